@@ -1,0 +1,225 @@
+//! bounce, the application: the `bounce` command line (`render`, `info`) and image output.
+//!
+//! Exit codes: 0 success; 2 bad input (unreadable or malformed scene, impossible settings, no usable
+//! Vulkan device or validation layer: things the user fixes); 1 a runtime failure. Every error is one
+//! line on stderr.
+
+pub mod output;
+
+use anyhow::{Context, Result};
+use bounce_device::{Gpu, GpuOptions};
+use bounce_graph::frame::{Component, FrameSettings, Renderer};
+use bounce_graph::scene::Scene;
+use clap::{Parser, Subcommand, ValueEnum};
+use output::RgbImage;
+use std::ffi::OsString;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Parser, Debug)]
+#[command(name = "bounce", version, about = "One-bounce global illumination from point lights with virtual point lights, on Vulkan.")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to a linear float32 EXR (and optionally a tone-mapped PNG).
+    Render(RenderArgs),
+    /// List the Vulkan devices with the features and limits bounce uses.
+    Info,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ComponentArg {
+    Direct,
+    Indirect,
+    Combined,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Output EXR (linear float32 RGB).
+    #[arg(long, default_value = "out.exr")]
+    pub out: PathBuf,
+    /// Also write a tone-mapped (Reinhard 2002) sRGB PNG.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Image width (default: the scene's [render] width, else 256).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: the scene's [render] height, else 256).
+    #[arg(long)]
+    pub height: Option<u32>,
+    #[arg(long, value_enum, default_value = "direct")]
+    pub component: ComponentArg,
+    /// Random seed (same seed, same image).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layers; fail if they report anything.
+    #[arg(long)]
+    pub validation: bool,
+    /// Print a per-pass GPU time table.
+    #[arg(long)]
+    pub timings: bool,
+    /// Paraboloid map resolution per face.
+    #[arg(long, default_value_t = 512)]
+    pub dprsm_res: u32,
+}
+
+/// An error the user can fix by changing the input or the machine (exit code 2).
+#[derive(Debug)]
+struct BadInput(anyhow::Error);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:#}", self.0)
+    }
+}
+impl std::error::Error for BadInput {}
+
+fn bad(e: impl Into<anyhow::Error>) -> anyhow::Error {
+    anyhow::Error::new(BadInput(e.into()))
+}
+
+fn gpu_error(e: bounce_device::Error) -> anyhow::Error {
+    use bounce_device::Error as E;
+    match e {
+        E::Loader(_) | E::NoDevice(_) | E::NoMatchingDevice { .. } | E::MissingFeature { .. } | E::NoValidationLayer => bad(e),
+        e => anyhow::Error::new(e).context("creating the Vulkan device"),
+    }
+}
+
+/// Run the command line; returns the exit code. Output goes to `out`, the one-line error to `err`.
+pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    let cli = match Cli::try_parse_from(args) {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let text = e.render().to_string();
+            if code == 0 {
+                let _ = write!(out, "{text}");
+            } else {
+                // clap's message is several lines; the first names the problem.
+                let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+                let _ = writeln!(err, "{}", first.trim_start_matches("error: ").trim());
+                let _ = writeln!(err, "  (see `bounce --help`)");
+            }
+            return code;
+        }
+    };
+    let r = match cli.command {
+        Command::Render(a) => render(&a, out, err),
+        Command::Info => info(out),
+    };
+    match r {
+        Ok(()) => 0,
+        Err(e) => {
+            let one_line = format!("{e:#}").replace('\n', " ");
+            let _ = writeln!(err, "error: {one_line}");
+            if e.downcast_ref::<BadInput>().is_some() {
+                2
+            } else {
+                1
+            }
+        }
+    }
+}
+
+fn info(out: &mut dyn Write) -> Result<()> {
+    let devices = Gpu::enumerate().map_err(gpu_error)?;
+    if devices.is_empty() {
+        return Err(gpu_error(bounce_device::Error::NoDevice(String::new())));
+    }
+    for d in devices {
+        writeln!(out, "{} ({:?}), Vulkan {}, driver {}", d.name, d.kind, d.api_version, d.driver)?;
+        match &d.suitable {
+            Ok(()) => writeln!(out, "  usable by bounce: yes")?,
+            Err(what) => writeln!(out, "  usable by bounce: no (lacks {what})")?,
+        }
+        for (k, v) in &d.features {
+            writeln!(out, "  feature {k}: {v}")?;
+        }
+        for (k, v) in &d.limits {
+            writeln!(out, "  limit {k}: {v}")?;
+        }
+    }
+    Ok(())
+}
+
+fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    let scene = Scene::load(&a.scene).map_err(bad)?;
+    writeln!(err, "{}", scene.summary())?;
+    let width = a.width.or(scene.render_width).unwrap_or(256);
+    let height = a.height.or(scene.render_height).unwrap_or(256);
+    let settings = FrameSettings {
+        width,
+        height,
+        component: match a.component {
+            ComponentArg::Direct => Component::Direct,
+            ComponentArg::Indirect => Component::Indirect,
+            ComponentArg::Combined => Component::Combined,
+        },
+        dprsm_res: a.dprsm_res,
+        ..FrameSettings::default()
+    };
+    let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone() }).map_err(gpu_error)?;
+    settings.validate(&gpu).map_err(bad)?;
+    let renderer = Renderer::new(&gpu, &scene)?;
+    let t0 = Instant::now();
+    let frame = renderer.render(&settings).map_err(|e| {
+        if e.to_string().contains("needs the VPL passes") {
+            bad(e)
+        } else {
+            e
+        }
+    })?;
+    let wall = t0.elapsed().as_secs_f64();
+    if a.validation {
+        let msgs = gpu.validation().messages();
+        anyhow::ensure!(msgs.is_empty(), "{} validation message(s); first: {}", msgs.len(), msgs[0]);
+    }
+    let img = RgbImage::from_rgba(frame.width, frame.height, &frame.radiance);
+    let bad_px = img.non_finite_count();
+    if bad_px > 0 {
+        writeln!(err, "warning: {bad_px} pixel(s) are not finite")?;
+    }
+    let gpu_ms = frame.gpu_ms();
+    let meta = vec![
+        ("scene", a.scene.display().to_string()),
+        ("component", settings.component.name().to_string()),
+        ("method", "none".to_string()),
+        ("seed", a.seed.to_string()),
+        ("device", gpu.name.clone()),
+        ("gpu_ms", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())),
+        ("dprsm_res", settings.dprsm_res.to_string()),
+        ("non_finite_pixels", bad_px.to_string()),
+    ];
+    output::write_exr(&a.out, &img, &meta)?;
+    if let Some(p) = &a.png {
+        output::write_png(p, &img)?;
+    }
+    if a.timings {
+        writeln!(out, "{:<12} {:>10}", "pass", "GPU ms")?;
+        for t in &frame.timings {
+            let ms = t.ms.map(|m| format!("{m:10.3}")).unwrap_or_else(|| format!("{:>10}", "n/a"));
+            writeln!(out, "{:<12} {ms}", t.name)?;
+        }
+        for s in &frame.skipped {
+            writeln!(out, "{s:<12} {:>10}", "skipped")?;
+        }
+        let total = gpu_ms.map(|m| format!("{m:10.3}")).unwrap_or_else(|| format!("{:>10}", "n/a"));
+        writeln!(out, "{:<12} {total}", "total")?;
+        writeln!(out, "wall {wall:.3} s on {}", gpu.name)?;
+    }
+    writeln!(err, "wrote {}{}", a.out.display(), a.png.as_ref().map(|p| format!(" and {}", p.display())).unwrap_or_default())
+        .context("writing to stderr")?;
+    Ok(())
+}

@@ -1,0 +1,127 @@
+//! Image files: linear float32 RGB EXR with metadata, tone-mapped PNG. Both are written to a temporary
+//! file next to the target and renamed into place, so a failure never leaves a half-written output.
+
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+
+/// Linear RGB radiance, row-major, row 0 = top.
+#[derive(Clone, Debug)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl RgbImage {
+    pub fn from_rgba(width: u32, height: u32, rgba: &[[f32; 4]]) -> Self {
+        RgbImage { width, height, pixels: rgba.iter().map(|p| [p[0], p[1], p[2]]).collect() }
+    }
+    pub fn non_finite_count(&self) -> usize {
+        self.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count()
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Write with `write` to a temporary file, then rename over `path`; the temporary is removed on failure.
+fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let tmp = temp_path(path);
+    let r = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).with_context(|| format!("renaming into {}", path.display())));
+    if r.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    r
+}
+
+fn ascii(s: &str) -> String {
+    s.chars().map(|c| if c.is_ascii() && !c.is_ascii_control() { c } else { '?' }).collect()
+}
+
+/// Write linear float32 RGB with `metadata` as EXR string attributes (`bounce.<key>`).
+pub fn write_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Result<()> {
+    use exr::prelude::*;
+    let (w, h) = (img.width as usize, img.height as usize);
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+        let p = img.pixels[y * w + x];
+        (p[0], p[1], p[2])
+    });
+    let layer = Layer::new((w, h), LayerAttributes::named("radiance"), Encoding::SMALL_LOSSLESS, channels);
+    let mut image = Image::from_layer(layer);
+    for (k, v) in metadata {
+        let key = Text::new_or_none(ascii(&format!("bounce.{k}"))).context("EXR attribute name")?;
+        let value = Text::new_or_none(ascii(v)).context("EXR attribute value")?;
+        image.attributes.other.insert(key, AttributeValue::Text(value));
+    }
+    write_atomic(path, |tmp| {
+        image.write().to_file(tmp).with_context(|| format!("writing {}", path.display()))
+    })
+}
+
+/// Read the first RGB(A) layer of an EXR as linear RGB, with its `bounce.*` string attributes.
+pub fn read_exr(path: &Path) -> Result<(RgbImage, Vec<(String, String)>)> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b];
+        },
+    )
+    .with_context(|| format!("reading {}", path.display()))?;
+    let size = image.layer_data.size;
+    let mut meta = vec![];
+    for (k, v) in &image.attributes.other {
+        if let AttributeValue::Text(t) = v {
+            meta.push((k.to_string(), t.to_string()));
+        }
+    }
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    Ok((RgbImage { width: size.width() as u32, height: size.height() as u32, pixels }, meta))
+}
+
+/// Reinhard et al. 2002, the global photographic operator (the thesis's tone mapping): scale by key
+/// a = 0.18 over the log-average luminance, then L_d = L (1 + L/L_white²) / (1 + L) with L_white the
+/// largest scaled luminance, applied to the luminance with colour ratios kept. Returns linear [0,1].
+pub fn tonemap_reinhard(img: &RgbImage) -> Vec<[f32; 3]> {
+    let lum = |p: &[f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let finite: Vec<f32> = img.pixels.iter().map(lum).filter(|l| l.is_finite() && *l >= 0.0).collect();
+    if finite.is_empty() {
+        return vec![[0.0; 3]; img.pixels.len()];
+    }
+    let delta = 1e-6f64;
+    let log_avg = (finite.iter().map(|&l| (delta + l as f64).ln()).sum::<f64>() / finite.len() as f64).exp();
+    let key = 0.18 / log_avg;
+    let l_white = finite.iter().fold(0.0f64, |m, &l| m.max(l as f64 * key)).max(1e-12);
+    img.pixels
+        .iter()
+        .map(|p| {
+            let lw = lum(p) as f64;
+            if !(lw.is_finite() && lw > 0.0) {
+                return [0.0; 3];
+            }
+            let l = lw * key;
+            let ld = l * (1.0 + l / (l_white * l_white)) / (1.0 + l);
+            let s = (ld / lw) as f32;
+            [(p[0] * s).clamp(0.0, 1.0), (p[1] * s).clamp(0.0, 1.0), (p[2] * s).clamp(0.0, 1.0)]
+        })
+        .collect()
+}
+
+pub fn linear_to_srgb8(c: f32) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let s = if c <= 0.0031308 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// Tone-map (Reinhard 2002) and write an sRGB PNG.
+pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
+    let mapped = tonemap_reinhard(img);
+    let bytes: Vec<u8> = mapped.iter().flat_map(|p| p.map(linear_to_srgb8)).collect();
+    let buf = image::RgbImage::from_raw(img.width, img.height, bytes).context("PNG buffer size")?;
+    write_atomic(path, |tmp| {
+        buf.save_with_format(tmp, image::ImageFormat::Png).with_context(|| format!("writing {}", path.display()))
+    })
+}

@@ -1,0 +1,121 @@
+//! One-shot submission and push-descriptor writes.
+
+use crate::error::{Result, VkContext};
+use crate::gpu::Gpu;
+use crate::memory::{Buffer, Image};
+use ash::vk;
+
+impl Gpu {
+    /// Record `f` into a fresh command buffer, submit it, and wait for its fence. Objects parked with
+    /// [`Gpu::retire`] are released afterwards.
+    pub fn submit<R>(&self, f: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
+        let d = &self.device;
+        let pool = self.command_pool.lock().unwrap();
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { d.allocate_command_buffers(&info) }.vk("vkAllocateCommandBuffers")?[0];
+        // The pool stays locked while recording: one recording thread per device, by design.
+        let result = (|| {
+            unsafe {
+                d.begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+            }
+            .vk("vkBeginCommandBuffer")?;
+            let r = f(cmd);
+            unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+            let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+            let cmds = [cmd];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+            let waited = unsafe { d.queue_submit(self.queue, &submit, fence) }
+                .vk("vkQueueSubmit")
+                .and_then(|_| unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+            unsafe { d.destroy_fence(fence, None) };
+            waited.map(|_| r)
+        })();
+        unsafe { d.free_command_buffers(*pool, &[cmd]) };
+        drop(pool);
+        self.drain_retired();
+        result
+    }
+}
+
+enum Info {
+    Buffer(vk::DescriptorBufferInfo),
+    Image(vk::DescriptorImageInfo),
+}
+
+/// Descriptor writes for one push-descriptor set, by binding number (the constants from
+/// `glsl/shared/bindings.glsl`, never positions).
+#[derive(Default)]
+pub struct DescriptorWrites {
+    entries: Vec<(u32, vk::DescriptorType, Info)>,
+}
+
+impl DescriptorWrites {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    pub fn storage_buffer(mut self, binding: u32, b: &Buffer) -> Self {
+        let info = vk::DescriptorBufferInfo { buffer: b.raw, offset: 0, range: vk::WHOLE_SIZE };
+        self.entries.push((binding, vk::DescriptorType::STORAGE_BUFFER, Info::Buffer(info)));
+        self
+    }
+    pub fn uniform_buffer(mut self, binding: u32, b: &Buffer) -> Self {
+        let info = vk::DescriptorBufferInfo { buffer: b.raw, offset: 0, range: vk::WHOLE_SIZE };
+        self.entries.push((binding, vk::DescriptorType::UNIFORM_BUFFER, Info::Buffer(info)));
+        self
+    }
+    pub fn storage_image(mut self, binding: u32, i: &Image) -> Self {
+        let info = vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: i.view, image_layout: vk::ImageLayout::GENERAL };
+        self.entries.push((binding, vk::DescriptorType::STORAGE_IMAGE, Info::Image(info)));
+        self
+    }
+    /// A sampled image read with `texelFetch` or a sampler; `layout` is the layout it is in when read.
+    pub fn sampled_image(mut self, binding: u32, i: &Image, sampler: vk::Sampler) -> Self {
+        let layout = if i.desc.is_depth() {
+            vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL
+        } else {
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
+        };
+        let info = vk::DescriptorImageInfo { sampler, image_view: i.view, image_layout: layout };
+        self.entries.push((binding, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, Info::Image(info)));
+        self
+    }
+
+    /// Push the set as set 0 of `layout`.
+    pub fn push(&self, gpu: &Gpu, cmd: vk::CommandBuffer, bind_point: vk::PipelineBindPoint, layout: vk::PipelineLayout) {
+        let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = self
+            .entries
+            .iter()
+            .map(|(_, _, i)| match i {
+                Info::Buffer(b) => [*b],
+                Info::Image(_) => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let images: Vec<[vk::DescriptorImageInfo; 1]> = self
+            .entries
+            .iter()
+            .map(|(_, _, i)| match i {
+                Info::Image(b) => [*b],
+                Info::Buffer(_) => [vk::DescriptorImageInfo::default()],
+            })
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet> = self
+            .entries
+            .iter()
+            .enumerate()
+            .map(|(k, (binding, ty, info))| {
+                let w = vk::WriteDescriptorSet::default().dst_binding(*binding).descriptor_type(*ty);
+                match info {
+                    Info::Buffer(_) => w.buffer_info(&buffers[k]),
+                    Info::Image(_) => w.image_info(&images[k]),
+                }
+            })
+            .collect();
+        unsafe { gpu.push_descriptor.cmd_push_descriptor_set(cmd, bind_point, layout, 0, &writes) };
+    }
+}

@@ -1,0 +1,480 @@
+//! Instance, validation collector, device choice and the [`Gpu`] handle.
+
+use crate::error::{Error, Result, VkContext};
+use ash::{ext, khr, vk};
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to create a [`Gpu`].
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// Enable `VK_LAYER_KHRONOS_validation` and collect its messages in [`Gpu::validation`].
+    pub validation: bool,
+    /// Pick the first device whose name contains this (case-insensitive). `None`: the `BOUNCE_DEVICE`
+    /// environment variable, else the first discrete GPU, else integrated, else any (lavapipe).
+    pub device: Option<String>,
+}
+
+/// Validation messages of one device (warnings and errors), in arrival order.
+#[derive(Debug, Default)]
+pub struct ValidationLog {
+    messages: Mutex<Vec<String>>,
+}
+
+impl ValidationLog {
+    pub fn messages(&self) -> Vec<String> {
+        self.messages.lock().unwrap().clone()
+    }
+    pub fn count(&self) -> usize {
+        self.messages.lock().unwrap().len()
+    }
+    pub fn clear(&self) {
+        self.messages.lock().unwrap().clear();
+    }
+    fn push(&self, m: String) {
+        self.messages.lock().unwrap().push(m);
+    }
+}
+
+/// VUIDs we deliberately do not count, each with the reason. Empty: bounce is validation-clean.
+const SUPPRESSED_VUIDS: &[&str] = &[];
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // Only the validation layer's warnings and errors count; the loader's general chatter does not.
+    let counted = severity.intersects(
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+    ) && types.intersects(
+        vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+    );
+    if !counted || data.is_null() || user.is_null() {
+        return vk::FALSE;
+    }
+    let data = unsafe { &*data };
+    let text = |p: *const std::ffi::c_char| {
+        if p.is_null() {
+            String::new()
+        } else {
+            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+        }
+    };
+    let id = text(data.p_message_id_name);
+    if SUPPRESSED_VUIDS.contains(&id.as_str()) {
+        return vk::FALSE;
+    }
+    let log = unsafe { &*(user as *const ValidationLog) };
+    log.push(format!("[{severity:?}] {id}: {}", text(data.p_message)));
+    vk::FALSE
+}
+
+/// What `bounce info` prints about a device.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub kind: vk::PhysicalDeviceType,
+    pub api_version: String,
+    pub driver: String,
+    pub limits: Vec<(&'static str, String)>,
+    pub features: Vec<(&'static str, bool)>,
+    pub suitable: std::result::Result<(), String>,
+}
+
+pub struct Shared {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub properties: vk::PhysicalDeviceProperties,
+    pub name: String,
+    pub timestamp_valid_bits: u32,
+    pub push_descriptor: khr::push_descriptor::Device,
+    pub debug_utils: Option<ext::debug_utils::Device>,
+    pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub(crate) command_pool: Mutex<vk::CommandPool>,
+    pub(crate) retired: Mutex<Vec<Box<dyn Send + Sync>>>,
+    messenger: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    validation: Arc<ValidationLog>,
+}
+
+/// The device handle: cheap to clone, shared by every resource made from it.
+#[derive(Clone)]
+pub struct Gpu(Arc<Shared>);
+
+impl std::ops::Deref for Gpu {
+    type Target = Shared;
+    fn deref(&self) -> &Shared {
+        &self.0
+    }
+}
+
+impl std::fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Gpu({})", self.name)
+    }
+}
+
+fn load_entry() -> Result<ash::Entry> {
+    unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))
+}
+
+fn device_name(p: &vk::PhysicalDeviceProperties) -> String {
+    p.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+fn version_string(v: u32) -> String {
+    format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+}
+
+/// Device features bounce needs, with the reason for each (for the error message).
+fn check_suitable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::result::Result<(), String> {
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    if props.api_version < vk::API_VERSION_1_3 {
+        return Err(format!("Vulkan 1.3 (it has {})", version_string(props.api_version)));
+    }
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    let has = |n: &CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(n));
+    if !has(khr::push_descriptor::NAME) {
+        return Err("the extension VK_KHR_push_descriptor".into());
+    }
+    let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13);
+    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+    let f = f2.features;
+    for (ok, what) in [
+        (v13.dynamic_rendering, "the feature dynamicRendering"),
+        (v13.synchronization2, "the feature synchronization2"),
+        // SPIR-V 1.6 (Vulkan 1.3 target) compiles GLSL `discard` to OpDemoteToHelperInvocation.
+        (v13.shader_demote_to_helper_invocation, "the feature shaderDemoteToHelperInvocation"),
+        (f.geometry_shader, "the feature geometryShader"),
+        (f.fragment_stores_and_atomics, "the feature fragmentStoresAndAtomics"),
+        (f.vertex_pipeline_stores_and_atomics, "the feature vertexPipelineStoresAndAtomics"),
+    ] {
+        if ok == vk::FALSE {
+            return Err(what.into());
+        }
+    }
+    let qf = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    if !qf.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)) {
+        return Err("a queue with graphics and compute".into());
+    }
+    Ok(())
+}
+
+fn create_instance(entry: &ash::Entry, validation: bool, extra_exts: &[*const std::ffi::c_char]) -> Result<ash::Instance> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"bounce")
+        .engine_name(c"bounce")
+        .api_version(vk::API_VERSION_1_3);
+    let mut layers = vec![];
+    let mut exts: Vec<*const std::ffi::c_char> = extra_exts.to_vec();
+    if validation {
+        let available = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
+        if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
+            return Err(Error::NoValidationLayer);
+        }
+        layers.push(VALIDATION_LAYER.as_ptr());
+    }
+    let has_debug_utils = unsafe { entry.enumerate_instance_extension_properties(None) }
+        .unwrap_or_default()
+        .iter()
+        .any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
+    if has_debug_utils {
+        exts.push(ext::debug_utils::NAME.as_ptr());
+    }
+    let info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&exts);
+    unsafe { entry.create_instance(&info, None) }.map_err(|result| match result {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER => Error::NoDevice(" (vkCreateInstance: incompatible driver)".into()),
+        result => Error::Vk { call: "vkCreateInstance", result },
+    })
+}
+
+impl Gpu {
+    /// Every device the loader sees, with what bounce needs and whether each has it.
+    pub fn enumerate() -> Result<Vec<DeviceInfo>> {
+        let entry = load_entry()?;
+        let instance = create_instance(&entry, false, &[])?;
+        let pds = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
+        let mut out = vec![];
+        for pd in pds {
+            let p = unsafe { instance.get_physical_device_properties(pd) };
+            let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
+            let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13);
+            unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+            let f = f2.features;
+            let l = p.limits;
+            let qf = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+            let ts_bits = qf.first().map(|q| q.timestamp_valid_bits).unwrap_or(0);
+            out.push(DeviceInfo {
+                name: device_name(&p),
+                kind: p.device_type,
+                api_version: version_string(p.api_version),
+                driver: format!("{:#x}", p.driver_version),
+                limits: vec![
+                    ("maxImageDimension2D", l.max_image_dimension2_d.to_string()),
+                    ("maxImageArrayLayers", l.max_image_array_layers.to_string()),
+                    ("maxStorageBufferRange", l.max_storage_buffer_range.to_string()),
+                    ("maxComputeWorkGroupInvocations", l.max_compute_work_group_invocations.to_string()),
+                    ("maxComputeWorkGroupCount", format!("{:?}", l.max_compute_work_group_count)),
+                    ("maxPushConstantsSize", l.max_push_constants_size.to_string()),
+                    ("timestampPeriod (ns)", l.timestamp_period.to_string()),
+                    ("timestampValidBits (queue 0)", ts_bits.to_string()),
+                ],
+                features: vec![
+                    ("dynamicRendering", v13.dynamic_rendering != 0),
+                    ("synchronization2", v13.synchronization2 != 0),
+                    ("geometryShader", f.geometry_shader != 0),
+                    ("fragmentStoresAndAtomics", f.fragment_stores_and_atomics != 0),
+                    ("vertexPipelineStoresAndAtomics", f.vertex_pipeline_stores_and_atomics != 0),
+                    ("shaderFloat64", f.shader_float64 != 0),
+                    ("shaderInt64", f.shader_int64 != 0),
+                ],
+                suitable: check_suitable(&instance, pd),
+            });
+        }
+        unsafe { instance.destroy_instance(None) };
+        Ok(out)
+    }
+
+    pub fn new(opts: &GpuOptions) -> Result<Gpu> {
+        let entry = load_entry()?;
+        let instance = create_instance(&entry, opts.validation, &[])?;
+        // From here on, a failure must destroy what exists: wrap the rest.
+        match Self::with_instance(entry, instance.clone(), opts) {
+            Ok(g) => Ok(g),
+            Err(e) => {
+                unsafe { instance.destroy_instance(None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn with_instance(entry: ash::Entry, instance: ash::Instance, opts: &GpuOptions) -> Result<Gpu> {
+        let validation = Arc::new(ValidationLog::default());
+        let has_debug_utils = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .unwrap_or_default()
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
+        let messenger = if opts.validation && has_debug_utils {
+            let du = ext::debug_utils::Instance::new(&entry, &instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(Arc::as_ptr(&validation) as *mut c_void);
+            let m = unsafe { du.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
+            Some((du, m))
+        } else {
+            None
+        };
+        let destroy_messenger = |m: &Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
+            if let Some((du, m)) = m {
+                unsafe { du.destroy_debug_utils_messenger(*m, None) };
+            }
+        };
+
+        let pds = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
+        if pds.is_empty() {
+            destroy_messenger(&messenger);
+            return Err(Error::NoDevice(String::new()));
+        }
+        let wanted = opts.device.clone().or_else(|| std::env::var("BOUNCE_DEVICE").ok()).filter(|s| !s.is_empty());
+        let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> =
+            pds.iter().map(|&pd| (pd, unsafe { instance.get_physical_device_properties(pd) })).collect();
+        let pick = if let Some(w) = &wanted {
+            let wl = w.to_lowercase();
+            match named.iter().find(|(_, p)| device_name(p).to_lowercase().contains(&wl)) {
+                Some(x) => *x,
+                None => {
+                    destroy_messenger(&messenger);
+                    return Err(Error::NoMatchingDevice {
+                        wanted: w.clone(),
+                        available: named.iter().map(|(_, p)| device_name(p)).collect::<Vec<_>>().join(", "),
+                    });
+                }
+            }
+        } else {
+            let rank = |t: vk::PhysicalDeviceType| match t {
+                vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+                vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+                vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+                vk::PhysicalDeviceType::CPU => 3,
+                _ => 4,
+            };
+            // Prefer suitable devices, then by kind.
+            let mut c = named.clone();
+            c.sort_by_key(|(pd, p)| (check_suitable(&instance, *pd).is_err(), rank(p.device_type)));
+            c[0]
+        };
+        let (physical, properties) = pick;
+        let name = device_name(&properties);
+        if let Err(what) = check_suitable(&instance, physical) {
+            destroy_messenger(&messenger);
+            return Err(Error::MissingFeature {
+                device: name,
+                what,
+                hint: "; update the driver (for lavapipe: `mesa-vulkan-drivers` from Debian 12 or newer)".into(),
+            });
+        }
+        let qfs = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let queue_family = qfs
+            .iter()
+            .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+            .expect("check_suitable found a graphics+compute queue") as u32;
+        let timestamp_valid_bits = qfs[queue_family as usize].timestamp_valid_bits;
+
+        let prio = [1.0f32];
+        let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
+        let dev_exts = [khr::push_descriptor::NAME.as_ptr()];
+        let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true)
+            .shader_demote_to_helper_invocation(true);
+        let base = vk::PhysicalDeviceFeatures::default()
+            .geometry_shader(true)
+            .fragment_stores_and_atomics(true)
+            .vertex_pipeline_stores_and_atomics(true);
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v13);
+        let dinfo = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&qinfo)
+            .enabled_extension_names(&dev_exts)
+            .push_next(&mut f2);
+        let device = match unsafe { instance.create_device(physical, &dinfo, None) } {
+            Ok(d) => d,
+            Err(result) => {
+                destroy_messenger(&messenger);
+                return Err(Error::Vk { call: "vkCreateDevice", result });
+            }
+        };
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: {
+                let mut d = gpu_allocator::AllocatorDebugSettings::default();
+                d.log_leaks_on_shutdown = cfg!(debug_assertions);
+                d
+            },
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| Error::Alloc { name: "allocator".into(), source })?;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER | vk::CommandPoolCreateFlags::TRANSIENT);
+        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        let push_descriptor = khr::push_descriptor::Device::new(&instance, &device);
+        let debug_utils = has_debug_utils.then(|| ext::debug_utils::Device::new(&instance, &device));
+        Ok(Gpu(Arc::new(Shared {
+            entry,
+            instance,
+            physical,
+            device,
+            queue,
+            queue_family,
+            properties,
+            name,
+            timestamp_valid_bits,
+            push_descriptor,
+            debug_utils,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            command_pool: Mutex::new(command_pool),
+            retired: Mutex::new(vec![]),
+            messenger,
+            validation,
+        })))
+    }
+
+    /// This device's validation messages (empty unless created with `validation: true`).
+    pub fn validation(&self) -> &ValidationLog {
+        &self.0.validation
+    }
+
+    pub fn validation_enabled(&self) -> bool {
+        self.0.messenger.is_some()
+    }
+
+    pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
+        &self.properties.limits
+    }
+
+    /// Keep `object` alive until the next submission has completed.
+    pub fn retire<T: Send + Sync + 'static>(&self, object: T) {
+        self.retired.lock().unwrap().push(Box::new(object));
+    }
+
+    pub(crate) fn drain_retired(&self) {
+        let drained = std::mem::take(&mut *self.retired.lock().unwrap());
+        drop(drained);
+    }
+
+    /// Give a Vulkan object a name that shows in validation messages and RenderDoc.
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(du) = &self.debug_utils {
+            let Ok(c) = CString::new(name) else { return };
+            let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&c);
+            // A failed name is cosmetic; ignore it.
+            let _ = unsafe { du.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    /// Open a debug-utils label region on `cmd` (no-op without debug utils).
+    pub fn begin_label(&self, cmd: vk::CommandBuffer, name: &str) {
+        if let Some(du) = &self.debug_utils {
+            let c = CString::new(name).unwrap_or_default();
+            let label = vk::DebugUtilsLabelEXT::default().label_name(&c);
+            unsafe { du.cmd_begin_debug_utils_label(cmd, &label) };
+        }
+    }
+
+    pub fn end_label(&self, cmd: vk::CommandBuffer) {
+        if let Some(du) = &self.debug_utils {
+            unsafe { du.cmd_end_debug_utils_label(cmd) };
+        }
+    }
+
+    pub fn wait_idle(&self) -> Result<()> {
+        unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
+        self.drain_retired();
+        Ok(())
+    }
+
+    pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap()
+    }
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.retired.get_mut().unwrap().clear();
+            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap(), None);
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+            if let Some((du, m)) = self.messenger.take() {
+                du.destroy_debug_utils_messenger(m, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}

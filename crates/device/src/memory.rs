@@ -1,0 +1,350 @@
+//! Named buffers and images on gpu-allocator memory, plus upload and readback.
+
+use crate::error::{Error, Result, VkContext};
+use crate::gpu::Gpu;
+use crate::sync::{self, Access};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+#[derive(Clone, Debug)]
+pub struct BufferDesc {
+    pub name: String,
+    pub size: u64,
+    pub usage: vk::BufferUsageFlags,
+    pub location: MemoryLocation,
+}
+
+impl BufferDesc {
+    /// A device-local storage buffer that can also be copied to and from.
+    pub fn storage(name: impl Into<String>, size: u64) -> Self {
+        BufferDesc {
+            name: name.into(),
+            size,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::GpuOnly,
+        }
+    }
+}
+
+pub struct Buffer {
+    pub raw: vk::Buffer,
+    pub size: u64,
+    pub name: String,
+    allocation: Option<Allocation>,
+    gpu: Gpu,
+}
+
+impl std::fmt::Debug for Buffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Buffer({}, {} B)", self.name, self.size)
+    }
+}
+
+impl Buffer {
+    pub fn new(gpu: &Gpu, desc: &BufferDesc) -> Result<Buffer> {
+        // Zero-sized buffers are invalid in Vulkan; an empty upload still gets a valid 4-byte buffer.
+        let size = desc.size.max(4);
+        let info = vk::BufferCreateInfo::default().size(size).usage(desc.usage);
+        let raw = unsafe { gpu.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        let requirements = unsafe { gpu.device.get_buffer_memory_requirements(raw) };
+        let allocation = gpu.allocator().allocate(&AllocationCreateDesc {
+            name: &desc.name,
+            requirements,
+            location: desc.location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { gpu.device.destroy_buffer(raw, None) };
+                return Err(Error::Alloc { name: desc.name.clone(), source });
+            }
+        };
+        let bound = unsafe { gpu.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        let buffer = Buffer { raw, size, name: desc.name.clone(), allocation: Some(allocation), gpu: gpu.clone() };
+        bound.vk("vkBindBufferMemory")?;
+        gpu.set_name(raw, &desc.name);
+        Ok(buffer)
+    }
+
+    /// Host-visible mapping, for buffers made with a CPU-visible [`MemoryLocation`].
+    pub fn mapped(&self) -> Option<&[u8]> {
+        self.allocation.as_ref()?.mapped_slice().map(|s| &s[..self.size as usize])
+    }
+
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation.as_mut()?.mapped_slice_mut().map(|s| &mut s[..size])
+    }
+
+    /// A GPU-only buffer filled with `data` (through a staging buffer; left ready for any shader read
+    /// after the submission's fence, which this waits for).
+    pub fn with_data(gpu: &Gpu, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<Buffer> {
+        let dst = Buffer::new(
+            gpu,
+            &BufferDesc {
+                name: name.into(),
+                size: data.len() as u64,
+                usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuOnly,
+            },
+        )?;
+        if !data.is_empty() {
+            let mut staging = Buffer::new(
+                gpu,
+                &BufferDesc {
+                    name: format!("{name} (staging)"),
+                    size: data.len() as u64,
+                    usage: vk::BufferUsageFlags::TRANSFER_SRC,
+                    location: MemoryLocation::CpuToGpu,
+                },
+            )?;
+            staging.mapped_mut().expect("CpuToGpu memory is mapped")[..data.len()].copy_from_slice(data);
+            gpu.submit(|cmd| unsafe {
+                let region = vk::BufferCopy::default().size(data.len() as u64);
+                gpu.device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[region]);
+            })?;
+        }
+        Ok(dst)
+    }
+
+    /// Copy the whole buffer back to the CPU. `current` is how it was last used (the barrier from it to a
+    /// transfer read is recorded here); waits for completion.
+    pub fn read_back(&self, current: Access) -> Result<Vec<u8>> {
+        let gpu = &self.gpu;
+        let staging = Buffer::new(
+            gpu,
+            &BufferDesc {
+                name: format!("{} (readback)", self.name),
+                size: self.size,
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuToCpu,
+            },
+        )?;
+        gpu.submit(|cmd| unsafe {
+            sync::buffer_barrier(gpu, cmd, self.raw, current, Access::TransferRead);
+            let region = vk::BufferCopy::default().size(self.size);
+            gpu.device.cmd_copy_buffer(cmd, self.raw, staging.raw, &[region]);
+            sync::buffer_barrier(gpu, cmd, staging.raw, Access::TransferWrite, Access::HostRead);
+        })?;
+        Ok(staging.mapped().expect("GpuToCpu memory is mapped").to_vec())
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        unsafe { self.gpu.device.destroy_buffer(self.raw, None) };
+        if let Some(a) = self.allocation.take() {
+            let _ = self.gpu.allocator().free(a);
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct ImageDesc {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// Array layers (1: a 2D image; more: a 2D array, viewed as one).
+    pub layers: u32,
+    pub format: vk::Format,
+    pub usage: vk::ImageUsageFlags,
+}
+
+impl ImageDesc {
+    pub fn new(name: impl Into<String>, width: u32, height: u32, format: vk::Format, usage: vk::ImageUsageFlags) -> Self {
+        ImageDesc { name: name.into(), width, height, layers: 1, format, usage }
+    }
+    pub fn layers(mut self, layers: u32) -> Self {
+        self.layers = layers;
+        self
+    }
+    pub fn is_depth(&self) -> bool {
+        is_depth_format(self.format)
+    }
+}
+
+pub fn is_depth_format(f: vk::Format) -> bool {
+    matches!(f, vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT)
+}
+
+/// Bytes per texel of the formats bounce reads back.
+pub fn texel_size(f: vk::Format) -> u64 {
+    match f {
+        vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,
+        vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R32_SFLOAT | vk::Format::D32_SFLOAT | vk::Format::R32_UINT => 4,
+        vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB | vk::Format::B8G8R8A8_UNORM => 4,
+        vk::Format::R32G32_SFLOAT => 8,
+        other => panic!("texel_size: format {other:?} is not used by bounce"),
+    }
+}
+
+pub struct Image {
+    pub raw: vk::Image,
+    /// The whole image: `TYPE_2D` for one layer, `TYPE_2D_ARRAY` for more.
+    pub view: vk::ImageView,
+    pub desc: ImageDesc,
+    allocation: Option<Allocation>,
+    gpu: Gpu,
+}
+
+impl std::fmt::Debug for Image {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Image({}, {}x{}x{} {:?})", self.desc.name, self.desc.width, self.desc.height, self.desc.layers, self.desc.format)
+    }
+}
+
+impl Image {
+    pub fn new(gpu: &Gpu, desc: &ImageDesc) -> Result<Image> {
+        let max = gpu.limits().max_image_dimension2_d;
+        for (what, v) in [("width", desc.width), ("height", desc.height)] {
+            if v == 0 || v > max {
+                return Err(Error::Limit {
+                    what: format!("image `{}` {what}", desc.name),
+                    limit: "maxImageDimension2D",
+                    value: v as u64,
+                    max: max as u64,
+                });
+            }
+        }
+        let max_layers = gpu.limits().max_image_array_layers;
+        if desc.layers == 0 || desc.layers > max_layers {
+            return Err(Error::Limit {
+                what: format!("image `{}` layers", desc.name),
+                limit: "maxImageArrayLayers",
+                value: desc.layers as u64,
+                max: max_layers as u64,
+            });
+        }
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(desc.format)
+            .extent(vk::Extent3D { width: desc.width, height: desc.height, depth: 1 })
+            .mip_levels(1)
+            .array_layers(desc.layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { gpu.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        let requirements = unsafe { gpu.device.get_image_memory_requirements(raw) };
+        let allocation = match gpu.allocator().allocate(&AllocationCreateDesc {
+            name: &desc.name,
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        }) {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { gpu.device.destroy_image(raw, None) };
+                return Err(Error::Alloc { name: desc.name.clone(), source });
+            }
+        };
+        let mut image = Image { raw, view: vk::ImageView::null(), desc: desc.clone(), allocation: Some(allocation), gpu: gpu.clone() };
+        let a = image.allocation.as_ref().unwrap();
+        unsafe { gpu.device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(if desc.layers == 1 { vk::ImageViewType::TYPE_2D } else { vk::ImageViewType::TYPE_2D_ARRAY })
+            .format(desc.format)
+            .subresource_range(image.full_range());
+        image.view = unsafe { gpu.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
+        gpu.set_name(raw, &desc.name);
+        gpu.set_name(image.view, &desc.name);
+        Ok(image)
+    }
+
+    pub fn aspect(&self) -> vk::ImageAspectFlags {
+        if self.desc.is_depth() {
+            vk::ImageAspectFlags::DEPTH
+        } else {
+            vk::ImageAspectFlags::COLOR
+        }
+    }
+
+    pub fn full_range(&self) -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange::default()
+            .aspect_mask(self.aspect())
+            .level_count(1)
+            .layer_count(self.desc.layers)
+    }
+
+    pub fn extent(&self) -> vk::Extent2D {
+        vk::Extent2D { width: self.desc.width, height: self.desc.height }
+    }
+
+    /// Copy every layer back to the CPU (tightly packed, layer after layer). `current` is the image's
+    /// last access; the image is left in [`Access::TransferRead`].
+    pub fn read_back(&self, current: Access) -> Result<Vec<u8>> {
+        let gpu = &self.gpu;
+        let layer_bytes = self.desc.width as u64 * self.desc.height as u64 * texel_size(self.desc.format);
+        let staging = Buffer::new(
+            gpu,
+            &BufferDesc {
+                name: format!("{} (readback)", self.desc.name),
+                size: layer_bytes * self.desc.layers as u64,
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuToCpu,
+            },
+        )?;
+        gpu.submit(|cmd| unsafe {
+            sync::image_barrier(gpu, cmd, self, current, Access::TransferRead);
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default().aspect_mask(self.aspect()).layer_count(self.desc.layers),
+                )
+                .image_extent(vk::Extent3D { width: self.desc.width, height: self.desc.height, depth: 1 });
+            gpu.device.cmd_copy_image_to_buffer(cmd, self.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, staging.raw, &[region]);
+            sync::buffer_barrier(gpu, cmd, staging.raw, Access::TransferWrite, Access::HostRead);
+        })?;
+        Ok(staging.mapped().expect("GpuToCpu memory is mapped")[..(layer_bytes * self.desc.layers as u64) as usize].to_vec())
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        unsafe {
+            if self.view != vk::ImageView::null() {
+                self.gpu.device.destroy_image_view(self.view, None);
+            }
+            self.gpu.device.destroy_image(self.raw, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.gpu.allocator().free(a);
+        }
+    }
+}
+
+/// A sampler that destroys itself.
+pub struct Sampler {
+    pub raw: vk::Sampler,
+    gpu: Gpu,
+}
+
+impl Sampler {
+    /// Nearest filtering, clamp to edge: bounce reads textures with `texelFetch`-exact semantics.
+    pub fn nearest(gpu: &Gpu) -> Result<Sampler> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(0.0);
+        let raw = unsafe { gpu.device.create_sampler(&info, None) }.vk("vkCreateSampler")?;
+        Ok(Sampler { raw, gpu: gpu.clone() })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        unsafe { self.gpu.device.destroy_sampler(self.raw, None) };
+    }
+}

@@ -1,0 +1,18 @@
+#version 460
+// dprsm: exact per-texel depth. Each texel's centre direction is intersected with the (unclipped)
+// triangle; the stored depth is that distance over `far`, so the map holds exactly what a ray cast from
+// the light through the texel centre would hit.
+#include "shared/scene.glsl"
+
+layout(location = 0) flat in vec3 i_a;
+layout(location = 1) flat in vec3 i_b;
+layout(location = 2) flat in vec3 i_c;
+layout(location = 3) flat in uint i_tri;
+
+void main() {
+    vec2 uv = gl_FragCoord.xy / float(frame.size.w) * 2.0 - 1.0;
+    if (dot(uv, uv) > 1.0) discard; // outside this face's hemisphere: the other face covers it
+    float t = ray_triangle(vec3(0.0), paraboloid_direction(uv), i_a, i_b, i_c);
+    if (t < 0.0) discard;
+    gl_FragDepth = min(t / frame.scene_max.w, 1.0);
+}

@@ -1,0 +1,26 @@
+// Binding indices and constants: the single source of truth. build.rs turns every `#define NAME <int>`
+// in this file into `pub const NAME: u32` in Rust (crate bounce_graph::bindings).
+#ifndef BOUNCE_BINDINGS_GLSL
+#define BOUNCE_BINDINGS_GLSL
+
+#define MAX_LIGHTS 16
+
+// Scene data, shared by every pass that reads the mesh (gbuffer, dprsm, direct).
+#define B_FRAME 0
+#define B_VERTICES 1
+#define B_TRI_MATERIAL 2
+#define B_MATERIALS 3
+#define B_TEXTURES 4
+#define B_TEXELS 5
+#define B_LIGHTS 6
+
+// direct: inputs and output
+#define B_DIRECT_GPOSITION 7
+#define B_DIRECT_GNORMAL 8
+#define B_DIRECT_GALBEDO 9
+#define B_DIRECT_SHADOW 10
+#define B_DIRECT_OUT 11
+
+#define WG_2D 8
+
+#endif

@@ -1,0 +1,48 @@
+// Math shared by every shader: sRGB decoding, the paraboloid (stereographic) mapping of the dual
+// paraboloid maps, ray-triangle intersection.
+#ifndef BOUNCE_COMMON_GLSL
+#define BOUNCE_COMMON_GLSL
+
+const float PI = 3.14159265358979323846;
+
+float srgb_to_linear(float c) {
+    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+// Paraboloid face f (0: front, looking along +z; 1: back, along -z) works in a local frame that mirrors
+// z for the back face, so both faces use the same projection.
+vec3 to_face(vec3 d, uint face) {
+    return face == 0u ? d : vec3(d.x, d.y, -d.z);
+}
+
+// Direction (any length, local.z >= 0) -> paraboloid coordinates (u, v) in the unit disk. This is
+// Heidrich–Seidel's mapping (thesis eq. 6.6): (u, v) = (x, y) / (|d| + z), a stereographic projection.
+vec2 paraboloid_project(vec3 local) {
+    return local.xy / (length(local) + local.z);
+}
+
+// Inverse: unit direction of paraboloid coordinates (u, v), u² + v² <= 1.
+vec3 paraboloid_direction(vec2 uv) {
+    float r2 = dot(uv, uv);
+    return vec3(2.0 * uv, 1.0 - r2) / (1.0 + r2);
+}
+
+// Möller–Trumbore: distance t along unit `dir` from `org` to the triangle, or -1 when missed.
+float ray_triangle(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
+    vec3 e1 = b - a;
+    vec3 e2 = c - a;
+    vec3 p = cross(dir, e2);
+    float det = dot(e1, p);
+    if (abs(det) < 1e-20) return -1.0;
+    float inv = 1.0 / det;
+    vec3 s = org - a;
+    float u = dot(s, p) * inv;
+    if (u < 0.0 || u > 1.0) return -1.0;
+    vec3 q = cross(s, e1);
+    float v = dot(dir, q) * inv;
+    if (v < 0.0 || u + v > 1.0) return -1.0;
+    float t = dot(e2, q) * inv;
+    return t > 0.0 ? t : -1.0;
+}
+
+#endif

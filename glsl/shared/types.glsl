@@ -1,0 +1,41 @@
+// Structs shared between GLSL and Rust (crates/graph/src/shader_types.rs mirrors them with size and
+// offset asserts; tests/layout_echo checks both sides agree on the GPU). std430, no vec3 members, no bool.
+#ifndef BOUNCE_TYPES_GLSL
+#define BOUNCE_TYPES_GLSL
+
+// One vertex of the flat (non-indexed) triangle list: triangle t owns vertices 3t, 3t+1, 3t+2, so
+// gl_PrimitiveID (and gl_VertexIndex / 3) is the triangle index everywhere.
+struct Vertex {
+    vec4 position_u; // xyz world position, w texture u
+    vec4 normal_v;   // xyz shading normal (unit; the face normal when the OBJ has no vn), w texture v
+};
+
+// Per-material data; triangle t uses materials[tri_material[t]].
+struct Material {
+    vec4 kd_tex;     // rgb Kd (linear), w = texture index as float, or -1 for none
+};
+
+// A texture stored as packed sRGB RGBA8 texels (r in the low byte) in the texel buffer.
+struct TextureInfo {
+    uint offset;     // first texel in the texel buffer
+    uint width;
+    uint height;
+    uint pad;
+};
+
+struct Light {
+    vec4 position;   // xyz world position, w unused
+    vec4 intensity;  // rgb radiant intensity (W/sr), w unused
+};
+
+// Per-frame constants, one uniform buffer for every pass.
+struct FrameUniforms {
+    mat4 view_proj;          // world -> Vulkan clip space of the camera
+    vec4 eye;                // xyz camera position
+    vec4 scene_min;          // xyz scene bounds (w: scene diagonal length)
+    vec4 scene_max;          // xyz scene bounds (w: far distance used by the paraboloid maps)
+    uvec4 size;              // x width, y height, z light count, w paraboloid map resolution per face
+    vec4 shadow;             // x constant bias (world units), y slope bias (texel units), z,w unused
+};
+
+#endif

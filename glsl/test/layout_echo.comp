@@ -1,0 +1,29 @@
+#version 460
+// Test kernel: reads every shared struct at the offsets GLSL gives it and writes each scalar, in
+// declaration order, to a flat word array. The test fills the input from the Rust mirror
+// (crates/graph/src/shader_types.rs) with distinct values and expects the words in Rust's field order:
+// any offset or padding disagreement shows up as a mismatch.
+#include "../shared/types.glsl"
+
+layout(local_size_x = 1) in;
+layout(std430, set = 0, binding = 0) readonly buffer In { Vertex v; Material m; TextureInfo t; Light l; FrameUniforms f; };
+layout(std430, set = 0, binding = 1) writeonly buffer Out { uint words[]; };
+
+uint k = 0u;
+void put4(vec4 x) { for (int i = 0; i < 4; i++) words[k++] = floatBitsToUint(x[i]); }
+void put4u(uvec4 x) { for (int i = 0; i < 4; i++) words[k++] = x[i]; }
+
+void main() {
+    put4(v.position_u);
+    put4(v.normal_v);
+    put4(m.kd_tex);
+    put4u(uvec4(t.offset, t.width, t.height, t.pad));
+    put4(l.position);
+    put4(l.intensity);
+    for (int c = 0; c < 4; c++) put4(f.view_proj[c]);
+    put4(f.eye);
+    put4(f.scene_min);
+    put4(f.scene_max);
+    put4u(f.size);
+    put4(f.shadow);
+}
