@@ -64,7 +64,12 @@ fn main() {
                 let stem = f.file_name().unwrap().to_str().unwrap().replace('.', "_").to_uppercase();
                 let spv = out.join(format!("{}.spv", f.file_name().unwrap().to_str().unwrap()));
                 std::fs::write(&spv, a.as_binary_u8()).unwrap();
-                writeln!(rs, "/// SPIR-V of `{rel}`.\npub const {stem}: &[u8] = include_bytes!({:?});", spv.display().to_string()).unwrap();
+                writeln!(
+                    rs,
+                    "/// SPIR-V of `{rel}`.\npub const {stem}: &[u8] = include_bytes!({:?});",
+                    spv.display().to_string()
+                )
+                .unwrap();
             }
             Err(e) => errors.push(e.to_string()),
         }

@@ -1,1 +1,108 @@
+//! Test harness for the lavapipe integration tests: a validation-checked device per test, image
+//! metrics, and evidence files written on failure.
+//!
+//! Every test makes its own [`TestGpu`] (validation layers on). Its messages are collected per device
+//! (the messenger's user data, not a process global: tests run as threads of one process) and checked
+//! when the test ends: any message fails the test.
 
+use bounce::output::{self, RgbImage};
+use bounce_device::{Gpu, GpuOptions};
+use std::path::{Path, PathBuf};
+
+/// A device with validation on; asserts on drop that the validation layers said nothing.
+pub struct TestGpu {
+    pub gpu: Gpu,
+}
+
+impl TestGpu {
+    pub fn new() -> TestGpu {
+        let gpu = Gpu::new(&GpuOptions { validation: true, device: None }).unwrap_or_else(|e| {
+            panic!("cannot create a Vulkan device with validation (install mesa-vulkan-drivers and vulkan-validationlayers): {e}")
+        });
+        assert!(gpu.validation_enabled(), "validation layers requested but no debug messenger");
+        eprintln!("device: {}", gpu.name);
+        TestGpu { gpu }
+    }
+}
+
+impl Default for TestGpu {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl std::ops::Deref for TestGpu {
+    type Target = Gpu;
+    fn deref(&self) -> &Gpu {
+        &self.gpu
+    }
+}
+
+impl Drop for TestGpu {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            return;
+        }
+        let msgs = self.gpu.validation().messages();
+        assert!(msgs.is_empty(), "{} validation message(s):\n{}", msgs.len(), msgs.join("\n"));
+    }
+}
+
+/// The workspace root (tests run with the tests crate as working directory).
+pub fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+}
+
+pub fn default_scene() -> PathBuf {
+    workspace().join("assets/cornell-box/scene.toml")
+}
+
+/// Where failing tests leave their evidence.
+pub fn evidence_dir() -> PathBuf {
+    let base = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| workspace().join("target"));
+    let d = base.join("test-output");
+    let _ = std::fs::create_dir_all(&d);
+    d
+}
+
+/// relMSE as the project defines it: mean over pixels and channels of (t − r)² / (r² + 0.01).
+pub fn rel_mse(test: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
+    assert_eq!(test.len(), reference.len());
+    let mut s = 0.0f64;
+    for (t, r) in test.iter().zip(reference) {
+        for c in 0..3 {
+            let (t, r) = (t[c] as f64, r[c] as f64);
+            s += (t - r) * (t - r) / (r * r + 0.01);
+        }
+    }
+    s / (3 * test.len()) as f64
+}
+
+/// Mean over pixels and channels.
+pub fn mean(img: &[[f32; 3]]) -> f64 {
+    img.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * img.len()).max(1) as f64
+}
+
+/// Write `<name>-actual.exr`, `<name>-reference.exr` and `<name>-diff.exr` (|actual − reference|) to
+/// the evidence directory and return the paths, for the failure message.
+pub fn write_evidence(name: &str, actual: &RgbImage, reference: &RgbImage) -> String {
+    let dir = evidence_dir();
+    let diff = RgbImage {
+        width: actual.width,
+        height: actual.height,
+        pixels: actual
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .map(|(a, r)| [(a[0] - r[0]).abs(), (a[1] - r[1]).abs(), (a[2] - r[2]).abs()])
+            .collect(),
+    };
+    let mut paths = vec![];
+    for (suffix, img) in [("actual", actual), ("reference", reference), ("diff", &diff)] {
+        let p = dir.join(format!("{name}-{suffix}.exr"));
+        if output::write_exr(&p, img, &[]).is_ok() {
+            paths.push(p.display().to_string());
+        }
+    }
+    paths.join(", ")
+}

@@ -18,7 +18,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Parser, Debug)]
-#[command(name = "bounce", version, about = "One-bounce global illumination from point lights with virtual point lights, on Vulkan.")]
+#[command(
+    name = "bounce",
+    version,
+    about = "One-bounce global illumination from point lights with virtual point lights, on Vulkan."
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -69,9 +73,9 @@ pub struct RenderArgs {
     /// Print a per-pass GPU time table.
     #[arg(long)]
     pub timings: bool,
-    /// Paraboloid map resolution per face.
-    #[arg(long, default_value_t = 512)]
-    pub dprsm_res: u32,
+    /// Resolution per face of the paraboloid depth map used for direct-light shadows.
+    #[arg(long, default_value_t = 2048)]
+    pub shadow_res: u32,
 }
 
 /// An error the user can fix by changing the input or the machine (exit code 2).
@@ -92,7 +96,11 @@ fn bad(e: impl Into<anyhow::Error>) -> anyhow::Error {
 fn gpu_error(e: bounce_device::Error) -> anyhow::Error {
     use bounce_device::Error as E;
     match e {
-        E::Loader(_) | E::NoDevice(_) | E::NoMatchingDevice { .. } | E::MissingFeature { .. } | E::NoValidationLayer => bad(e),
+        E::Loader(_)
+        | E::NoDevice(_)
+        | E::NoMatchingDevice { .. }
+        | E::MissingFeature { .. }
+        | E::NoValidationLayer => bad(e),
         e => anyhow::Error::new(e).context("creating the Vulkan device"),
     }
 }
@@ -167,20 +175,24 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             ComponentArg::Indirect => Component::Indirect,
             ComponentArg::Combined => Component::Combined,
         },
-        dprsm_res: a.dprsm_res,
+        shadow_res: a.shadow_res,
         ..FrameSettings::default()
     };
     let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone() }).map_err(gpu_error)?;
     settings.validate(&gpu).map_err(bad)?;
     let renderer = Renderer::new(&gpu, &scene)?;
+    renderer.check(&settings).map_err(bad)?;
     let t0 = Instant::now();
-    let frame = renderer.render(&settings).map_err(|e| {
-        if e.to_string().contains("needs the VPL passes") {
-            bad(e)
-        } else {
-            e
-        }
-    })?;
+    let frame =
+        renderer.render(&settings).map_err(
+            |e| {
+                if e.to_string().contains("needs the VPL passes") {
+                    bad(e)
+                } else {
+                    e
+                }
+            },
+        )?;
     let wall = t0.elapsed().as_secs_f64();
     if a.validation {
         let msgs = gpu.validation().messages();
@@ -199,7 +211,7 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         ("seed", a.seed.to_string()),
         ("device", gpu.name.clone()),
         ("gpu_ms", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())),
-        ("dprsm_res", settings.dprsm_res.to_string()),
+        ("shadow_res", settings.shadow_res.to_string()),
         ("non_finite_pixels", bad_px.to_string()),
     ];
     output::write_exr(&a.out, &img, &meta)?;
@@ -219,7 +231,12 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         writeln!(out, "{:<12} {total}", "total")?;
         writeln!(out, "wall {wall:.3} s on {}", gpu.name)?;
     }
-    writeln!(err, "wrote {}{}", a.out.display(), a.png.as_ref().map(|p| format!(" and {}", p.display())).unwrap_or_default())
-        .context("writing to stderr")?;
+    writeln!(
+        err,
+        "wrote {}{}",
+        a.out.display(),
+        a.png.as_ref().map(|p| format!(" and {}", p.display())).unwrap_or_default()
+    )
+    .context("writing to stderr")?;
     Ok(())
 }

@@ -29,7 +29,8 @@ fn temp_path(path: &Path) -> PathBuf {
 /// Write with `write` to a temporary file, then rename over `path`; the temporary is removed on failure.
 fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let tmp = temp_path(path);
-    let r = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).with_context(|| format!("renaming into {}", path.display())));
+    let r = write(&tmp)
+        .and_then(|_| std::fs::rename(&tmp, path).with_context(|| format!("renaming into {}", path.display())));
     if r.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -55,9 +56,7 @@ pub fn write_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Re
         let value = Text::new_or_none(ascii(v)).context("EXR attribute value")?;
         image.attributes.other.insert(key, AttributeValue::Text(value));
     }
-    write_atomic(path, |tmp| {
-        image.write().to_file(tmp).with_context(|| format!("writing {}", path.display()))
-    })
+    write_atomic(path, |tmp| image.write().to_file(tmp).with_context(|| format!("writing {}", path.display())))
 }
 
 /// Read the first RGB(A) layer of an EXR as linear RGB, with its `bounce.*` string attributes.
@@ -73,7 +72,8 @@ pub fn read_exr(path: &Path) -> Result<(RgbImage, Vec<(String, String)>)> {
     .with_context(|| format!("reading {}", path.display()))?;
     let size = image.layer_data.size;
     let mut meta = vec![];
-    for (k, v) in &image.attributes.other {
+    // Custom header attributes may come back as image or layer attributes; take both.
+    for (k, v) in image.attributes.other.iter().chain(image.layer_data.attributes.other.iter()) {
         if let AttributeValue::Text(t) = v {
             meta.push((k.to_string(), t.to_string()));
         }

@@ -70,7 +70,11 @@ impl DescriptorWrites {
         self
     }
     pub fn storage_image(mut self, binding: u32, i: &Image) -> Self {
-        let info = vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: i.view, image_layout: vk::ImageLayout::GENERAL };
+        let info = vk::DescriptorImageInfo {
+            sampler: vk::Sampler::null(),
+            image_view: i.view,
+            image_layout: vk::ImageLayout::GENERAL,
+        };
         self.entries.push((binding, vk::DescriptorType::STORAGE_IMAGE, Info::Image(info)));
         self
     }
@@ -87,7 +91,13 @@ impl DescriptorWrites {
     }
 
     /// Push the set as set 0 of `layout`.
-    pub fn push(&self, gpu: &Gpu, cmd: vk::CommandBuffer, bind_point: vk::PipelineBindPoint, layout: vk::PipelineLayout) {
+    pub fn push(
+        &self,
+        gpu: &Gpu,
+        cmd: vk::CommandBuffer,
+        bind_point: vk::PipelineBindPoint,
+        layout: vk::PipelineLayout,
+    ) {
         let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = self
             .entries
             .iter()

@@ -50,11 +50,10 @@ unsafe extern "system" fn debug_callback(
     user: *mut c_void,
 ) -> vk::Bool32 {
     // Only the validation layer's warnings and errors count; the loader's general chatter does not.
-    let counted = severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-    ) && types.intersects(
-        vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-    );
+    let counted = severity
+        .intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+        && types
+            .intersects(vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE);
     if !counted || data.is_null() || user.is_null() {
         return vk::FALSE;
     }
@@ -170,7 +169,11 @@ fn check_suitable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::resu
     Ok(())
 }
 
-fn create_instance(entry: &ash::Entry, validation: bool, extra_exts: &[*const std::ffi::c_char]) -> Result<ash::Instance> {
+fn create_instance(
+    entry: &ash::Entry,
+    validation: bool,
+    extra_exts: &[*const std::ffi::c_char],
+) -> Result<ash::Instance> {
     let app = vk::ApplicationInfo::default()
         .application_name(c"bounce")
         .engine_name(c"bounce")
@@ -178,7 +181,8 @@ fn create_instance(entry: &ash::Entry, validation: bool, extra_exts: &[*const st
     let mut layers = vec![];
     let mut exts: Vec<*const std::ffi::c_char> = extra_exts.to_vec();
     if validation {
-        let available = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
+        let available =
+            unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
         if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
             return Err(Error::NoValidationLayer);
         }

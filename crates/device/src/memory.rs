@@ -156,7 +156,13 @@ pub struct ImageDesc {
 }
 
 impl ImageDesc {
-    pub fn new(name: impl Into<String>, width: u32, height: u32, format: vk::Format, usage: vk::ImageUsageFlags) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        width: u32,
+        height: u32,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Self {
         ImageDesc { name: name.into(), width, height, layers: 1, format, usage }
     }
     pub fn layers(mut self, layers: u32) -> Self {
@@ -169,7 +175,10 @@ impl ImageDesc {
 }
 
 pub fn is_depth_format(f: vk::Format) -> bool {
-    matches!(f, vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT)
+    matches!(
+        f,
+        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT
+    )
 }
 
 /// Bytes per texel of the formats bounce reads back.
@@ -186,7 +195,8 @@ pub fn texel_size(f: vk::Format) -> u64 {
 
 pub struct Image {
     pub raw: vk::Image,
-    /// The whole image: `TYPE_2D` for one layer, `TYPE_2D_ARRAY` for more.
+    /// The whole image: `TYPE_2D` for one layer, `TYPE_2D_ARRAY` for more; null when the usage takes no
+    /// view (transfer only).
     pub view: vk::ImageView,
     pub desc: ImageDesc,
     allocation: Option<Allocation>,
@@ -195,7 +205,11 @@ pub struct Image {
 
 impl std::fmt::Debug for Image {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Image({}, {}x{}x{} {:?})", self.desc.name, self.desc.width, self.desc.height, self.desc.layers, self.desc.format)
+        write!(
+            f,
+            "Image({}, {}x{}x{} {:?})",
+            self.desc.name, self.desc.width, self.desc.height, self.desc.layers, self.desc.format
+        )
     }
 }
 
@@ -246,9 +260,25 @@ impl Image {
                 return Err(Error::Alloc { name: desc.name.clone(), source });
             }
         };
-        let mut image = Image { raw, view: vk::ImageView::null(), desc: desc.clone(), allocation: Some(allocation), gpu: gpu.clone() };
+        let mut image = Image {
+            raw,
+            view: vk::ImageView::null(),
+            desc: desc.clone(),
+            allocation: Some(allocation),
+            gpu: gpu.clone(),
+        };
         let a = image.allocation.as_ref().unwrap();
         unsafe { gpu.device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
+        // Views exist only for usages that take one (a transfer-only image has none).
+        let viewable = vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+            | vk::ImageUsageFlags::INPUT_ATTACHMENT;
+        if !desc.usage.intersects(viewable) {
+            gpu.set_name(raw, &desc.name);
+            return Ok(image);
+        }
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
             .view_type(if desc.layers == 1 { vk::ImageViewType::TYPE_2D } else { vk::ImageViewType::TYPE_2D_ARRAY })
@@ -269,10 +299,7 @@ impl Image {
     }
 
     pub fn full_range(&self) -> vk::ImageSubresourceRange {
-        vk::ImageSubresourceRange::default()
-            .aspect_mask(self.aspect())
-            .level_count(1)
-            .layer_count(self.desc.layers)
+        vk::ImageSubresourceRange::default().aspect_mask(self.aspect()).level_count(1).layer_count(self.desc.layers)
     }
 
     pub fn extent(&self) -> vk::Extent2D {
@@ -300,10 +327,17 @@ impl Image {
                     vk::ImageSubresourceLayers::default().aspect_mask(self.aspect()).layer_count(self.desc.layers),
                 )
                 .image_extent(vk::Extent3D { width: self.desc.width, height: self.desc.height, depth: 1 });
-            gpu.device.cmd_copy_image_to_buffer(cmd, self.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, staging.raw, &[region]);
+            gpu.device.cmd_copy_image_to_buffer(
+                cmd,
+                self.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                staging.raw,
+                &[region],
+            );
             sync::buffer_barrier(gpu, cmd, staging.raw, Access::TransferWrite, Access::HostRead);
         })?;
-        Ok(staging.mapped().expect("GpuToCpu memory is mapped")[..(layer_bytes * self.desc.layers as u64) as usize].to_vec())
+        Ok(staging.mapped().expect("GpuToCpu memory is mapped")[..(layer_bytes * self.desc.layers as u64) as usize]
+            .to_vec())
     }
 }
 

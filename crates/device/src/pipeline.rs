@@ -93,9 +93,17 @@ pub struct ComputePipeline {
 }
 
 impl ComputePipeline {
-    pub fn new(gpu: &Gpu, name: &str, spirv: &[u32], bindings: &[Binding], push_constant_size: u32, spec: &[(u32, u32)]) -> Result<Self> {
+    pub fn new(
+        gpu: &Gpu,
+        name: &str,
+        spirv: &[u32],
+        bindings: &[Binding],
+        push_constant_size: u32,
+        spec: &[(u32, u32)],
+    ) -> Result<Self> {
         let l = make_layouts(gpu, bindings, push_constant_size, name)?;
-        let mut me = ComputePipeline { pipeline: vk::Pipeline::null(), layout: l.pipeline, set_layout: l.set, gpu: gpu.clone() };
+        let mut me =
+            ComputePipeline { pipeline: vk::Pipeline::null(), layout: l.pipeline, set_layout: l.set, gpu: gpu.clone() };
         let module = shader_module(gpu, spirv)?;
         let (entries, data) = spec_entries(spec);
         let si = spec_info(&entries, &data);
@@ -119,13 +127,26 @@ impl ComputePipeline {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
             writes.push(&self.gpu, cmd, vk::PipelineBindPoint::COMPUTE, self.layout);
             if !push.is_empty() {
-                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE, 0, push);
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout,
+                    vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    push,
+                );
             }
         }
     }
 
     /// Bind, push, and dispatch enough `local`-sized groups to cover `size` invocations per axis.
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, writes: &crate::DescriptorWrites, push: &[u8], size: [u32; 3], local: [u32; 3]) {
+    pub fn dispatch(
+        &self,
+        cmd: vk::CommandBuffer,
+        writes: &crate::DescriptorWrites,
+        push: &[u8],
+        size: [u32; 3],
+        local: [u32; 3],
+    ) {
         self.bind(cmd, writes, push);
         let g = |n: u32, l: u32| n.div_ceil(l).max(1);
         unsafe { self.gpu.device.cmd_dispatch(cmd, g(size[0], local[0]), g(size[1], local[1]), g(size[2], local[2])) };
@@ -143,7 +164,8 @@ impl Drop for ComputePipeline {
 }
 
 /// A graphics pipeline for dynamic rendering: no vertex input (vertices are pulled from storage
-/// buffers), no culling (every surface is two-sided), depth test LESS when a depth format is given.
+/// buffers), no culling (every surface is two-sided), depth test `depth_compare` when a depth format is
+/// given.
 pub struct GraphicsPipelineDesc<'a> {
     pub name: &'a str,
     pub vertex: &'a [u32],
@@ -151,6 +173,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub fragment: &'a [u32],
     pub color_formats: &'a [vk::Format],
     pub depth_format: Option<vk::Format>,
+    /// Depth test (with writes) when `depth_format` is set.
+    pub depth_compare: vk::CompareOp,
     pub bindings: &'a [Binding],
     pub push_constant_size: u32,
     pub spec: &'a [(u32, u32)],
@@ -166,7 +190,12 @@ pub struct GraphicsPipeline {
 impl GraphicsPipeline {
     pub fn new(gpu: &Gpu, desc: &GraphicsPipelineDesc) -> Result<Self> {
         let l = make_layouts(gpu, desc.bindings, desc.push_constant_size, desc.name)?;
-        let mut me = GraphicsPipeline { pipeline: vk::Pipeline::null(), layout: l.pipeline, set_layout: l.set, gpu: gpu.clone() };
+        let mut me = GraphicsPipeline {
+            pipeline: vk::Pipeline::null(),
+            layout: l.pipeline,
+            set_layout: l.set,
+            gpu: gpu.clone(),
+        };
         let mut modules = vec![(vk::ShaderStageFlags::VERTEX, shader_module(gpu, desc.vertex)?)];
         if let Some(g) = desc.geometry {
             modules.push((vk::ShaderStageFlags::GEOMETRY, shader_module(gpu, g)?));
@@ -176,7 +205,9 @@ impl GraphicsPipeline {
         let si = spec_info(&entries, &data);
         let stages: Vec<_> = modules
             .iter()
-            .map(|(s, m)| vk::PipelineShaderStageCreateInfo::default().stage(*s).module(*m).name(c"main").specialization_info(&si))
+            .map(|(s, m)| {
+                vk::PipelineShaderStageCreateInfo::default().stage(*s).module(*m).name(c"main").specialization_info(&si)
+            })
             .collect();
         let vi = vk::PipelineVertexInputStateCreateInfo::default();
         let ia = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
@@ -190,7 +221,7 @@ impl GraphicsPipeline {
         let ds = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth_format.is_some())
             .depth_write_enable(desc.depth_format.is_some())
-            .depth_compare_op(vk::CompareOp::LESS);
+            .depth_compare_op(desc.depth_compare);
         let blend: Vec<_> = desc
             .color_formats
             .iter()
@@ -228,12 +259,25 @@ impl GraphicsPipeline {
         let d = &self.gpu.device;
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
-            let vp = vk::Viewport { x: 0.0, y: 0.0, width: extent.width as f32, height: extent.height as f32, min_depth: 0.0, max_depth: 1.0 };
+            let vp = vk::Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: extent.width as f32,
+                height: extent.height as f32,
+                min_depth: 0.0,
+                max_depth: 1.0,
+            };
             d.cmd_set_viewport(cmd, 0, &[vp]);
             d.cmd_set_scissor(cmd, 0, &[vk::Rect2D { offset: vk::Offset2D::default(), extent }]);
             writes.push(&self.gpu, cmd, vk::PipelineBindPoint::GRAPHICS, self.layout);
             if !push.is_empty() {
-                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE, 0, push);
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout,
+                    vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    push,
+                );
             }
         }
     }

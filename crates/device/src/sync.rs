@@ -60,14 +60,18 @@ impl Access {
                 L::SHADER_READ_ONLY_OPTIMAL,
                 false,
             ),
-            Access::ComputeWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL, true),
+            Access::ComputeWrite => {
+                (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL, true)
+            }
             Access::FragmentRead => (
                 S::FRAGMENT_SHADER,
                 A::SHADER_SAMPLED_READ | A::SHADER_STORAGE_READ | A::UNIFORM_READ,
                 L::SHADER_READ_ONLY_OPTIMAL,
                 false,
             ),
-            Access::FragmentWrite => (S::FRAGMENT_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL, true),
+            Access::FragmentWrite => {
+                (S::FRAGMENT_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL, true)
+            }
             Access::ColorAttachment => (
                 S::COLOR_ATTACHMENT_OUTPUT,
                 A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE,

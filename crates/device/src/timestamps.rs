@@ -53,7 +53,12 @@ impl TimestampPool {
         }
         let mut out = vec![0u64; self.used as usize];
         unsafe {
-            self.gpu.device.get_query_pool_results(self.pool, 0, &mut out, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+            self.gpu.device.get_query_pool_results(
+                self.pool,
+                0,
+                &mut out,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
         }
         .vk("vkGetQueryPoolResults")?;
         Ok(out)

@@ -41,19 +41,11 @@ impl Camera {
             ));
         }
         if !(self.fov_y_deg.is_finite() && self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
-            return Err(format!(
-                "camera fov_y must be in (0, 180) degrees, got {}",
-                self.fov_y_deg
-            ));
+            return Err(format!("camera fov_y must be in (0, 180) degrees, got {}", self.fov_y_deg));
         }
         let to_target = self.target - self.eye;
         // Relative test: a camera 1e6 units from the origin cannot resolve a 1e-9 offset in f32.
-        let scale = self
-            .eye
-            .abs()
-            .max_element()
-            .max(self.target.abs().max_element())
-            .max(1.0);
+        let scale = self.eye.abs().max_element().max(self.target.abs().max_element()).max(1.0);
         if to_target.length() <= 1e-6 * scale {
             return Err(format!(
                 "camera eye and target coincide ({:?}); the view direction is undefined",
@@ -124,12 +116,7 @@ impl Camera {
             Vec4::new(right.x, true_up.x, -forward.x, 0.0),
             Vec4::new(right.y, true_up.y, -forward.y, 0.0),
             Vec4::new(right.z, true_up.z, -forward.z, 0.0),
-            Vec4::new(
-                -right.dot(self.eye),
-                -true_up.dot(self.eye),
-                forward.dot(self.eye),
-                1.0,
-            ),
+            Vec4::new(-right.dot(self.eye), -true_up.dot(self.eye), forward.dot(self.eye), 1.0),
         );
         let t = self.tan_half_fov();
         let aspect = w as f32 / h as f32;
@@ -155,12 +142,7 @@ mod tests {
     use super::*;
 
     fn cam() -> Camera {
-        Camera {
-            eye: Vec3::new(0.3, 1.0, 3.9),
-            target: Vec3::new(-0.2, 0.9, 0.0),
-            up: Vec3::Y,
-            fov_y_deg: 39.3,
-        }
+        Camera { eye: Vec3::new(0.3, 1.0, 3.9), target: Vec3::new(-0.2, 0.9, 0.0), up: Vec3::Y, fov_y_deg: 39.3 }
     }
 
     fn close(a: Vec3, b: Vec3, eps: f32) -> bool {
@@ -202,11 +184,7 @@ mod tests {
         // Pixel (0, 0)'s centre is half a pixel inside the corner.
         let p00 = c.ray_dir(0, 0, w, h);
         let ndc = Vec3::new(0.5 / w as f32 * 2.0 - 1.0, 1.0 - 0.5 / h as f32 * 2.0, 0.0);
-        assert!(close(
-            p00,
-            (f + ndc.x * t * aspect * r + ndc.y * t * u).normalize(),
-            1e-6
-        ));
+        assert!(close(p00, (f + ndc.x * t * aspect * r + ndc.y * t * u).normalize(), 1e-6));
         assert!(p00.dot(r) < 0.0 && p00.dot(u) > 0.0);
         // The full vertical extent spans fov_y.
         let top = c.ray_dir_f(w as f32 / 2.0, 0.0, w, h);
@@ -222,14 +200,7 @@ mod tests {
         let (near, far) = (0.05, 50.0);
         let m = c.view_proj(w, h, near, far);
         let (_, _, f) = c.basis();
-        for (i, j) in [
-            (0, 0),
-            (319, 0),
-            (0, 199),
-            (319, 199),
-            (160, 100),
-            (17, 123),
-        ] {
+        for (i, j) in [(0, 0), (319, 0), (0, 199), (319, 199), (160, 100), (17, 123)] {
             let d = c.ray_dir(i, j, w, h);
             for dist in [0.5f32, 3.0, 20.0] {
                 let p = c.eye + d * dist;
@@ -237,16 +208,8 @@ mod tests {
                 let ndc = clip.truncate() / clip.w;
                 let want_x = (i as f32 + 0.5) / w as f32 * 2.0 - 1.0;
                 let want_y = (j as f32 + 0.5) / h as f32 * 2.0 - 1.0;
-                assert!(
-                    (ndc.x - want_x).abs() < 1e-5,
-                    "x {i},{j}: {} vs {want_x}",
-                    ndc.x
-                );
-                assert!(
-                    (ndc.y - want_y).abs() < 1e-5,
-                    "y {i},{j}: {} vs {want_y}",
-                    ndc.y
-                );
+                assert!((ndc.x - want_x).abs() < 1e-5, "x {i},{j}: {} vs {want_x}", ndc.x);
+                assert!((ndc.y - want_y).abs() < 1e-5, "y {i},{j}: {} vs {want_y}", ndc.y);
                 // Clip w is the depth along forward; depth is in (0, 1).
                 assert!((clip.w - d.dot(f) * dist).abs() < 1e-4);
                 assert!(ndc.z > 0.0 && ndc.z < 1.0);
@@ -266,38 +229,16 @@ mod tests {
     #[test]
     fn invalid_cameras_are_rejected() {
         assert!(cam().validate().is_ok());
-        let same = Camera {
-            target: cam().eye,
-            ..cam()
-        };
+        let same = Camera { target: cam().eye, ..cam() };
         assert!(same.validate().unwrap_err().contains("coincide"));
-        let parallel = Camera {
-            eye: Vec3::ZERO,
-            target: Vec3::new(0.0, 5.0, 0.0),
-            up: Vec3::Y,
-            fov_y_deg: 40.0,
-        };
+        let parallel = Camera { eye: Vec3::ZERO, target: Vec3::new(0.0, 5.0, 0.0), up: Vec3::Y, fov_y_deg: 40.0 };
         assert!(parallel.validate().unwrap_err().contains("parallel"));
-        let zero_up = Camera {
-            up: Vec3::ZERO,
-            ..cam()
-        };
+        let zero_up = Camera { up: Vec3::ZERO, ..cam() };
         assert!(zero_up.validate().is_err());
         for fov in [0.0, 180.0, -5.0, f32::NAN] {
-            assert!(
-                Camera {
-                    fov_y_deg: fov,
-                    ..cam()
-                }
-                .validate()
-                .is_err(),
-                "{fov}"
-            );
+            assert!(Camera { fov_y_deg: fov, ..cam() }.validate().is_err(), "{fov}");
         }
-        let nan = Camera {
-            eye: Vec3::new(f32::NAN, 0.0, 0.0),
-            ..cam()
-        };
+        let nan = Camera { eye: Vec3::new(f32::NAN, 0.0, 0.0), ..cam() };
         assert!(nan.validate().is_err());
     }
 }

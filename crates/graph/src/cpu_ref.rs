@@ -101,11 +101,7 @@ impl Bvh {
             .chunks_exact(3)
             .map(|v| {
                 let p0 = v[0].position().as_dvec3();
-                Tri {
-                    p0,
-                    e1: v[1].position().as_dvec3() - p0,
-                    e2: v[2].position().as_dvec3() - p0,
-                }
+                Tri { p0, e1: v[1].position().as_dvec3() - p0, e2: v[2].position().as_dvec3() - p0 }
             })
             .collect();
         // Bounds and centroids of the triangles that can be hit.
@@ -126,12 +122,7 @@ impl Bvh {
             }
         }
 
-        let mut nodes = vec![Node {
-            lo: DVec3::ZERO,
-            hi: DVec3::ZERO,
-            first: 0,
-            count: order.len() as u32,
-        }];
+        let mut nodes = vec![Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: order.len() as u32 }];
         // (node index, depth)
         let mut work = vec![(0usize, 0usize)];
         while let Some((ni, depth)) = work.pop() {
@@ -166,9 +157,7 @@ impl Bvh {
                         continue;
                     }
                     let scale = BINS as f64 / extent[axis];
-                    let bin_of = |k: u32| {
-                        (((centroid[k as usize][axis] - clo[axis]) * scale) as usize).min(BINS - 1)
-                    };
+                    let bin_of = |k: u32| (((centroid[k as usize][axis] - clo[axis]) * scale) as usize).min(BINS - 1);
                     let mut bcount = [0usize; BINS];
                     let mut blo = [DVec3::splat(f64::INFINITY); BINS];
                     let mut bhi = [DVec3::splat(f64::NEG_INFINITY); BINS];
@@ -181,11 +170,7 @@ impl Bvh {
                     // Sweep from the right to get suffix areas, then from the left.
                     let mut right_area = [0.0; BINS];
                     let mut right_count = [0usize; BINS];
-                    let (mut rlo, mut rhi, mut rc) = (
-                        DVec3::splat(f64::INFINITY),
-                        DVec3::splat(f64::NEG_INFINITY),
-                        0,
-                    );
+                    let (mut rlo, mut rhi, mut rc) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
                     for b in (1..BINS).rev() {
                         rlo = rlo.min(blo[b]);
                         rhi = rhi.max(bhi[b]);
@@ -193,11 +178,7 @@ impl Bvh {
                         right_area[b] = area(rlo, rhi);
                         right_count[b] = rc;
                     }
-                    let (mut llo, mut lhi, mut lc) = (
-                        DVec3::splat(f64::INFINITY),
-                        DVec3::splat(f64::NEG_INFINITY),
-                        0,
-                    );
+                    let (mut llo, mut lhi, mut lc) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
                     for b in 0..BINS - 1 {
                         llo = llo.min(blo[b]);
                         lhi = lhi.max(bhi[b]);
@@ -223,9 +204,7 @@ impl Bvh {
                     }
                     let scale = BINS as f64 / extent[axis];
                     let split = partition(items, |k| {
-                        ((((centroid[k as usize][axis] - clo[axis]) * scale) as usize)
-                            .min(BINS - 1))
-                            < left_bins
+                        ((((centroid[k as usize][axis] - clo[axis]) * scale) as usize).min(BINS - 1)) < left_bins
                     });
                     if split > 0 && split < count {
                         mid = Some(split);
@@ -251,12 +230,7 @@ impl Bvh {
                 }
             };
             let left = nodes.len();
-            nodes.push(Node {
-                lo: DVec3::ZERO,
-                hi: DVec3::ZERO,
-                first: first as u32,
-                count: mid as u32,
-            });
+            nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: first as u32, count: mid as u32 });
             nodes.push(Node {
                 lo: DVec3::ZERO,
                 hi: DVec3::ZERO,
@@ -400,13 +374,7 @@ impl Bvh {
     }
 
     /// Closest hit with `t ∈ (t_min, t_max]`; tie rule as in [`Bvh::intersect`].
-    pub fn intersect_range(
-        &self,
-        origin: DVec3,
-        dir: DVec3,
-        t_min: f64,
-        t_max: f64,
-    ) -> Option<Hit> {
+    pub fn intersect_range(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         self.traverse(origin, dir, t_min, t_max, |k, t, u, v, cur_max| {
             let better = match &best {
@@ -414,11 +382,7 @@ impl Bvh {
                 Some(b) => t < b.t || (t == b.t && k < b.tri),
             };
             if better {
-                best = Some(Hit {
-                    t,
-                    tri: k,
-                    barycentrics: DVec3::new(1.0 - u - v, u, v),
-                });
+                best = Some(Hit { t, tri: k, barycentrics: DVec3::new(1.0 - u - v, u, v) });
                 Some(t)
             } else {
                 Some(cur_max)
@@ -440,11 +404,7 @@ impl Bvh {
                     Some(b) => t < b.t || (t == b.t && k < b.tri),
                 };
                 if better {
-                    best = Some(Hit {
-                        t,
-                        tri: k,
-                        barycentrics: DVec3::new(1.0 - u - v, u, v),
-                    });
+                    best = Some(Hit { t, tri: k, barycentrics: DVec3::new(1.0 - u - v, u, v) });
                 }
             }
         }
@@ -543,14 +503,10 @@ fn surface(scene: &Scene, bvh: &Bvh, hit: &Hit, eye: DVec3) -> Surface {
     let t = hit.tri as usize;
     let v = &scene.vertices[3 * t..3 * t + 3];
     let w = hit.barycentrics;
-    let x = v[0].position().as_dvec3() * w.x
-        + v[1].position().as_dvec3() * w.y
-        + v[2].position().as_dvec3() * w.z;
+    let x = v[0].position().as_dvec3() * w.x + v[1].position().as_dvec3() * w.y + v[2].position().as_dvec3() * w.z;
     let tri = &bvh.tris[t];
     let mut ng = tri.e1.cross(tri.e2).normalize_or_zero();
-    let interp = v[0].normal().as_dvec3() * w.x
-        + v[1].normal().as_dvec3() * w.y
-        + v[2].normal().as_dvec3() * w.z;
+    let interp = v[0].normal().as_dvec3() * w.x + v[1].normal().as_dvec3() * w.y + v[2].normal().as_dvec3() * w.z;
     let mut n = interp.normalize_or_zero();
     if n == DVec3::ZERO {
         n = ng;
@@ -564,12 +520,7 @@ fn surface(scene: &Scene, bvh: &Bvh, hit: &Hit, eye: DVec3) -> Surface {
     }
     let uv = v[0].uv().as_dvec2() * w.x + v[1].uv().as_dvec2() * w.y + v[2].uv().as_dvec2() * w.z;
     let material = scene.tri_material.get(t).copied().unwrap_or(u32::MAX);
-    Surface {
-        x,
-        n,
-        ng,
-        albedo: albedo(scene, material, uv.as_vec2()),
-    }
+    Surface { x, n, ng, albedo: albedo(scene, material, uv.as_vec2()) }
 }
 
 /// Direct radiance toward the eye at `s`, and the bit mask of lights that reach it
@@ -579,11 +530,7 @@ fn shade(scene: &Scene, bvh: &Bvh, s: &Surface) -> (Vec3, u32) {
     let mut lit = 0u32;
     let brdf = s.albedo.as_dvec3() / std::f64::consts::PI;
     for (k, l) in scene.lights.iter().enumerate() {
-        let lp = DVec3::new(
-            l.position[0] as f64,
-            l.position[1] as f64,
-            l.position[2] as f64,
-        );
+        let lp = DVec3::new(l.position[0] as f64, l.position[1] as f64, l.position[2] as f64);
         let to = lp - s.x;
         let d2 = to.length_squared();
         if d2 <= 0.0 {
@@ -594,11 +541,7 @@ fn shade(scene: &Scene, bvh: &Bvh, s: &Surface) -> (Vec3, u32) {
             continue;
         }
         lit |= 1 << k.min(31);
-        let i = DVec3::new(
-            l.intensity[0] as f64,
-            l.intensity[1] as f64,
-            l.intensity[2] as f64,
-        );
+        let i = DVec3::new(l.intensity[0] as f64, l.intensity[1] as f64, l.intensity[2] as f64);
         sum += brdf * i * (cos / d2);
     }
     (sum.as_vec3(), lit)
@@ -647,14 +590,7 @@ fn primary_ray(scene: &Scene, x: f32, y: f32, w: u32, h: u32) -> (DVec3, DVec3) 
 
 /// The reference for pixel `(i, j)` of a `w×h` image (centre ray), or `None` when the centre ray
 /// hits nothing (radiance 0). See [`DirectSample::shadow_edge`] for the edge rule.
-pub fn direct_at_pixel(
-    scene: &Scene,
-    bvh: &Bvh,
-    i: u32,
-    j: u32,
-    w: u32,
-    h: u32,
-) -> Option<DirectSample> {
+pub fn direct_at_pixel(scene: &Scene, bvh: &Bvh, i: u32, j: u32, w: u32, h: u32) -> Option<DirectSample> {
     let (eye, dir) = primary_ray(scene, i as f32 + 0.5, j as f32 + 0.5, w, h);
     let hit = bvh.intersect(eye, dir)?;
     let s = surface(scene, bvh, &hit, eye);
@@ -699,18 +635,12 @@ pub fn direct_radiance_at_pixel(scene: &Scene, bvh: &Bvh, i: u32, j: u32, w: u32
 
 /// Runs `f(i, j)` for every pixel of a `w×h` image on all cores; row-major, row 0 = top.
 /// Rows are dealt out in small chunks round-robin so that expensive regions spread over threads.
-fn per_pixel<T: Send + Clone + Default>(
-    w: u32,
-    h: u32,
-    f: impl Fn(u32, u32) -> T + Sync,
-) -> Vec<T> {
+fn per_pixel<T: Send + Clone + Default>(w: u32, h: u32, f: impl Fn(u32, u32) -> T + Sync) -> Vec<T> {
     let mut out = vec![T::default(); w as usize * h as usize];
     if out.is_empty() {
         return out;
     }
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(64);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(64);
     let rows_per_chunk = (h as usize).div_ceil(threads * 8).max(1);
     let mut buckets: Vec<Vec<(usize, &mut [T])>> = (0..threads).map(|_| Vec::new()).collect();
     for (ci, chunk) in out.chunks_mut(rows_per_chunk * w as usize).enumerate() {
@@ -740,9 +670,7 @@ pub fn render_direct(scene: &Scene, w: u32, h: u32) -> Vec<[f32; 3]> {
 
 /// [`render_direct`] with a prebuilt BVH.
 pub fn render_direct_with(scene: &Scene, bvh: &Bvh, w: u32, h: u32) -> Vec<[f32; 3]> {
-    per_pixel(w, h, |i, j| {
-        direct_radiance_at_pixel(scene, bvh, i, j, w, h).to_array()
-    })
+    per_pixel(w, h, |i, j| direct_radiance_at_pixel(scene, bvh, i, j, w, h).to_array())
 }
 
 /// [`direct_at_pixel`] for every pixel (row-major, row 0 = top), on all cores.
@@ -774,19 +702,10 @@ mod tests {
         if blocker {
             // Small triangle halfway up, around the light's axis; clear of the camera ray.
             let y = h * 0.5;
-            tris.push([
-                Vec3::new(-0.3, y, -0.3),
-                Vec3::new(0.3, y, -0.3),
-                Vec3::new(0.0, y, 0.3),
-            ]);
+            tris.push([Vec3::new(-0.3, y, -0.3), Vec3::new(0.3, y, -0.3), Vec3::new(0.0, y, 0.3)]);
         }
         let albedo = vec![Vec3::splat(0.5); tris.len()];
-        let camera = Camera {
-            eye: Vec3::new(2.0, 3.0, 0.0),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y_deg: 40.0,
-        };
+        let camera = Camera { eye: Vec3::new(2.0, 3.0, 0.0), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 40.0 };
         let light = point_light(Vec3::new(0.0, h, 0.0), Vec3::splat(intensity));
         Scene::from_triangles(&tris, &albedo, camera, &[light])
     }
@@ -808,15 +727,8 @@ mod tests {
         let s = direct_at_pixel(&scene, &bvh, 3, 17, w, hh).expect("hits the floor");
         let to = Vec3::new(0.0, h, 0.0) - s.position;
         let want = 0.5 / PI * i * (to.normalize().y) / to.length_squared();
-        assert!(
-            (s.radiance.x - want).abs() < 1e-5 * want,
-            "{} vs {want}",
-            s.radiance.x
-        );
-        assert_eq!(
-            direct_radiance_at_pixel(&scene, &bvh, 3, 17, w, hh),
-            s.radiance
-        );
+        assert!((s.radiance.x - want).abs() < 1e-5 * want, "{} vs {want}", s.radiance.x);
+        assert_eq!(direct_radiance_at_pixel(&scene, &bvh, 3, 17, w, hh), s.radiance);
         // render_direct agrees with the per-pixel call, row 0 = top.
         let img = render_direct(&scene, w, hh);
         assert_eq!(img.len(), (w * hh) as usize);
@@ -829,11 +741,7 @@ mod tests {
         let bvh = Bvh::new(&scene);
         let (w, h) = (31, 21);
         let s = direct_at_pixel(&scene, &bvh, 15, 10, w, h).expect("hits the floor");
-        assert!(
-            s.position.length() < 1e-5,
-            "camera ray not blocked: {:?}",
-            s.position
-        );
+        assert!(s.position.length() < 1e-5, "camera ray not blocked: {:?}", s.position);
         assert_eq!(s.radiance, Vec3::ZERO);
         assert!(!s.shadow_edge, "the shadow centre is uniform");
         // Walk right from the centre until lit: the boundary pixel is flagged.
@@ -853,12 +761,7 @@ mod tests {
         let sky = Scene::from_triangles(
             &floor(),
             &[Vec3::ONE; 2],
-            Camera {
-                eye: Vec3::new(0.0, 1.0, 0.0),
-                target: Vec3::new(0.0, 2.0, 1.0),
-                up: Vec3::Y,
-                fov_y_deg: 30.0,
-            },
+            Camera { eye: Vec3::new(0.0, 1.0, 0.0), target: Vec3::new(0.0, 2.0, 1.0), up: Vec3::Y, fov_y_deg: 30.0 },
             &scene.lights,
         );
         let sky_bvh = Bvh::new(&sky);
@@ -878,12 +781,7 @@ mod tests {
         );
         tris.push([a, c, b]);
         tris.push([a, d, c]);
-        let camera = Camera {
-            eye: Vec3::new(0.0, 5.0, 0.0),
-            target: Vec3::ZERO,
-            up: Vec3::NEG_Z,
-            fov_y_deg: 30.0,
-        };
+        let camera = Camera { eye: Vec3::new(0.0, 5.0, 0.0), target: Vec3::ZERO, up: Vec3::NEG_Z, fov_y_deg: 30.0 };
         // The light is far to the side, so the square's shadow falls outside the view.
         let light = point_light(Vec3::new(40.0, 3.0, 0.0), Vec3::splat(100.0));
         let scene = Scene::from_triangles(&tris, &[Vec3::splat(0.5); 4], camera, &[light]);
@@ -897,9 +795,7 @@ mod tests {
                 let s = img[(j * n + i) as usize].expect("everything hits");
                 // A pixel is interior when its whole 3×3 neighbourhood sees the same surface.
                 let same = (j - 1..=j + 1).all(|y| {
-                    (i - 1..=i + 1).all(|x| {
-                        on_square(&img[(y * n + x) as usize].expect("hit")) == on_square(&s)
-                    })
+                    (i - 1..=i + 1).all(|x| on_square(&img[(y * n + x) as usize].expect("hit")) == on_square(&s))
                 });
                 if same {
                     assert!(!s.shadow_edge, "interior pixel {i},{j} flagged");
@@ -911,51 +807,28 @@ mod tests {
         assert!(edges > 0);
         let flagged = img.iter().flatten().filter(|s| s.shadow_edge).count();
         // Every boundary pixel on at least one side is flagged (the two sides of the silhouette).
-        assert!(
-            flagged >= edges / 2,
-            "{flagged} flagged, {edges} boundary pixels"
-        );
+        assert!(flagged >= edges / 2, "{flagged} flagged, {edges} boundary pixels");
     }
 
     #[test]
     fn textured_albedo_is_nearest_repeat_and_v_flipped() {
         // 2×2 texture: row 0 (top) red, green; row 1 (bottom) blue, white (sRGB 255 / 128).
-        let texels = [
-            [255u8, 0, 0, 255],
-            [0, 255, 0, 255],
-            [0, 0, 128, 255],
-            [255, 255, 255, 255],
-        ]
-        .map(u32::from_le_bytes)
-        .to_vec();
+        let texels = [[255u8, 0, 0, 255], [0, 255, 0, 255], [0, 0, 128, 255], [255, 255, 255, 255]]
+            .map(u32::from_le_bytes)
+            .to_vec();
         let v = |p: [f32; 3], uv: [f32; 2]| Vertex {
             position_u: [p[0], p[1], p[2], uv[0]],
             normal_v: [0.0, 1.0, 0.0, uv[1]],
         };
-        let vertices = vec![
-            v([0.0, 0.0, 0.0], [0.0, 0.0]),
-            v([1.0, 0.0, 0.0], [1.0, 0.0]),
-            v([0.0, 0.0, -1.0], [0.0, 1.0]),
-        ];
+        let vertices =
+            vec![v([0.0, 0.0, 0.0], [0.0, 0.0]), v([1.0, 0.0, 0.0], [1.0, 0.0]), v([0.0, 0.0, -1.0], [0.0, 1.0])];
         let scene = Scene::from_raw(
             vertices,
             vec![0],
-            vec![Material {
-                kd_tex: [0.5, 1.0, 1.0, 0.0],
-            }],
-            vec![TextureInfo {
-                offset: 0,
-                width: 2,
-                height: 2,
-                pad: 0,
-            }],
+            vec![Material { kd_tex: [0.5, 1.0, 1.0, 0.0] }],
+            vec![TextureInfo { offset: 0, width: 2, height: 2, pad: 0 }],
             texels,
-            Camera {
-                eye: Vec3::new(0.0, 3.0, 0.0),
-                target: Vec3::ZERO,
-                up: Vec3::NEG_Z,
-                fov_y_deg: 40.0,
-            },
+            Camera { eye: Vec3::new(0.0, 3.0, 0.0), target: Vec3::ZERO, up: Vec3::NEG_Z, fov_y_deg: 40.0 },
             vec![point_light(Vec3::Y, Vec3::ONE)],
         );
         // v small = bottom of the image = texel row 1.
@@ -972,18 +845,9 @@ mod tests {
 
         let blue = srgb_to_linear(128.0 / 255.0);
         assert!((blue - 0.2158605).abs() < 1e-6);
-        assert_eq!(
-            albedo(&scene, 0, Vec2::new(0.1, 0.1)),
-            Vec3::new(0.0, 0.0, blue)
-        );
-        assert_eq!(
-            albedo(&scene, 0, Vec2::new(0.1, 0.9)),
-            Vec3::new(0.5, 0.0, 0.0)
-        );
-        assert_eq!(
-            albedo(&scene, 0, Vec2::new(0.9, 0.1)),
-            Vec3::new(0.5, 1.0, 1.0)
-        );
+        assert_eq!(albedo(&scene, 0, Vec2::new(0.1, 0.1)), Vec3::new(0.0, 0.0, blue));
+        assert_eq!(albedo(&scene, 0, Vec2::new(0.1, 0.9)), Vec3::new(0.5, 0.0, 0.0));
+        assert_eq!(albedo(&scene, 0, Vec2::new(0.9, 0.1)), Vec3::new(0.5, 1.0, 1.0));
         assert_eq!(srgb_to_linear(0.0), 0.0);
         assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
         assert!((srgb_to_linear(0.04) - 0.04 / 12.92).abs() < 1e-9);
@@ -1016,8 +880,7 @@ mod tests {
         let pad = (hi - lo) * 0.2;
         let mut hits = 0;
         for _ in 0..rays {
-            let o =
-                lo - pad + DVec3::new(rng.next(), rng.next(), rng.next()) * (hi - lo + 2.0 * pad);
+            let o = lo - pad + DVec3::new(rng.next(), rng.next(), rng.next()) * (hi - lo + 2.0 * pad);
             let d = rng.dir();
             let a = bvh.intersect(o, d);
             let b = bvh.intersect_brute_force(o, d);
@@ -1040,8 +903,7 @@ mod tests {
 
     #[test]
     fn bvh_matches_brute_force_on_the_cornell_box() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/cornell-box/scene.toml");
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
         let scene = crate::scene::load(&path).expect("cornell box loads");
         let hits = check_bvh_against_brute_force(&scene, 20_000, 0x9e3779b97f4a7c15);
         assert!(hits > 10_000, "{hits}");
@@ -1059,12 +921,7 @@ mod tests {
         // Clustered duplicates and a degenerate triangle.
         tris.push(tris[0]);
         tris.push([Vec3::ONE; 3]);
-        let camera = Camera {
-            eye: Vec3::splat(-5.0),
-            target: Vec3::splat(5.0),
-            up: Vec3::Y,
-            fov_y_deg: 60.0,
-        };
+        let camera = Camera { eye: Vec3::splat(-5.0), target: Vec3::splat(5.0), up: Vec3::Y, fov_y_deg: 60.0 };
         let scene = Scene::from_triangles(
             &tris,
             &vec![Vec3::splat(0.5); tris.len()],
@@ -1077,8 +934,7 @@ mod tests {
 
     #[test]
     fn cornell_box_direct_image_is_sane() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/cornell-box/scene.toml");
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
         let scene = crate::scene::load(&path).expect("cornell box loads");
         let bvh = Bvh::new(&scene);
         let n = 64;
@@ -1100,17 +956,10 @@ mod tests {
         let mut sorted = lum.clone();
         sorted.sort_by(f32::total_cmp);
         let (median, p90) = (sorted[sorted.len() / 2], sorted[sorted.len() * 9 / 10]);
-        assert!(
-            median > 0.05 && median < 0.5,
-            "median direct radiance {median}"
-        );
+        assert!(median > 0.05 && median < 0.5, "median direct radiance {median}");
         assert!(p90 > 0.1 && p90 < 1.0, "90th percentile {p90}");
         // The boxes cast shadows: some pixels that hit get no direct light.
-        let shadowed = samples
-            .iter()
-            .flatten()
-            .filter(|s| s.radiance == Vec3::ZERO)
-            .count();
+        let shadowed = samples.iter().flatten().filter(|s| s.radiance == Vec3::ZERO).count();
         assert!(shadowed > 100, "{shadowed}");
         // The left wall is red, the right wall green (image +x = camera right).
         let mid = (n / 2) as usize * n as usize;
@@ -1140,12 +989,7 @@ mod tests {
         }
         let vertices: Vec<Vertex> = tris
             .iter()
-            .flat_map(|t| {
-                t.map(|p| Vertex {
-                    position_u: [p.x, p.y, p.z, 0.0],
-                    normal_v: [0.0, 1.0, 0.0, 0.0],
-                })
-            })
+            .flat_map(|t| t.map(|p| Vertex { position_u: [p.x, p.y, p.z, 0.0], normal_v: [0.0, 1.0, 0.0, 0.0] }))
             .collect();
         let start = std::time::Instant::now();
         let bvh = Bvh::from_vertices(&vertices);
@@ -1153,9 +997,7 @@ mod tests {
         assert!(secs < 20.0, "BVH build took {secs} s");
         assert!(bvh.node_count() > 1000);
         // A vertical ray through the middle hits the surface.
-        let hit = bvh
-            .intersect(DVec3::new(1.575, 5.0, 1.575), DVec3::NEG_Y)
-            .expect("hit");
+        let hit = bvh.intersect(DVec3::new(1.575, 5.0, 1.575), DVec3::NEG_Y).expect("hit");
         assert!((hit.t - 5.0).abs() < 0.2);
     }
 }

@@ -2,8 +2,8 @@
 //! gbuffer → dprsm → direct, handles flowing from call to call. [`Renderer`] owns the passes (their
 //! pipelines) and the uploaded scene; [`Renderer::render`] builds, executes and reads back one frame.
 
-use crate::graph::{Graph, Handle, PassTiming};
 use crate::gpu_scene::GpuScene;
+use crate::graph::{Graph, Handle, PassTiming};
 use crate::passes::{direct::Direct, dprsm::Dprsm, gbuffer::GBuffer, FrameInputs};
 use crate::scene::Scene;
 use crate::shader_types::FrameUniforms;
@@ -33,8 +33,10 @@ pub struct FrameSettings {
     pub width: u32,
     pub height: u32,
     pub component: Component,
-    /// Paraboloid map resolution per face.
-    pub dprsm_res: u32,
+    /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
+    /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
+    /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
+    pub shadow_res: u32,
     /// Constant shadow bias, as a fraction of the scene diagonal.
     pub shadow_bias: f32,
     /// Slope shadow bias, in texels.
@@ -47,7 +49,7 @@ impl Default for FrameSettings {
             width: 256,
             height: 256,
             component: Component::Direct,
-            dprsm_res: 512,
+            shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
         }
@@ -58,7 +60,7 @@ impl FrameSettings {
     /// Reject impossible settings with a message naming the setting and the device limit.
     pub fn validate(&self, gpu: &Gpu) -> Result<()> {
         let max = gpu.limits().max_image_dimension2_d;
-        for (what, v) in [("width", self.width), ("height", self.height), ("dprsm resolution", self.dprsm_res)] {
+        for (what, v) in [("width", self.width), ("height", self.height), ("shadow map resolution", self.shadow_res)] {
             if v == 0 {
                 bail!("{what} must be at least 1");
             }
@@ -66,7 +68,8 @@ impl FrameSettings {
                 bail!("{what} {v} exceeds the device limit maxImageDimension2D ({max})");
             }
         }
-        if !(self.shadow_bias.is_finite() && self.shadow_bias >= 0.0) || !(self.shadow_slope_bias.is_finite() && self.shadow_slope_bias >= 0.0) {
+        let ok = |v: f32| v.is_finite() && v >= 0.0;
+        if !ok(self.shadow_bias) || !ok(self.shadow_slope_bias) {
             bail!("shadow biases must be finite and non-negative");
         }
         Ok(())
@@ -101,7 +104,12 @@ impl FrameOutput {
 }
 
 /// The frame recipe: gbuffer → dprsm → direct. Returns the radiance image of the asked component.
-pub fn build_frame<'a>(r: &'a Renderer, g: &mut Graph<'a>, f: FrameInputs<'a>, s: &FrameSettings) -> Result<Handle<Image>> {
+pub fn build_frame<'a>(
+    r: &'a Renderer,
+    g: &mut Graph<'a>,
+    f: FrameInputs<'a>,
+    s: &FrameSettings,
+) -> Result<Handle<Image>> {
     let gbuffer = r.gbuffer.add(g, f);
     let shadow = r.dprsm.add(g, f);
     let direct = r.direct.add(g, f, &gbuffer, &shadow);
@@ -118,7 +126,7 @@ impl Renderer {
         Ok(Renderer {
             gpu: gpu.clone(),
             scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
-            camera: scene.camera.clone(),
+            camera: scene.camera,
             gbuffer: GBuffer::new(gpu).context("creating the gbuffer pass")?,
             dprsm: Dprsm::new(gpu).context("creating the dprsm pass")?,
             direct: Direct::new(gpu).context("creating the direct pass")?,
@@ -145,11 +153,12 @@ impl Renderer {
         // Paraboloid far: no light-to-surface distance exceeds the diagonal of bounds that hold both.
         let far_light = diag * 1.01;
         FrameUniforms {
-            view_proj: self.camera.view_proj(s.width, s.height, near, far_cam).to_cols_array_2d(),
+            // near and far swapped: reverse Z (see passes/gbuffer.rs).
+            view_proj: self.camera.view_proj(s.width, s.height, far_cam, near).to_cols_array_2d(),
             eye: [eye.x, eye.y, eye.z, 0.0],
             scene_min: [lo.x, lo.y, lo.z, diag],
             scene_max: [hi.x, hi.y, hi.z, far_light],
-            size: [s.width, s.height, self.scene.light_count, s.dprsm_res],
+            size: [s.width, s.height, self.scene.light_count, s.shadow_res],
             shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
         }
     }
@@ -172,16 +181,38 @@ impl Renderer {
         Ok(uniforms)
     }
 
+    /// Memory the paraboloid depth maps take: 2 faces × lights × res² × 4 bytes.
+    pub fn shadow_map_bytes(&self, s: &FrameSettings) -> u64 {
+        2 * self.scene.light_count as u64 * (s.shadow_res as u64).pow(2) * 4
+    }
+
+    /// Reject settings this device or scene cannot run (bad input, not a runtime failure).
+    pub fn check(&self, s: &FrameSettings) -> Result<()> {
+        s.validate(&self.gpu)?;
+        const MAX_SHADOW_BYTES: u64 = 2 << 30;
+        let bytes = self.shadow_map_bytes(s);
+        if bytes > MAX_SHADOW_BYTES {
+            bail!(
+                "the shadow maps would take {} MiB ({} lights × 2 faces × {}²); lower --shadow-res (limit {} MiB)",
+                bytes >> 20,
+                self.scene.light_count,
+                s.shadow_res,
+                MAX_SHADOW_BYTES >> 20
+            );
+        }
+        Ok(())
+    }
+
     /// Build, execute and read back one frame.
     pub fn render(&self, s: &FrameSettings) -> Result<FrameOutput> {
-        s.validate(&self.gpu)?;
+        self.check(s)?;
         let uniforms = self.uniform_buffer(s)?;
         let inputs = FrameInputs {
             scene: &self.scene,
             uniforms: &uniforms,
             width: s.width,
             height: s.height,
-            dprsm_res: s.dprsm_res,
+            shadow_res: s.shadow_res,
         };
         let mut g = Graph::new(&self.gpu);
         let out = build_frame(self, &mut g, inputs, s)?;
@@ -201,9 +232,15 @@ impl Renderer {
 
     /// Render the dual paraboloid depth maps alone (for tests and diagnostics): distance/far per texel.
     pub fn render_dprsm(&self, s: &FrameSettings) -> Result<Vec<f32>> {
-        s.validate(&self.gpu)?;
+        self.check(s)?;
         let uniforms = self.uniform_buffer(s)?;
-        let inputs = FrameInputs { scene: &self.scene, uniforms: &uniforms, width: s.width, height: s.height, dprsm_res: s.dprsm_res };
+        let inputs = FrameInputs {
+            scene: &self.scene,
+            uniforms: &uniforms,
+            width: s.width,
+            height: s.height,
+            shadow_res: s.shadow_res,
+        };
         let mut g = Graph::new(&self.gpu);
         let shadow = self.dprsm.add(&mut g, inputs);
         g.export(&shadow.depth);

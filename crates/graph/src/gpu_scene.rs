@@ -25,7 +25,9 @@ pub struct GpuScene {
 impl GpuScene {
     pub fn upload(gpu: &Gpu, scene: &Scene) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let up = |name: &str, bytes: &[u8]| Buffer::with_data(gpu, name, storage, bytes).with_context(|| format!("uploading {name}"));
+        let up = |name: &str, bytes: &[u8]| {
+            Buffer::with_data(gpu, name, storage, bytes).with_context(|| format!("uploading {name}"))
+        };
         let max_range = gpu.limits().max_storage_buffer_range as u64;
         for (what, n) in [("vertex buffer", scene.vertices.len() * 32), ("texel buffer", scene.texels.len() * 4)] {
             anyhow::ensure!(

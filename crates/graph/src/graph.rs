@@ -194,12 +194,20 @@ impl<'a> Graph<'a> {
 
     /// A buffer that lives for this frame only.
     pub fn create_buffer(&mut self, desc: BufferDesc) -> Handle<Buffer> {
-        let id = self.push(desc.name.clone(), Storage::TransientBuffer(desc, None), State::from_access(Access::Nothing, false));
+        let id = self.push(
+            desc.name.clone(),
+            Storage::TransientBuffer(desc, None),
+            State::from_access(Access::Nothing, false),
+        );
         Handle { id, _t: PhantomData }
     }
     /// An image that lives for this frame only.
     pub fn create_image(&mut self, desc: ImageDesc) -> Handle<Image> {
-        let id = self.push(desc.name.clone(), Storage::TransientImage(desc, None), State::from_access(Access::Nothing, false));
+        let id = self.push(
+            desc.name.clone(),
+            Storage::TransientImage(desc, None),
+            State::from_access(Access::Nothing, false),
+        );
         Handle { id, _t: PhantomData }
     }
     pub fn import_buffer(&mut self, p: &'a Persistent<Buffer>) -> Handle<Buffer> {

@@ -59,21 +59,13 @@ pub enum SceneError {
     /// The scene TOML is malformed or does not match the contract (unknown or missing keys, wrong
     /// types). `line` is 1-based.
     #[error("{}", located(path, *line, msg))]
-    Toml {
-        path: PathBuf,
-        line: Option<usize>,
-        msg: String,
-    },
+    Toml { path: PathBuf, line: Option<usize>, msg: String },
     /// The scene TOML parsed but a value is out of range (fov, intensity, light count, camera...).
     #[error("{}: {msg}", path.display())]
     Invalid { path: PathBuf, msg: String },
     /// The OBJ or MTL file is malformed. `line` is 1-based where it is known.
     #[error("{}", located(path, *line, msg))]
-    Mesh {
-        path: PathBuf,
-        line: Option<usize>,
-        msg: String,
-    },
+    Mesh { path: PathBuf, line: Option<usize>, msg: String },
     /// A `map_Kd` texture is missing or cannot be decoded.
     #[error("texture {}: {msg}", path.display())]
     Texture { path: PathBuf, msg: String },
@@ -94,18 +86,11 @@ fn one_line(s: &str) -> String {
 }
 
 fn mesh_err(path: &Path, line: Option<usize>, msg: impl Into<String>) -> SceneError {
-    SceneError::Mesh {
-        path: path.to_path_buf(),
-        line,
-        msg: msg.into(),
-    }
+    SceneError::Mesh { path: path.to_path_buf(), line, msg: msg.into() }
 }
 
 fn invalid(path: &Path, msg: impl Into<String>) -> SceneError {
-    SceneError::Invalid {
-        path: path.to_path_buf(),
-        msg: msg.into(),
-    }
+    SceneError::Invalid { path: path.to_path_buf(), msg: msg.into() }
 }
 
 /// Timing and size facts about a load, for logging.
@@ -205,10 +190,7 @@ struct RenderToml {
 
 /// Builds the GPU light record of an isotropic point light.
 pub fn point_light(position: Vec3, intensity: Vec3) -> Light {
-    Light {
-        position: position.extend(1.0).to_array(),
-        intensity: intensity.extend(0.0).to_array(),
-    }
+    Light { position: position.extend(1.0).to_array(), intensity: intensity.extend(0.0).to_array() }
 }
 
 /// Parses and validates scene TOML `text` as if it were the file `path` (used in messages and to
@@ -217,9 +199,7 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     let raw: SceneToml = toml::from_str(text).map_err(|e| SceneError::Toml {
         path: path.to_path_buf(),
         // toml's Display is a multi-line snippet; keep the message and compute the line ourselves.
-        line: e
-            .span()
-            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
+        line: e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
         msg: one_line(e.message()),
     })?;
 
@@ -229,43 +209,23 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         up: Vec3::from_array(raw.camera.up),
         fov_y_deg: raw.camera.fov_y,
     };
-    camera
-        .validate()
-        .map_err(|m| invalid(path, format!("[camera]: {m}")))?;
+    camera.validate().map_err(|m| invalid(path, format!("[camera]: {m}")))?;
 
     if raw.light.is_empty() {
         return Err(invalid(path, "at least one [[light]] is required"));
     }
     if raw.light.len() > MAX_LIGHTS {
-        return Err(invalid(
-            path,
-            format!(
-                "{} lights given, at most {MAX_LIGHTS} are supported",
-                raw.light.len()
-            ),
-        ));
+        return Err(invalid(path, format!("{} lights given, at most {MAX_LIGHTS} are supported", raw.light.len())));
     }
     let mut lights = Vec::with_capacity(raw.light.len());
     for (k, l) in raw.light.iter().enumerate() {
         if !l.position.iter().all(|x| x.is_finite()) {
-            return Err(invalid(
-                path,
-                format!("light[{k}].position {:?} must be finite", l.position),
-            ));
+            return Err(invalid(path, format!("light[{k}].position {:?} must be finite", l.position)));
         }
         if !l.intensity.iter().all(|x| x.is_finite() && *x >= 0.0) {
-            return Err(invalid(
-                path,
-                format!(
-                    "light[{k}].intensity {:?} must be finite and >= 0",
-                    l.intensity
-                ),
-            ));
+            return Err(invalid(path, format!("light[{k}].intensity {:?} must be finite and >= 0", l.intensity)));
         }
-        lights.push(point_light(
-            Vec3::from_array(l.position),
-            Vec3::from_array(l.intensity),
-        ));
+        lights.push(point_light(Vec3::from_array(l.position), Vec3::from_array(l.intensity)));
     }
 
     let (render_width, render_height) = match &raw.render {
@@ -275,10 +235,7 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     for (name, v) in [("width", render_width), ("height", render_height)] {
         if let Some(v) = v {
             if !(1..=MAX_RENDER_DIM).contains(&v) {
-                return Err(invalid(
-                    path,
-                    format!("[render] {name} = {v} is outside 1..={MAX_RENDER_DIM}"),
-                ));
+                return Err(invalid(path, format!("[render] {name} = {v} is outside 1..={MAX_RENDER_DIM}")));
             }
         }
     }
@@ -287,20 +244,10 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         return Err(invalid(path, "mesh path is empty"));
     }
     let mesh = Path::new(&raw.mesh);
-    let mesh_path = if mesh.is_absolute() {
-        mesh.to_path_buf()
-    } else {
-        path.parent().unwrap_or(Path::new("")).join(mesh)
-    };
+    let mesh_path =
+        if mesh.is_absolute() { mesh.to_path_buf() } else { path.parent().unwrap_or(Path::new("")).join(mesh) };
 
-    Ok(SceneDesc {
-        path: path.to_path_buf(),
-        mesh_path,
-        camera,
-        lights,
-        render_width,
-        render_height,
-    })
+    Ok(SceneDesc { path: path.to_path_buf(), mesh_path, camera, lights, render_width, render_height })
 }
 
 /// Loads the scene TOML at `path` and everything it references.
@@ -316,10 +263,7 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
 /// `vn` is rare and cannot be attributed reliably).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let start = Instant::now();
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
     let mut scene = Scene::from_desc(parse_desc(&text, path)?)?;
     scene.stats.load_seconds = start.elapsed().as_secs_f64();
     Ok(scene)
@@ -380,34 +324,22 @@ impl Scene {
         camera: Camera,
         lights: Vec<Light>,
     ) -> Scene {
-        assert_eq!(
-            vertices.len(),
-            3 * tri_material.len(),
-            "one material per triangle"
-        );
+        assert_eq!(vertices.len(), 3 * tri_material.len(), "one material per triangle");
+        assert!(tri_material.iter().all(|&m| (m as usize) < materials.len()), "material index out of range");
         assert!(
-            tri_material.iter().all(|&m| (m as usize) < materials.len()),
-            "material index out of range"
-        );
-        assert!(
-            materials
-                .iter()
-                .all(|m| m.texture().into_iter().all(|t| t < textures.len())),
+            materials.iter().all(|m| m.texture().into_iter().all(|t| t < textures.len())),
             "texture index out of range"
         );
         assert!(
-            textures.iter().all(
-                |t| t.offset as usize + (t.width as usize * t.height as usize) <= texels.len()
-            ),
+            textures.iter().all(|t| t.offset as usize + (t.width as usize * t.height as usize) <= texels.len()),
             "texture texels out of range"
         );
         let (bounds_min, bounds_max) = if vertices.is_empty() {
             (Vec3::ZERO, Vec3::ZERO)
         } else {
-            vertices.iter().fold(
-                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                |(lo, hi), v| (lo.min(v.position()), hi.max(v.position())),
-            )
+            vertices.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), v| {
+                (lo.min(v.position()), hi.max(v.position()))
+            })
         };
         let stats = LoadStats {
             triangles: tri_material.len(),
@@ -439,12 +371,7 @@ impl Scene {
     ///
     /// # Panics
     /// If `albedo.len() != triangles.len()`.
-    pub fn from_triangles(
-        triangles: &[[Vec3; 3]],
-        albedo: &[Vec3],
-        camera: Camera,
-        lights: &[Light],
-    ) -> Scene {
+    pub fn from_triangles(triangles: &[[Vec3; 3]], albedo: &[Vec3], camera: Camera, lights: &[Light]) -> Scene {
         assert_eq!(triangles.len(), albedo.len(), "one albedo per triangle");
         let mut vertices = Vec::with_capacity(triangles.len() * 3);
         let mut degenerate = 0;
@@ -455,12 +382,7 @@ impl Scene {
             });
             vertices.extend(tri.iter().map(|&p| make_vertex(p, n, [0.0, 0.0])));
         }
-        let materials = albedo
-            .iter()
-            .map(|a| Material {
-                kd_tex: [a.x, a.y, a.z, -1.0],
-            })
-            .collect();
+        let materials = albedo.iter().map(|a| Material { kd_tex: [a.x, a.y, a.z, -1.0] }).collect();
         let mut scene = Scene::from_raw(
             vertices,
             (0..triangles.len() as u32).collect(),
@@ -492,21 +414,9 @@ impl Scene {
         let mut far: f32 = 0.0;
         for k in 0..8 {
             let corner = Vec3::new(
-                if k & 1 == 0 {
-                    self.bounds_min.x
-                } else {
-                    self.bounds_max.x
-                },
-                if k & 2 == 0 {
-                    self.bounds_min.y
-                } else {
-                    self.bounds_max.y
-                },
-                if k & 4 == 0 {
-                    self.bounds_min.z
-                } else {
-                    self.bounds_max.z
-                },
+                if k & 1 == 0 { self.bounds_min.x } else { self.bounds_max.x },
+                if k & 2 == 0 { self.bounds_min.y } else { self.bounds_max.y },
+                if k & 4 == 0 { self.bounds_min.z } else { self.bounds_max.z },
             );
             far = far.max(corner.distance(eye));
         }
@@ -517,11 +427,7 @@ impl Scene {
     /// One line for the log: file, triangle count, materials, textures, bounds, lights, load time.
     pub fn summary(&self) -> String {
         let (lo, hi) = (self.bounds_min, self.bounds_max);
-        let mut s = format!(
-            "{}: {} triangles",
-            self.path.display(),
-            self.triangle_count()
-        );
+        let mut s = format!("{}: {} triangles", self.path.display(), self.triangle_count());
         if self.stats.degenerate_triangles > 0 {
             let _ = write!(s, " ({} degenerate)", self.stats.degenerate_triangles);
         }
@@ -559,10 +465,7 @@ struct MeshData {
 }
 
 fn make_vertex(p: Vec3, n: Vec3, uv: [f32; 2]) -> Vertex {
-    Vertex {
-        position_u: [p.x, p.y, p.z, uv[0]],
-        normal_v: [n.x, n.y, n.z, uv[1]],
-    }
+    Vertex { position_u: [p.x, p.y, p.z, uv[0]], normal_v: [n.x, n.y, n.z, uv[1]] }
 }
 
 /// Unit face normal `normalize(cross(p1 − p0, p2 − p0))`, or `None` for a zero-area or non-finite
@@ -630,29 +533,22 @@ fn prescan_obj(text: &str, path: &Path) -> Result<Prescan, SceneError> {
         };
         match kw {
             "v" => {
-                let xyz = parse_floats(&mut toks, 3).ok_or_else(|| {
-                    mesh_err(path, Some(lineno), "vertex position needs three numbers")
-                })?;
+                let xyz = parse_floats(&mut toks, 3)
+                    .ok_or_else(|| mesh_err(path, Some(lineno), "vertex position needs three numbers"))?;
                 if !xyz.iter().all(|x| x.is_finite()) {
-                    return Err(mesh_err(
-                        path,
-                        Some(lineno),
-                        format!("non-finite vertex position {xyz:?}"),
-                    ));
+                    return Err(mesh_err(path, Some(lineno), format!("non-finite vertex position {xyz:?}")));
                 }
                 nv += 1;
             }
             "vt" => {
                 // tobj needs u and v; a lone u (allowed by the spec) would be a parse error there.
-                parse_floats(&mut toks, 2).ok_or_else(|| {
-                    mesh_err(path, Some(lineno), "texture coordinate needs u and v")
-                })?;
+                parse_floats(&mut toks, 2)
+                    .ok_or_else(|| mesh_err(path, Some(lineno), "texture coordinate needs u and v"))?;
                 nvt += 1;
             }
             "vn" => {
-                parse_floats(&mut toks, 3).ok_or_else(|| {
-                    mesh_err(path, Some(lineno), "vertex normal needs three numbers")
-                })?;
+                parse_floats(&mut toks, 3)
+                    .ok_or_else(|| mesh_err(path, Some(lineno), "vertex normal needs three numbers"))?;
                 nvn += 1;
             }
             "f" => {
@@ -663,11 +559,7 @@ fn prescan_obj(text: &str, path: &Path) -> Result<Prescan, SceneError> {
                     corners += 1;
                     for (slot, part) in corner.split('/').enumerate() {
                         if slot >= 3 {
-                            return Err(mesh_err(
-                                path,
-                                Some(lineno),
-                                format!("malformed face corner `{corner}`"),
-                            ));
+                            return Err(mesh_err(path, Some(lineno), format!("malformed face corner `{corner}`")));
                         }
                         if part.is_empty() {
                             if slot == 0 {
@@ -679,21 +571,14 @@ fn prescan_obj(text: &str, path: &Path) -> Result<Prescan, SceneError> {
                             }
                             continue;
                         }
-                        let idx: isize = part.parse().map_err(|_| {
-                            mesh_err(
-                                path,
-                                Some(lineno),
-                                format!("malformed face corner `{corner}`"),
-                            )
-                        })?;
+                        let idx: isize = part
+                            .parse()
+                            .map_err(|_| mesh_err(path, Some(lineno), format!("malformed face corner `{corner}`")))?;
                         if idx == 0 {
                             return Err(mesh_err(
                                 path,
                                 Some(lineno),
-                                format!(
-                                    "{} index 0 in `{corner}` (OBJ indices start at 1)",
-                                    names[slot]
-                                ),
+                                format!("{} index 0 in `{corner}` (OBJ indices start at 1)", names[slot]),
                             ));
                         }
                         if idx < 0 {
@@ -730,10 +615,7 @@ fn prescan_obj(text: &str, path: &Path) -> Result<Prescan, SceneError> {
                 if rest.is_empty() {
                     return Err(mesh_err(path, Some(lineno), format!("{kw} without a name")));
                 }
-                if kw == "mtllib"
-                    && rest.contains(char::is_whitespace)
-                    && !obj_dir.join(rest).is_file()
-                {
+                if kw == "mtllib" && rest.contains(char::is_whitespace) && !obj_dir.join(rest).is_file() {
                     for name in rest.split_whitespace() {
                         out.push_str("mtllib ");
                         out.push_str(name);
@@ -761,10 +643,7 @@ fn prescan_obj(text: &str, path: &Path) -> Result<Prescan, SceneError> {
             return Err(mesh_err(
                 path,
                 Some(lineno),
-                format!(
-                    "{} index {idx} is out of range (the file defines {})",
-                    names[slot], counts[slot]
-                ),
+                format!("{} index {idx} is out of range (the file defines {})", names[slot], counts[slot]),
             ));
         }
     }
@@ -805,11 +684,7 @@ fn sanitize_mtl(text: &str, path: &Path) -> Result<String, SceneError> {
                     }
                 };
                 if !nums.iter().all(|x| x.is_finite() && *x >= 0.0) {
-                    return Err(mesh_err(
-                        path,
-                        Some(lineno),
-                        format!("Kd {nums:?} must be finite and >= 0"),
-                    ));
+                    return Err(mesh_err(path, Some(lineno), format!("Kd {nums:?} must be finite and >= 0")));
                 }
                 let _ = write!(out, "Kd {} {} {}", nums[0], nums[1], nums[2]);
             }
@@ -835,35 +710,24 @@ fn map_kd_file(spec: &str) -> Option<String> {
 
 /// Decodes an image file into packed sRGB RGBA8 texels (r in the low byte), row 0 = top.
 fn load_texture(path: &Path) -> Result<(u32, u32, Vec<u32>), SceneError> {
-    let terr = |msg: String| SceneError::Texture {
-        path: path.to_path_buf(),
-        msg,
-    };
+    let terr = |msg: String| SceneError::Texture { path: path.to_path_buf(), msg };
     let reader = image::ImageReader::open(path)
         .map_err(|e| terr(format!("cannot open: {e}")))?
         .with_guessed_format()
         .map_err(|e| terr(format!("cannot read: {e}")))?;
-    let img = reader
-        .decode()
-        .map_err(|e| terr(format!("cannot decode: {}", one_line(&e.to_string()))))?;
+    let img = reader.decode().map_err(|e| terr(format!("cannot decode: {}", one_line(&e.to_string()))))?;
     let rgba = img.to_rgba8();
     let (w, h) = rgba.dimensions();
     if w == 0 || h == 0 {
         return Err(terr("image is empty".to_string()));
     }
-    let texels = rgba
-        .pixels()
-        .map(|p| u32::from_le_bytes(p.0))
-        .collect::<Vec<u32>>();
+    let texels = rgba.pixels().map(|p| u32::from_le_bytes(p.0)).collect::<Vec<u32>>();
     Ok((w, h, texels))
 }
 
 /// Loads the OBJ at `obj_path` (with its MTL libraries and textures) and flattens it.
 fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
-    let bytes = std::fs::read(obj_path).map_err(|source| SceneError::Io {
-        path: obj_path.to_path_buf(),
-        source,
-    })?;
+    let bytes = std::fs::read(obj_path).map_err(|source| SceneError::Io { path: obj_path.to_path_buf(), source })?;
     // Lossy: stray Latin-1 bytes in comments or group names must not make the file unreadable.
     let text = String::from_utf8_lossy(&bytes);
     let pre = prescan_obj(&text, obj_path)?;
@@ -886,42 +750,34 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
         ignore_lines: true,
         ..Default::default()
     };
-    let loaded = tobj::load_obj_buf(
-        &mut std::io::Cursor::new(pre.text.as_bytes()),
-        &options,
-        |rel: &Path| {
-            let full = obj_dir.join(rel);
-            let result = std::fs::read_to_string(&full)
-                .map_err(|source| SceneError::Io {
-                    path: full.clone(),
-                    source,
-                })
-                .and_then(|t| sanitize_mtl(&t, &full))
-                .and_then(|t| {
-                    tobj::load_mtl_buf(&mut std::io::Cursor::new(t.as_bytes()))
-                        .map_err(|e| mesh_err(&full, None, e.to_string()))
-                });
-            match result {
-                Ok((mats, map)) => {
-                    libs.borrow_mut().push((full, mats.len()));
-                    Ok((mats, map))
-                }
-                Err(e) => {
-                    let mut slot = mtl_error.borrow_mut();
-                    if slot.is_none() {
-                        *slot = Some(e);
-                    }
-                    Err(tobj::LoadError::GenericFailure)
-                }
+    let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(pre.text.as_bytes()), &options, |rel: &Path| {
+        let full = obj_dir.join(rel);
+        let result = std::fs::read_to_string(&full)
+            .map_err(|source| SceneError::Io { path: full.clone(), source })
+            .and_then(|t| sanitize_mtl(&t, &full))
+            .and_then(|t| {
+                tobj::load_mtl_buf(&mut std::io::Cursor::new(t.as_bytes()))
+                    .map_err(|e| mesh_err(&full, None, e.to_string()))
+            });
+        match result {
+            Ok((mats, map)) => {
+                libs.borrow_mut().push((full, mats.len()));
+                Ok((mats, map))
             }
-        },
-    );
+            Err(e) => {
+                let mut slot = mtl_error.borrow_mut();
+                if slot.is_none() {
+                    *slot = Some(e);
+                }
+                Err(tobj::LoadError::GenericFailure)
+            }
+        }
+    });
     if let Some(e) = mtl_error.into_inner() {
         return Err(e);
     }
     let (models, tobj_materials) = loaded.map_err(|e| mesh_err(obj_path, None, e.to_string()))?;
-    let tobj_materials =
-        tobj_materials.map_err(|e| mesh_err(obj_path, None, format!("material library: {e}")))?;
+    let tobj_materials = tobj_materials.map_err(|e| mesh_err(obj_path, None, format!("material library: {e}")))?;
     let libs = libs.into_inner();
 
     // Materials and textures.
@@ -941,11 +797,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
         let mut tex = -1.0f32;
         if let Some(spec) = &m.diffuse_texture {
             let file = map_kd_file(spec).ok_or_else(|| {
-                mesh_err(
-                    mtl_path,
-                    None,
-                    format!("material `{}`: map_Kd without a file name", m.name),
-                )
+                mesh_err(mtl_path, None, format!("material `{}`: map_Kd without a file name", m.name))
             })?;
             let tex_path = mtl_dir.join(file);
             let idx = match texture_index.get(&tex_path) {
@@ -954,11 +806,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
                     let (w, h, data) = load_texture(&tex_path).map_err(|e| match e {
                         SceneError::Texture { path, msg } => SceneError::Texture {
                             path,
-                            msg: format!(
-                                "{msg} (map_Kd of material `{}` in {})",
-                                m.name,
-                                mtl_path.display()
-                            ),
+                            msg: format!("{msg} (map_Kd of material `{}` in {})", m.name, mtl_path.display()),
                         },
                         other => other,
                     })?;
@@ -969,12 +817,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
                             path: tex_path.clone(),
                             msg: "the scene's textures exceed 2^32 texels".to_string(),
                         })?;
-                    textures.push(TextureInfo {
-                        offset,
-                        width: w,
-                        height: h,
-                        pad: 0,
-                    });
+                    textures.push(TextureInfo { offset, width: w, height: h, pad: 0 });
                     texels.extend_from_slice(&data);
                     texture_index.insert(tex_path, textures.len() - 1);
                     textures.len() - 1
@@ -987,9 +830,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
             None if tex >= 0.0 => [1.0; 3],
             None => [DEFAULT_ALBEDO; 3],
         };
-        materials.push(Material {
-            kd_tex: [kd[0], kd[1], kd[2], tex],
-        });
+        materials.push(Material { kd_tex: [kd[0], kd[1], kd[2], tex] });
     }
     // Index of the grey default material, appended only if some face needs it.
     let mut default_material: Option<u32> = None;
@@ -1009,9 +850,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
         let mat = match mesh.material_id {
             Some(id) if id < materials.len() => id as u32,
             _ => *default_material.get_or_insert_with(|| {
-                materials.push(Material {
-                    kd_tex: [DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO, -1.0],
-                });
+                materials.push(Material { kd_tex: [DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO, -1.0] });
                 (materials.len() - 1) as u32
             }),
         };
@@ -1057,10 +896,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
                         f64::from(mesh.texcoords[2 * idx[c] + 1]) as f32,
                     );
                     // Non-finite UVs would make the texel index undefined on the GPU.
-                    [
-                        if u.is_finite() { u } else { 0.0 },
-                        if v.is_finite() { v } else { 0.0 },
-                    ]
+                    [if u.is_finite() { u } else { 0.0 }, if v.is_finite() { v } else { 0.0 }]
                 } else {
                     [0.0, 0.0]
                 };
@@ -1070,15 +906,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
         }
     }
 
-    Ok(MeshData {
-        vertices,
-        tri_material,
-        materials,
-        textures,
-        texels,
-        degenerate,
-        repaired_normals,
-    })
+    Ok(MeshData { vertices, tri_material, materials, textures, texels, degenerate, repaired_normals })
 }
 
 #[cfg(test)]
@@ -1104,10 +932,7 @@ mod tests {
     fn temp_dir(tag: &str) -> TempDir {
         static COUNTER: AtomicUsize = AtomicUsize::new(0);
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!(
-            "bounce-scene-test-{}-{tag}-{n}",
-            std::process::id()
-        ));
+        let dir = std::env::temp_dir().join(format!("bounce-scene-test-{}-{tag}-{n}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("create temp dir");
         TempDir(dir)
@@ -1154,11 +979,7 @@ height = 256
         assert_eq!((d.render_width, d.render_height), (Some(256), Some(256)));
 
         // [render] is optional, integers are accepted for floats, several lights are fine.
-        let text = EXAMPLE
-            .split("[render]")
-            .next()
-            .unwrap_or_default()
-            .replace("3.9]", "4]")
+        let text = EXAMPLE.split("[render]").next().unwrap_or_default().replace("3.9]", "4]")
             + "[[light]]\nposition = [1, 1, 1]\nintensity = [0, 0, 0]\n";
         let d = parse_desc(&text, Path::new("scene.toml")).expect("parses");
         assert_eq!((d.render_width, d.render_height), (None, None));
@@ -1172,43 +993,27 @@ height = 256
         let cases = [
             ("mesh = \"room.obj\"", "mesh = \"room.obj\"\nmeshes = 1"),
             ("fov_y  = 39.3", "fov = 39.3\nfov_y = 39.3"),
-            (
-                "position  = [0.0, 1.8, 0.0]",
-                "position = [0.0, 1.8, 0.0]\ncolor = 1",
-            ),
+            ("position  = [0.0, 1.8, 0.0]", "position = [0.0, 1.8, 0.0]\ncolor = 1"),
             ("width  = 256", "width = 256\nsamples = 4"),
         ];
         for (from, to) in cases {
             let text = replace(EXAMPLE, from, to);
             let err = parse_desc(&text, Path::new("scene.toml")).expect_err(to);
             let msg = err.to_string();
-            assert!(
-                matches!(err, SceneError::Toml { line: Some(_), .. }),
-                "{msg}"
-            );
+            assert!(matches!(err, SceneError::Toml { line: Some(_), .. }), "{msg}");
             assert!(msg.contains("unknown field"), "{msg}");
             assert!(msg.starts_with("scene.toml:"), "{msg}");
             assert!(!msg.contains('\n'), "{msg}");
         }
-        let err = parse_desc(
-            &replace(EXAMPLE, "fov_y  = 39.3", "fov = 39.3"),
-            Path::new("s.toml"),
-        )
-        .expect_err("fov typo");
+        let err =
+            parse_desc(&replace(EXAMPLE, "fov_y  = 39.3", "fov = 39.3"), Path::new("s.toml")).expect_err("fov typo");
         // `fov` is on line 6 of the example.
-        assert!(
-            err.to_string().starts_with("s.toml:6: unknown field `fov`"),
-            "{err}"
-        );
+        assert!(err.to_string().starts_with("s.toml:6: unknown field `fov`"), "{err}");
     }
 
     #[test]
     fn missing_required_keys_are_rejected() {
-        for key in [
-            "mesh = \"room.obj\"",
-            "fov_y  = 39.3",
-            "intensity = [5.0, 5.0, 5.0]",
-        ] {
+        for key in ["mesh = \"room.obj\"", "fov_y  = 39.3", "intensity = [5.0, 5.0, 5.0]"] {
             let text = replace(EXAMPLE, key, "");
             let err = parse_desc(&text, Path::new("scene.toml")).expect_err(key);
             assert!(err.to_string().contains("missing field"), "{err}");
@@ -1216,11 +1021,7 @@ height = 256
         // No light table at all.
         let no_light = EXAMPLE
             .lines()
-            .filter(|l| {
-                !l.starts_with("[[light]]")
-                    && !l.starts_with("position")
-                    && !l.starts_with("intensity")
-            })
+            .filter(|l| !l.starts_with("[[light]]") && !l.starts_with("position") && !l.starts_with("intensity"))
             .collect::<Vec<_>>()
             .join("\n");
         let err = parse_desc(&no_light, Path::new("scene.toml")).expect_err("no light");
@@ -1233,25 +1034,14 @@ height = 256
 
     #[test]
     fn malformed_toml_names_the_line() {
-        let text = replace(
-            EXAMPLE,
-            "up     = [0.0, 1.0, 0.0]",
-            "up     = [0.0, 1.0 0.0]",
-        );
+        let text = replace(EXAMPLE, "up     = [0.0, 1.0, 0.0]", "up     = [0.0, 1.0 0.0]");
         let err = parse_desc(&text, Path::new("dir/scene.toml")).expect_err("malformed");
         let msg = err.to_string();
-        assert!(
-            matches!(err, SceneError::Toml { line: Some(5), .. }),
-            "{msg}"
-        );
+        assert!(matches!(err, SceneError::Toml { line: Some(5), .. }), "{msg}");
         assert!(msg.starts_with("dir/scene.toml:5: "), "{msg}");
         assert!(!msg.contains('\n'));
         // An unterminated array is noticed on the next line.
-        let text = replace(
-            EXAMPLE,
-            "up     = [0.0, 1.0, 0.0]",
-            "up     = [0.0, 1.0, 0.0",
-        );
+        let text = replace(EXAMPLE, "up     = [0.0, 1.0, 0.0]", "up     = [0.0, 1.0, 0.0");
         let err = parse_desc(&text, Path::new("scene.toml")).expect_err("unterminated");
         assert!(err.to_string().starts_with("scene.toml:6: "), "{err}");
         // Wrong type.
@@ -1266,55 +1056,25 @@ height = 256
             ("fov_y  = 39.3", "fov_y = 0.0", "fov_y"),
             ("fov_y  = 39.3", "fov_y = 180.0", "fov_y"),
             ("fov_y  = 39.3", "fov_y = -10", "fov_y"),
-            (
-                "intensity = [5.0, 5.0, 5.0]",
-                "intensity = [5.0, -1.0, 5.0]",
-                "intensity",
-            ),
-            (
-                "intensity = [5.0, 5.0, 5.0]",
-                "intensity = [5.0, inf, 5.0]",
-                "intensity",
-            ),
-            (
-                "intensity = [5.0, 5.0, 5.0]",
-                "intensity = [5.0, nan, 5.0]",
-                "intensity",
-            ),
-            (
-                "position  = [0.0, 1.8, 0.0]",
-                "position = [0.0, inf, 0.0]",
-                "position",
-            ),
+            ("intensity = [5.0, 5.0, 5.0]", "intensity = [5.0, -1.0, 5.0]", "intensity"),
+            ("intensity = [5.0, 5.0, 5.0]", "intensity = [5.0, inf, 5.0]", "intensity"),
+            ("intensity = [5.0, 5.0, 5.0]", "intensity = [5.0, nan, 5.0]", "intensity"),
+            ("position  = [0.0, 1.8, 0.0]", "position = [0.0, inf, 0.0]", "position"),
             ("width  = 256", "width = 0", "width"),
             ("height = 256", "height = 16385", "height"),
-            (
-                "target = [0.0, 1.0, 0.0]",
-                "target = [0.0, 1.0, 3.9]",
-                "coincide",
-            ),
-            (
-                "up     = [0.0, 1.0, 0.0]",
-                "up = [0.0, 0.0, 1.0]",
-                "parallel",
-            ),
+            ("target = [0.0, 1.0, 0.0]", "target = [0.0, 1.0, 3.9]", "coincide"),
+            ("up     = [0.0, 1.0, 0.0]", "up = [0.0, 0.0, 1.0]", "parallel"),
         ];
         for (from, to, what) in bad {
             let text = replace(EXAMPLE, from, to);
             let err = parse_desc(&text, Path::new("scene.toml")).expect_err(to);
             let msg = err.to_string();
-            assert!(
-                msg.contains(what) && msg.starts_with("scene.toml"),
-                "{to}: {msg}"
-            );
+            assert!(msg.contains(what) && msg.starts_with("scene.toml"), "{to}: {msg}");
             assert!(!msg.contains('\n'));
         }
         // Negative width is a TOML type error (u32).
         let text = replace(EXAMPLE, "width  = 256", "width = -3");
-        assert!(matches!(
-            parse_desc(&text, Path::new("scene.toml")),
-            Err(SceneError::Toml { .. })
-        ));
+        assert!(matches!(parse_desc(&text, Path::new("scene.toml")), Err(SceneError::Toml { .. })));
         // 17 lights.
         let mut text = EXAMPLE.to_string();
         for _ in 0..16 {
@@ -1330,10 +1090,7 @@ height = 256
         let err = Scene::from_toml_str(EXAMPLE, &dir.join("scene.toml")).expect_err("no mesh");
         let msg = err.to_string();
         assert!(matches!(err, SceneError::Io { .. }));
-        assert!(
-            msg.contains(&*dir.join("room.obj").to_string_lossy()),
-            "{msg}"
-        );
+        assert!(msg.contains(&*dir.join("room.obj").to_string_lossy()), "{msg}");
 
         let err = load(&dir.join("nope.toml")).expect_err("no toml");
         assert!(err.to_string().contains("nope.toml"), "{err}");
@@ -1344,16 +1101,8 @@ height = 256
         assert!(err.to_string().contains("gone.mtl"), "{err}");
 
         // A missing texture is an error naming it (and the material).
-        write(
-            &dir,
-            "room.obj",
-            &format!("mtllib m.mtl\nusemtl tex\n{QUAD_OBJ}"),
-        );
-        write(
-            &dir,
-            "m.mtl",
-            "newmtl tex\nKd 1 1 1\nmap_Kd -bm 1 textures/albedo.png\n",
-        );
+        write(&dir, "room.obj", &format!("mtllib m.mtl\nusemtl tex\n{QUAD_OBJ}"));
+        write(&dir, "m.mtl", "newmtl tex\nKd 1 1 1\nmap_Kd -bm 1 textures/albedo.png\n");
         let err = Scene::from_toml_str(EXAMPLE, &dir.join("scene.toml")).expect_err("no png");
         let msg = err.to_string();
         assert!(matches!(err, SceneError::Texture { .. }), "{msg}");
@@ -1371,11 +1120,7 @@ height = 256
             ("v 0 0 0\nv 1 0 0\nv 0 0 1\n\nf 1 2 4\n", 5, "out of range"),
             ("v 0 0 0\nv 1 0 0\nv 0 0 1\nf -1 -2 -4\n", 4, "out of range"),
             ("v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 0\n", 4, "index 0"),
-            (
-                "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1/1 2/1 3/1\n",
-                4,
-                "texture coordinate index 1",
-            ),
+            ("v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1/1 2/1 3/1\n", 4, "texture coordinate index 1"),
             ("v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 x\n", 4, "malformed"),
             ("v 0 0\n", 1, "three numbers"),
         ];
@@ -1480,11 +1225,7 @@ f 4 4 4
         assert_eq!(kd(0), [0.1, 0.2, 0.3, -1.0]);
         assert_eq!(kd(1), [0.4, 0.5, 0.6, -1.0]);
 
-        write(
-            &dir,
-            "room.obj",
-            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-        );
+        write(&dir, "room.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
         write(&dir, "m.mtl", "newmtl red\nKd 0.8 0.1\n");
         let err = Scene::from_toml_str(EXAMPLE, &dir.join("scene.toml")).expect_err("bad Kd");
         assert!(err.to_string().contains("m.mtl:2: "), "{err}");
@@ -1494,14 +1235,8 @@ f 4 4 4
     fn texture_round_trips_into_texels() {
         let dir = temp_dir("texture");
         // 3×2 RGBA image with distinct sRGB values; row 0 is the top row of the PNG.
-        let px: [[u8; 4]; 6] = [
-            [255, 0, 0, 255],
-            [0, 255, 0, 255],
-            [0, 0, 255, 255],
-            [10, 20, 30, 40],
-            [128, 64, 32, 255],
-            [1, 2, 3, 4],
-        ];
+        let px: [[u8; 4]; 6] =
+            [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [10, 20, 30, 40], [128, 64, 32, 255], [1, 2, 3, 4]];
         let raw: Vec<u8> = px.iter().flatten().copied().collect();
         let img = image::RgbaImage::from_raw(3, 2, raw).expect("image");
         std::fs::create_dir_all(dir.join("tex")).expect("mkdir");
@@ -1511,87 +1246,45 @@ f 4 4 4
             "room.obj",
             "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.25 0.75\nusemtl t\nf 1/1 2/2 3/3\nusemtl t2\nf 1/1 2/2 3/3\n",
         );
-        write(
-            &dir,
-            "m.mtl",
-            "newmtl t\nmap_Kd -bm 1 tex\\ab.png\nnewmtl t2\nKd 0.5 0.5 0.5\nmap_Kd tex/ab.png\n",
-        );
+        write(&dir, "m.mtl", "newmtl t\nmap_Kd -bm 1 tex\\ab.png\nnewmtl t2\nKd 0.5 0.5 0.5\nmap_Kd tex/ab.png\n");
         let s = Scene::from_toml_str(EXAMPLE, &dir.join("scene.toml")).expect("loads");
         // Both materials share one texture.
         assert_eq!(s.textures.len(), 1);
-        assert_eq!(
-            s.textures[0],
-            TextureInfo {
-                offset: 0,
-                width: 3,
-                height: 2,
-                pad: 0
-            }
-        );
+        assert_eq!(s.textures[0], TextureInfo { offset: 0, width: 3, height: 2, pad: 0 });
         let want: Vec<u32> = px.iter().map(|p| u32::from_le_bytes(*p)).collect();
         assert_eq!(s.texels, want);
         assert_eq!(s.texels[0] & 0xff, 255, "r is the low byte");
         // map_Kd without Kd: Kd = 1.
-        assert_eq!(
-            s.materials[s.tri_material[0] as usize].kd_tex,
-            [1.0, 1.0, 1.0, 0.0]
-        );
-        assert_eq!(
-            s.materials[s.tri_material[1] as usize].kd_tex,
-            [0.5, 0.5, 0.5, 0.0]
-        );
+        assert_eq!(s.materials[s.tri_material[0] as usize].kd_tex, [1.0, 1.0, 1.0, 0.0]);
+        assert_eq!(s.materials[s.tri_material[1] as usize].kd_tex, [0.5, 0.5, 0.5, 0.0]);
         // Raw UVs are stored (no flip).
         assert_eq!(s.vertices[2].uv(), glam::Vec2::new(0.25, 0.75));
     }
 
     #[test]
     fn cornell_box_loads() {
-        let path =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
         let s = load(&path).expect("cornell box loads");
         // 18 `f` lines, all quads: 36 triangles.
         assert_eq!(s.triangle_count(), 36);
         assert_eq!(s.stats.degenerate_triangles, 0);
         assert_eq!(s.lights.len(), 1);
         assert_eq!((s.render_width, s.render_height), (Some(256), Some(256)));
-        assert!(
-            (s.bounds_min - Vec3::new(-1.02, 0.0, -1.04))
-                .abs()
-                .max_element()
-                < 1e-6
-        );
-        assert!(
-            (s.bounds_max - Vec3::new(1.0, 1.99, 0.99))
-                .abs()
-                .max_element()
-                < 1e-6
-        );
+        assert!((s.bounds_min - Vec3::new(-1.02, 0.0, -1.04)).abs().max_element() < 1e-6);
+        assert!((s.bounds_max - Vec3::new(1.0, 1.99, 0.99)).abs().max_element() < 1e-6);
         // Every face has a material from the MTL (no default grey needed).
         assert_eq!(s.materials.len(), 8);
-        let red = s
-            .materials
-            .iter()
-            .position(|m| m.kd_tex[..3] == [0.63, 0.065, 0.05]);
+        let red = s.materials.iter().position(|m| m.kd_tex[..3] == [0.63, 0.065, 0.05]);
         assert!(red.is_some());
         for v in &s.vertices {
             assert!((v.normal().length() - 1.0).abs() < 1e-6);
         }
         // The floor's normal points into the room (+y) with the file's winding.
-        let floor = s
-            .vertices
-            .chunks(3)
-            .position(|t| t.iter().all(|v| v.position().y == 0.0))
-            .expect("floor triangle");
+        let floor = s.vertices.chunks(3).position(|t| t.iter().all(|v| v.position().y == 0.0)).expect("floor triangle");
         assert_eq!(s.vertices[3 * floor].normal(), Vec3::Y);
         let (near, far) = s.depth_range();
-        assert!(
-            near > 0.0 && near < 0.01 && far > 5.0 && far < 6.0,
-            "{near} {far}"
-        );
+        assert!(near > 0.0 && near < 0.01 && far > 5.0 && far < 6.0, "{near} {far}");
         let summary = s.summary();
-        assert!(
-            summary.contains("36 triangles") && !summary.contains('\n'),
-            "{summary}"
-        );
+        assert!(summary.contains("36 triangles") && !summary.contains('\n'), "{summary}");
     }
 }

@@ -48,7 +48,13 @@ impl Direct {
         Ok(Direct { pipeline, sampler: Sampler::nearest(gpu)? })
     }
 
-    pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, gb: &GBufferOut, shadow: &DprsmOut) -> Handle<Image> {
+    pub fn add<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        gb: &GBufferOut,
+        shadow: &DprsmOut,
+    ) -> Handle<Image> {
         let mut radiance = g.create_image(ImageDesc::new(
             "direct.radiance",
             f.width,

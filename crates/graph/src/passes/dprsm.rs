@@ -28,7 +28,7 @@ use crate::graph::{Graph, Handle};
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{vk, GraphicsPipeline, GraphicsPipelineDesc, Gpu, Image, ImageDesc};
+use bounce_device::{vk, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc};
 
 pub const DPRSM_DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
@@ -53,6 +53,7 @@ impl Dprsm {
                 fragment: &crate::spirv(shaders::DPRSM_FRAG),
                 color_formats: &[],
                 depth_format: Some(DPRSM_DEPTH_FORMAT),
+                depth_compare: vk::CompareOp::LESS,
                 bindings: &scene_bindings(),
                 push_constant_size: 0,
                 spec: &[],
@@ -67,10 +68,12 @@ impl Dprsm {
             depth: g.create_image(
                 ImageDesc::new(
                     "dprsm.depth",
-                    f.dprsm_res,
-                    f.dprsm_res,
+                    f.shadow_res,
+                    f.shadow_res,
                     DPRSM_DEPTH_FORMAT,
-                    vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
+                    vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                        | vk::ImageUsageFlags::SAMPLED
+                        | vk::ImageUsageFlags::TRANSFER_SRC,
                 )
                 .layers(layers),
             ),
@@ -78,7 +81,7 @@ impl Dprsm {
         let o = out;
         g.add_pass("dprsm").overwrite(&mut out.depth, Access::DepthAttachment).record(move |ctx| {
             let d = &ctx.gpu.device;
-            let extent = vk::Extent2D { width: f.dprsm_res, height: f.dprsm_res };
+            let extent = vk::Extent2D { width: f.shadow_res, height: f.shadow_res };
             let depth = vk::RenderingAttachmentInfo::default()
                 .image_view(ctx.image(&o.depth).view)
                 .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)

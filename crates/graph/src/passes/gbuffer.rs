@@ -3,7 +3,7 @@
 //! Inputs: the scene buffers, `FrameUniforms.view_proj`. Outputs (W×H): `position` RGBA32F (xyz world
 //! position, w = 1 where geometry was hit, 0 elsewhere), `normal` RGBA32F (xyz unit shading normal
 //! flipped to face the camera, w = triangle index bits), `albedo` RGBA32F (Kd × nearest map_Kd texel,
-//! sRGB-decoded), `depth` D32 (forward Z). Rasterization samples pixel centres, so each pixel holds the
+//! sRGB-decoded), `depth` D32 (reverse Z: 1 at near, 0 at far). Rasterization samples pixel centres, so each pixel holds the
 //! surface point on the camera ray of the scene contract (perspective-correct interpolation of a
 //! position on a plane is exact).
 
@@ -13,7 +13,7 @@ use crate::graph::{Graph, Handle};
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{vk, GraphicsPipeline, GraphicsPipelineDesc, Gpu, Image, ImageDesc};
+use bounce_device::{vk, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc};
 
 pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
@@ -41,6 +41,10 @@ impl GBuffer {
                 fragment: &crate::spirv(shaders::GBUFFER_FRAG),
                 color_formats: &[GBUFFER_FORMAT; 3],
                 depth_format: Some(DEPTH_FORMAT),
+                // Reverse Z (1 at the near plane, 0 at the far one): float depth keeps its precision
+                // where the values are small, i.e. far away. Forward Z with a small near plane could
+                // not separate the Cornell box's light panel from the ceiling 1 cm above it.
+                depth_compare: vk::CompareOp::GREATER,
                 bindings: &scene_bindings(),
                 push_constant_size: 0,
                 spec: &[],
@@ -50,7 +54,8 @@ impl GBuffer {
     }
 
     pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>) -> GBufferOut {
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
+        let usage =
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
         let color = |name: &str| ImageDesc::new(name, f.width, f.height, GBUFFER_FORMAT, usage);
         let mut out = GBufferOut {
             position: g.create_image(color("gbuffer.position")),
@@ -90,7 +95,9 @@ impl GBuffer {
                     .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
                     .load_op(vk::AttachmentLoadOp::CLEAR)
                     .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+                    .clear_value(vk::ClearValue {
+                        depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 },
+                    });
                 let info = vk::RenderingInfo::default()
                     .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
                     .layer_count(1)

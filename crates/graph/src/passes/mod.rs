@@ -15,6 +15,6 @@ pub struct FrameInputs<'a> {
     pub uniforms: &'a Buffer,
     pub width: u32,
     pub height: u32,
-    /// Paraboloid map resolution per face.
-    pub dprsm_res: u32,
+    /// Paraboloid depth map resolution per face.
+    pub shadow_res: u32,
 }

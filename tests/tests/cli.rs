@@ -1,0 +1,140 @@
+//! The `bounce` command line, run in-process through `bounce::run` (the binary's `main` is only that
+//! call): exit codes, one-line errors naming the file, no output file on failure, the timings table,
+//! and the EXR's metadata.
+
+use bounce::output::read_exr;
+use std::path::{Path, PathBuf};
+
+struct Run {
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+fn bounce(args: &[&str]) -> Run {
+    let mut argv = vec!["bounce".into()];
+    argv.extend(args.iter().map(|a| a.into()));
+    let (mut out, mut err) = (vec![], vec![]);
+    let code = bounce::run(argv, &mut out, &mut err);
+    Run { code, stdout: String::from_utf8_lossy(&out).into(), stderr: String::from_utf8_lossy(&err).into() }
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = bounce_tests::evidence_dir().join(format!("cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn error_lines(r: &Run) -> Vec<&str> {
+    r.stderr.lines().filter(|l| l.starts_with("error")).collect()
+}
+
+#[test]
+fn render_writes_exr_png_and_timings() {
+    let d = scratch("render");
+    let exr = d.join("img.exr");
+    let png = d.join("img.png");
+    let scene = bounce_tests::default_scene();
+    let r = bounce(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        exr.to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--component",
+        "direct",
+        "--shadow-res",
+        "256",
+        "--validation",
+        "--timings",
+    ]);
+    assert_eq!(r.code, 0, "stderr: {}", r.stderr);
+    for pass in ["gbuffer", "dprsm", "direct", "total"] {
+        assert!(r.stdout.lines().any(|l| l.starts_with(pass)), "timings table lacks {pass}:\n{}", r.stdout);
+    }
+    let (img, meta) = read_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (32, 24));
+    assert!(img.pixels.iter().any(|p| p[0] > 0.0), "black image");
+    let get = |k: &str| meta.iter().find(|(key, _)| key == k).map(|(_, v)| v.clone());
+    assert_eq!(get("bounce.component").as_deref(), Some("direct"));
+    for k in ["bounce.scene", "bounce.method", "bounce.seed", "bounce.device", "bounce.gpu_ms"] {
+        assert!(get(k).is_some(), "EXR lacks {k}: {meta:?}");
+    }
+    let png_img = std::fs::read(&png).unwrap();
+    assert_eq!(&png_img[1..4], b"PNG");
+    // Nothing but the outputs is left behind (no temporary files).
+    let names: Vec<_> = std::fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}
+
+fn expect_bad_input(args: &[&str], must_name: &str, out: &Path) {
+    let r = bounce(args);
+    assert_eq!(r.code, 2, "args {args:?}: stderr {}", r.stderr);
+    let errs = error_lines(&r);
+    assert_eq!(errs.len(), 1, "want one error line, got: {}", r.stderr);
+    assert!(errs[0].contains(must_name), "error does not name `{must_name}`: {}", errs[0]);
+    assert!(!out.exists(), "an output file was written despite the error");
+}
+
+#[test]
+fn a_missing_mesh_is_exit_2_naming_the_file() {
+    let d = scratch("missing-mesh");
+    let scene = d.join("s.toml");
+    std::fs::write(
+        &scene,
+        "mesh = \"nothere.obj\"\n[camera]\neye=[0,1,3]\ntarget=[0,1,0]\nup=[0,1,0]\nfov_y=40\n[[light]]\nposition=[0,1,0]\nintensity=[1,1,1]\n",
+    )
+    .unwrap();
+    let out = d.join("o.exr");
+    expect_bad_input(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap()], "nothere.obj", &out);
+}
+
+#[test]
+fn a_malformed_scene_is_exit_2_naming_file_and_line() {
+    let d = scratch("malformed");
+    let scene = d.join("broken.toml");
+    std::fs::write(&scene, "mesh = \"x.obj\"\n[camera]\neye = [0, 1, \n").unwrap();
+    let out = d.join("o.exr");
+    expect_bad_input(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap()], "broken.toml:", &out);
+    let r = bounce(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let line = error_lines(&r)[0].to_string();
+    assert!(line.contains("broken.toml:3") || line.contains("broken.toml:4"), "no line number: {line}");
+}
+
+#[test]
+fn a_missing_scene_file_and_impossible_sizes_are_exit_2() {
+    let d = scratch("sizes");
+    let out = d.join("o.exr");
+    expect_bad_input(
+        &["render", d.join("absent.toml").to_str().unwrap(), "--out", out.to_str().unwrap()],
+        "absent.toml",
+        &out,
+    );
+    let scene = bounce_tests::default_scene();
+    expect_bad_input(
+        &["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--width", "0"],
+        "width",
+        &out,
+    );
+    expect_bad_input(
+        &["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--height", "100000"],
+        "maxImageDimension2D",
+        &out,
+    );
+    let r = bounce(&["render", scene.to_str().unwrap(), "--component", "sideways"]);
+    assert_eq!(r.code, 2);
+}
+
+#[test]
+fn info_lists_the_device() {
+    let r = bounce(&["info"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stdout.contains("usable by bounce: yes"), "{}", r.stdout);
+    assert!(r.stdout.contains("timestampValidBits"), "{}", r.stdout);
+}

@@ -1,0 +1,102 @@
+//! The dual paraboloid depth maps against an exact CPU ray cast from the light through every texel
+//! centre. The GPU rasterizes a conservative box around each triangle's exact (curved) image and
+//! intersects per texel, so depths must agree to float rounding everywhere but at texels whose centre
+//! ray grazes a triangle edge (there the two sides may legitimately pick different triangles).
+
+use bounce_graph::camera::Camera;
+use bounce_graph::cpu_ref::Bvh;
+use bounce_graph::frame::{FrameSettings, Renderer};
+use bounce_graph::scene::{point_light, Scene};
+use bounce_tests::TestGpu;
+use glam::{DVec3, Vec3};
+
+/// A 20×20 floor with the light 0.05 above it: from the light the floor fills almost a whole
+/// hemisphere and crosses the boundary between the two paraboloid faces, the worst case for a
+/// non-linear projection. A tilted blocker triangle hangs between.
+pub fn big_floor_scene() -> Scene {
+    let f = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+    let tris = [
+        [f(-10.0, -10.0), f(10.0, -10.0), f(10.0, 10.0)],
+        [f(-10.0, -10.0), f(10.0, 10.0), f(-10.0, 10.0)],
+        [Vec3::new(-0.5, 0.3, -0.2), Vec3::new(0.6, 0.35, 0.1), Vec3::new(0.1, 0.32, 0.7)],
+    ];
+    let albedo = [Vec3::splat(0.5), Vec3::splat(0.5), Vec3::new(0.8, 0.2, 0.2)];
+    let camera = Camera { eye: Vec3::new(0.0, 2.5, 2.5), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 60.0 };
+    let light = point_light(Vec3::new(0.13, 0.05, -0.07), Vec3::splat(1.0));
+    // A second light, far off to the side, so the map array has more than one light.
+    let light2 = point_light(Vec3::new(4.0, 3.0, 1.0), Vec3::splat(4.0));
+    Scene::from_triangles(&tris, &albedo, camera, &[light, light2])
+}
+
+fn check_against_ray_cast(scene: &Scene, res: u32) {
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, scene).unwrap();
+    let s = FrameSettings { shadow_res: res, ..FrameSettings::default() };
+    let far = r.uniforms(&s).scene_max[3] as f64;
+    let depth = r.render_dprsm(&s).unwrap();
+    let bvh = Bvh::new(scene);
+    let n = res as usize;
+    let (mut checked, mut edge, mut worst) = (0usize, 0usize, 0.0f64);
+    let mut mismatches = vec![];
+    for (li, light) in scene.lights.iter().enumerate() {
+        let lp = DVec3::new(light.position[0] as f64, light.position[1] as f64, light.position[2] as f64);
+        for face in 0..2 {
+            for j in 0..n {
+                for i in 0..n {
+                    let gpu_d = depth[((li * 2 + face) * n + j) * n + i] as f64;
+                    let uv = |di: f64, dj: f64| {
+                        ((i as f64 + 0.5 + di) / n as f64 * 2.0 - 1.0, (j as f64 + 0.5 + dj) / n as f64 * 2.0 - 1.0)
+                    };
+                    let dir = |(u, v): (f64, f64)| {
+                        let r2 = u * u + v * v;
+                        let d = DVec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
+                        if face == 0 {
+                            d
+                        } else {
+                            DVec3::new(d.x, d.y, -d.z)
+                        }
+                    };
+                    let (u, v) = uv(0.0, 0.0);
+                    if u * u + v * v > 1.0 {
+                        assert_eq!(gpu_d, 1.0, "texel ({i},{j}) outside the unit disk was written");
+                        continue;
+                    }
+                    let hit = bvh.intersect(lp, dir((u, v)));
+                    // Edge texels: a hundredth of a texel away the ray hits another triangle (or nothing).
+                    let tri = hit.as_ref().map(|h| h.tri);
+                    let near_edge = [(0.01, 0.0), (-0.01, 0.0), (0.0, 0.01), (0.0, -0.01)].iter().any(|&(di, dj)| {
+                        let (pu, pv) = uv(di, dj);
+                        pu * pu + pv * pv > 1.0 || bvh.intersect(lp, dir((pu, pv))).map(|h| h.tri) != tri
+                    });
+                    if near_edge {
+                        edge += 1;
+                        continue;
+                    }
+                    checked += 1;
+                    let want = hit.map(|h| (h.t / far).min(1.0)).unwrap_or(1.0);
+                    let err = (gpu_d - want).abs() / want.max(1e-3);
+                    worst = worst.max(err);
+                    if err > 2e-5 && mismatches.len() < 10 {
+                        mismatches.push(format!("light {li} face {face} texel ({i},{j}): gpu {gpu_d} cpu {want}"));
+                    }
+                }
+            }
+        }
+    }
+    eprintln!(
+        "dprsm {res}²: {checked} texels checked, {edge} edge texels skipped, worst relative depth error {worst:.2e}"
+    );
+    assert!(mismatches.is_empty(), "{}", mismatches.join("\n"));
+    assert!(edge * 20 < checked, "too many edge texels ({edge} of {checked}): the edge rule hides real errors");
+}
+
+#[test]
+fn dprsm_depth_matches_a_cpu_ray_cast_on_a_floor_crossing_both_faces() {
+    check_against_ray_cast(&big_floor_scene(), 96);
+}
+
+#[test]
+fn dprsm_depth_matches_a_cpu_ray_cast_in_the_cornell_box() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    check_against_ray_cast(&scene, 64);
+}

@@ -1,0 +1,102 @@
+//! The pass graph's own behaviour: culling of passes whose outputs nothing consumes, dependency chains
+//! kept alive, and barriers that make one pass's writes visible to the next (validated, and checked by
+//! reading the data back).
+
+use bounce_device::sync::Access;
+use bounce_device::{vk, Image, ImageDesc};
+use bounce_graph::graph::{Graph, Handle, PassContext};
+use bounce_tests::TestGpu;
+
+fn image(g: &mut Graph, name: &str) -> Handle<Image> {
+    g.create_image(ImageDesc::new(
+        name,
+        4,
+        4,
+        vk::Format::R32G32B32A32_SFLOAT,
+        vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC,
+    ))
+}
+
+fn clear(ctx: &PassContext, h: &Handle<Image>, v: f32) {
+    let img = ctx.image(h);
+    let c = vk::ClearColorValue { float32: [v; 4] };
+    unsafe {
+        ctx.gpu.device.cmd_clear_color_image(
+            ctx.cmd,
+            img.raw,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &c,
+            &[img.full_range()],
+        )
+    };
+}
+
+fn copy(ctx: &PassContext, src: &Handle<Image>, dst: &Handle<Image>) {
+    let (s, d) = (ctx.image(src), ctx.image(dst));
+    let layers = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
+    let region = vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(vk::Extent3D {
+        width: 4,
+        height: 4,
+        depth: 1,
+    });
+    unsafe {
+        ctx.gpu.device.cmd_copy_image(
+            ctx.cmd,
+            s.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            d.raw,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &[region],
+        )
+    };
+}
+
+#[test]
+fn unused_passes_are_culled_and_chains_kept() {
+    let gpu = TestGpu::new();
+    let mut g = Graph::new(&gpu);
+    let mut a = image(&mut g, "a");
+    let mut b = image(&mut g, "b");
+    let mut unused = image(&mut g, "unused");
+    let ha = a;
+    g.add_pass("make_a").overwrite(&mut a, Access::TransferWrite).record(move |ctx| clear(ctx, &ha, 3.0));
+    let hu = unused;
+    g.add_pass("make_unused").overwrite(&mut unused, Access::TransferWrite).record(move |ctx| clear(ctx, &hu, 9.0));
+    let hb = b;
+    g.add_pass("copy_a_to_b")
+        .read(&a, Access::TransferRead)
+        .overwrite(&mut b, Access::TransferWrite)
+        .record(move |ctx| copy(ctx, &ha, &hb));
+    g.export(&b);
+    let done = g.execute().unwrap();
+    assert_eq!(done.ran, vec!["make_a", "copy_a_to_b"]);
+    assert_eq!(done.skipped, vec!["make_unused"]);
+    let px: Vec<f32> = bytemuck::pod_collect_to_vec(&done.read_image(&b).unwrap());
+    assert!(px.iter().all(|&v| v == 3.0), "the copy did not see the clear: {px:?}");
+    assert_eq!(done.timings.len(), 2);
+}
+
+#[test]
+fn an_overwrite_kills_earlier_writers_but_a_write_keeps_them() {
+    let gpu = TestGpu::new();
+    let mut g = Graph::new(&gpu);
+    let mut x = image(&mut g, "x");
+    let hx = x;
+    g.add_pass("first").overwrite(&mut x, Access::TransferWrite).record(move |ctx| clear(ctx, &hx, 1.0));
+    g.add_pass("second").overwrite(&mut x, Access::TransferWrite).record(move |ctx| clear(ctx, &hx, 2.0));
+    g.export(&x);
+    let done = g.execute().unwrap();
+    assert_eq!(done.ran, vec!["second"]);
+    assert_eq!(done.skipped, vec!["first"]);
+
+    let mut g = Graph::new(&gpu);
+    let mut y = image(&mut g, "y");
+    let hy = y;
+    g.add_pass("first").overwrite(&mut y, Access::TransferWrite).record(move |ctx| clear(ctx, &hy, 1.0));
+    g.add_pass("second").write(&mut y, Access::TransferWrite).record(|_| {});
+    g.export(&y);
+    let done = g.execute().unwrap();
+    assert_eq!(done.ran, vec!["first", "second"]);
+    let px: Vec<f32> = bytemuck::pod_collect_to_vec(&done.read_image(&y).unwrap());
+    assert!(px.iter().all(|&v| v == 1.0));
+}

@@ -1,0 +1,59 @@
+//! Layout echo: the GPU reads every shared struct at GLSL's offsets and writes its scalars in declaration
+//! order; they must equal the Rust mirror's fields in order.
+
+use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites};
+use bounce_graph::shader_types::*;
+use bounce_tests::TestGpu;
+
+#[test]
+fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
+    let gpu = TestGpu::new();
+    // Distinct values everywhere, so a shifted field cannot match by accident.
+    let mut k = 0u32;
+    let mut next = || {
+        k += 1;
+        k as f32 + 0.25
+    };
+    let v = Vertex { position_u: [next(), next(), next(), next()], normal_v: [next(), next(), next(), next()] };
+    let m = Material { kd_tex: [next(), next(), next(), next()] };
+    let t = TextureInfo { offset: 1001, width: 1002, height: 1003, pad: 1004 };
+    let l = Light { position: [next(), next(), next(), next()], intensity: [next(), next(), next(), next()] };
+    let mut f = FrameUniforms::default();
+    for c in 0..4 {
+        for r in 0..4 {
+            f.view_proj[c][r] = next();
+        }
+    }
+    f.eye = [next(), next(), next(), next()];
+    f.scene_min = [next(), next(), next(), next()];
+    f.scene_max = [next(), next(), next(), next()];
+    f.size = [2001, 2002, 2003, 2004];
+    f.shadow = [next(), next(), next(), next()];
+    let mut input = vec![];
+    input.extend_from_slice(bytemuck::bytes_of(&v));
+    input.extend_from_slice(bytemuck::bytes_of(&m));
+    input.extend_from_slice(bytemuck::bytes_of(&t));
+    input.extend_from_slice(bytemuck::bytes_of(&l));
+    input.extend_from_slice(bytemuck::bytes_of(&f));
+
+    let inb = Buffer::with_data(&gpu, "echo in", vk::BufferUsageFlags::STORAGE_BUFFER, &input).unwrap();
+    let outb = Buffer::new(&gpu, &BufferDesc::storage("echo out", input.len() as u64)).unwrap();
+    let p = ComputePipeline::new(
+        &gpu,
+        "layout_echo",
+        &bounce_graph::spirv(bounce_graph::shaders::LAYOUT_ECHO_COMP),
+        &[Binding::storage_buffer(0), Binding::storage_buffer(1)],
+        0,
+        &[],
+    )
+    .unwrap();
+    gpu.submit(|cmd| {
+        let w = DescriptorWrites::new().storage_buffer(0, &inb).storage_buffer(1, &outb);
+        p.dispatch(cmd, &w, &[], [1, 1, 1], [1, 1, 1]);
+    })
+    .unwrap();
+    let out = outb.read_back(bounce_device::sync::Access::ComputeWrite).unwrap();
+    let got: Vec<u32> = bytemuck::pod_collect_to_vec(&out);
+    let want: Vec<u32> = bytemuck::pod_collect_to_vec(&input);
+    assert_eq!(got, want);
+}

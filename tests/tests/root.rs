@@ -1,0 +1,11 @@
+//! The lavapipe integration tests: one binary, one module per subject. Every test that touches the GPU
+//! uses `bounce_tests::TestGpu`, which fails the test on any validation message.
+
+mod cli;
+mod direct;
+mod dprsm;
+mod graph;
+mod images;
+
+mod layout;
+mod validation;

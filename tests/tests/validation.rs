@@ -1,0 +1,33 @@
+//! The validation collector itself: it must catch a deliberately invalid call, on the device that made
+//! it and no other.
+
+use bounce_device::{vk, Gpu, GpuOptions};
+
+#[test]
+fn collector_catches_an_invalid_call_per_device() {
+    let bad = Gpu::new(&GpuOptions { validation: true, device: None }).expect("device");
+    let clean = Gpu::new(&GpuOptions { validation: true, device: None }).expect("device");
+    // VUID-VkBufferCreateInfo-size-00912: a buffer's size must be greater than 0.
+    let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    if let Ok(b) = unsafe { bad.device.create_buffer(&info, None) } {
+        unsafe { bad.device.destroy_buffer(b, None) };
+    }
+    let msgs = bad.validation().messages();
+    assert!(!msgs.is_empty(), "the invalid vkCreateBuffer was not reported");
+    assert!(msgs.iter().any(|m| m.contains("00912")), "unexpected messages: {msgs:?}");
+    assert_eq!(clean.validation().count(), 0, "messages leaked to another device: {:?}", clean.validation().messages());
+}
+
+#[test]
+fn a_device_without_validation_collects_nothing() {
+    let g = Gpu::new(&GpuOptions { validation: false, device: None }).expect("device");
+    assert!(!g.validation_enabled());
+    assert_eq!(g.validation().count(), 0);
+}
+
+#[test]
+fn an_unknown_device_name_is_a_clear_error() {
+    let e = Gpu::new(&GpuOptions { validation: false, device: Some("no-such-device-xyz".into()) }).unwrap_err();
+    let m = e.to_string();
+    assert!(m.contains("no-such-device-xyz") && m.contains("available"), "{m}");
+}
