@@ -21,6 +21,25 @@
 #define B_DIRECT_SHADOW 10
 #define B_DIRECT_OUT 11
 
+// voxelize / voxel march: the occupancy bits (bit c % 32 of word c / 32 for cell
+// c = x + dims.x * (y + dims.y * z)).
+#define B_VOXELS 12
+
+// dprsm (reflective): nothing extra; gather: inputs and outputs
+#define B_GATHER_GPOSITION 13
+#define B_GATHER_GNORMAL 14
+#define B_GATHER_GALBEDO 15
+#define B_VPL_POSITION 16
+#define B_VPL_NORMAL 17
+#define B_VPL_FLUX 18
+#define B_CDF 19
+#define B_GATHER_OUT 20
+
+// cdf_reduce: importance in, CDF out
+#define B_IMPORTANCE 21
+#define B_CDF_OUT 22
+
 #define WG_2D 8
+#define WG_1D 64
 
 #endif

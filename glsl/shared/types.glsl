@@ -36,6 +36,8 @@ struct FrameUniforms {
     vec4 scene_max;          // xyz scene bounds (w: far distance used by the paraboloid maps)
     uvec4 size;              // x width, y height, z light count, w paraboloid map resolution per face
     vec4 shadow;             // x constant bias (world units), y slope bias (texel units), z,w unused
+    vec4 voxel_origin;       // xyz world position of the grid's minimum corner, w cell size (cubic cells)
+    uvec4 voxel_dims;        // xyz cells per axis, w total cells
 };
 
 #endif

@@ -26,4 +26,6 @@ void main() {
     put4(f.scene_max);
     put4u(f.size);
     put4(f.shadow);
+    put4(f.voxel_origin);
+    put4u(f.voxel_dims);
 }

@@ -29,6 +29,8 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     f.scene_max = [next(), next(), next(), next()];
     f.size = [2001, 2002, 2003, 2004];
     f.shadow = [next(), next(), next(), next()];
+    f.voxel_origin = [next(), next(), next(), next()];
+    f.voxel_dims = [3001, 3002, 3003, 3004];
     let mut input = vec![];
     input.extend_from_slice(bytemuck::bytes_of(&v));
     input.extend_from_slice(bytemuck::bytes_of(&m));

@@ -75,8 +75,11 @@ pub struct FrameUniforms {
     pub scene_max: [f32; 4],
     pub size: [u32; 4],
     pub shadow: [f32; 4],
+    pub voxel_origin: [f32; 4],
+    pub voxel_dims: [u32; 4],
 }
-const _: () = assert!(size_of::<FrameUniforms>() == 144);
+const _: () = assert!(size_of::<FrameUniforms>() == 176);
+const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 144);
 const _: () = assert!(offset_of!(FrameUniforms, eye) == 64);
 const _: () = assert!(offset_of!(FrameUniforms, size) == 112);
 const _: () = assert!(offset_of!(FrameUniforms, shadow) == 128);
