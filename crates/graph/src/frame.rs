@@ -160,6 +160,8 @@ impl Renderer {
             scene_max: [hi.x, hi.y, hi.z, far_light],
             size: [s.width, s.height, self.scene.light_count, s.shadow_res],
             shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
+            voxel_origin: [0.0; 4],
+            voxel_dims: [0; 4],
         }
     }
 
