@@ -17,7 +17,7 @@ float visibility(vec3 x, float d, float cos_theta, uint li) {
     vec3 local = x - lights[li].position.xyz;
     uint face = local.z >= 0.0 ? 0u : 1u;
     vec2 uv = paraboloid_project(to_face(local, face));
-    int res = int(frame.size.w);
+    int res = int(frame.maps.x);
     ivec2 texel = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(res - 1));
     float stored = texelFetch(shadow_map, ivec3(texel, int(li * 2u + face)), 0).r * frame.scene_max.w;
     // The texel stores the depth along its centre direction, up to ~0.71 texel away from x's direction.

@@ -4,13 +4,17 @@
 // the light through the texel centre would hit.
 #include "shared/scene.glsl"
 
+// The map resolution per face: the shadow map and the reflective map share these shaders.
+layout(push_constant) uniform Push { uint map_res; };
+
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;
 layout(location = 2) flat in vec3 i_c;
 layout(location = 3) flat in uint i_tri;
+layout(location = 4) flat in uint i_instance; // unused here; declared so the interface matches dprsm.geom
 
 void main() {
-    vec2 uv = gl_FragCoord.xy / float(frame.size.w) * 2.0 - 1.0;
+    vec2 uv = gl_FragCoord.xy / float(map_res) * 2.0 - 1.0;
     if (dot(uv, uv) > 1.0) discard; // outside this face's hemisphere: the other face covers it
     float t = ray_triangle(vec3(0.0), paraboloid_direction(uv), i_a, i_b, i_c);
     if (t < 0.0) discard;

@@ -3,6 +3,9 @@
 // shader then intersects each texel's ray with the triangle. See crates/graph/src/passes/dprsm.rs.
 #include "shared/scene.glsl"
 
+// The map resolution per face: the shadow map and the reflective map share these shaders.
+layout(push_constant) uniform Push { uint map_res; };
+
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 4) out;
 
@@ -13,6 +16,7 @@ layout(location = 0) flat out vec3 o_a;
 layout(location = 1) flat out vec3 o_b;
 layout(location = 2) flat out vec3 o_c;
 layout(location = 3) flat out uint o_tri;
+layout(location = 4) flat out uint o_instance;
 
 void include_uv(vec2 uv, inout vec2 lo, inout vec2 hi) {
     lo = min(lo, uv);
@@ -88,7 +92,7 @@ void main() {
             include_arc(a, b, lo, hi);
         }
         // Half a texel of margin against rounding; the fragment test is exact anyway.
-        float margin = 1.0 / float(frame.size.w);
+        float margin = 1.0 / float(map_res);
         lo = max(lo - margin, vec2(-1.0));
         hi = min(hi + margin, vec2(1.0));
     }
@@ -100,6 +104,7 @@ void main() {
         o_b = p[1];
         o_c = p[2];
         o_tri = uint(gl_PrimitiveIDIn);
+        o_instance = inst;
         gl_Layer = int(inst);
         gl_Position = vec4(corners[k], 0.5, 1.0);
         EmitVertex();

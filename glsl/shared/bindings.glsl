@@ -38,6 +38,12 @@
 // cdf_reduce: importance in, CDF out
 #define B_IMPORTANCE 21
 #define B_CDF_OUT 22
+#define B_GATHER_DIRECT 23
+
+#define GATHER_SAMPLE 0
+#define GATHER_ALL 1
+#define CDF_ROWS 0
+#define CDF_TOTALS 1
 
 #define WG_2D 8
 #define WG_1D 64

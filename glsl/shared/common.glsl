@@ -27,6 +27,38 @@ vec3 paraboloid_direction(vec2 uv) {
     return vec3(2.0 * uv, 1.0 - r2) / (1.0 + r2);
 }
 
+// Möller–Trumbore with barycentrics: (t, b1, b2) with the hit at (1−b1−b2)·a + b1·b + b2·c, or
+// t = −1 when missed.
+vec3 ray_triangle_bary(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
+    vec3 e1 = b - a;
+    vec3 e2 = c - a;
+    vec3 p = cross(dir, e2);
+    float det = dot(e1, p);
+    if (abs(det) < 1e-20) return vec3(-1.0);
+    float inv = 1.0 / det;
+    vec3 s = org - a;
+    float u = dot(s, p) * inv;
+    if (u < 0.0 || u > 1.0) return vec3(-1.0);
+    vec3 q = cross(s, e1);
+    float v = dot(dir, q) * inv;
+    if (v < 0.0 || u + v > 1.0) return vec3(-1.0);
+    float t = dot(e2, q) * inv;
+    return t > 0.0 ? vec3(t, u, v) : vec3(-1.0);
+}
+
+// PCG hash (Jarzynski & Olano 2020): a good 32-bit hash for per-pixel, per-sample random streams.
+uint pcg_hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// A random stream: state advanced by hashing; rand01 returns [0, 1) with 24 bits.
+float rand01(inout uint state) {
+    state = pcg_hash(state);
+    return float(state >> 8) * (1.0 / 16777216.0);
+}
+
 // Möller–Trumbore: distance t along unit `dir` from `org` to the triangle, or -1 when missed.
 float ray_triangle(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
     vec3 e1 = b - a;

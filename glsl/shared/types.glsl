@@ -34,10 +34,31 @@ struct FrameUniforms {
     vec4 eye;                // xyz camera position
     vec4 scene_min;          // xyz scene bounds (w: scene diagonal length)
     vec4 scene_max;          // xyz scene bounds (w: far distance used by the paraboloid maps)
-    uvec4 size;              // x width, y height, z light count, w paraboloid map resolution per face
+    uvec4 size;              // x width, y height, z light count, w reflective DPRSM (VPL) resolution per face
+    uvec4 maps;              // x direct-light paraboloid shadow map resolution per face, y VPL count (2·lights·w²), z,w unused
     vec4 shadow;             // x constant bias (world units), y slope bias (texel units), z,w unused
     vec4 voxel_origin;       // xyz world position of the grid's minimum corner, w cell size (cubic cells)
     uvec4 voxel_dims;        // xyz cells per axis, w total cells
+};
+
+// gather push constants.
+struct GatherPush {
+    uint mode;        // GATHER_SAMPLE: N VPLs drawn from the CDF; GATHER_ALL: every VPL in [first, last)
+    uint samples;     // N (GATHER_SAMPLE)
+    uint seed;
+    uint first;       // GATHER_ALL: VPL index range of this dispatch; GATHER_SAMPLE: sample index range
+    uint last;
+    uint accumulate;  // 1: add to the output image (later tiles); 0: overwrite it
+    uint add_direct;  // 1: add the direct image (the combined component)
+    float clamp_d2;   // the squared distance below which 1/d² is clamped (0: no clamp)
+};
+
+// cdf_reduce push constants.
+struct CdfPush {
+    uint stage;       // CDF_ROWS: prefix per row; CDF_TOTALS: prefix over the row totals
+    uint row_length;  // texels per row
+    uint rows;        // rows in all (2 faces × lights × rows per face)
+    uint pad;
 };
 
 #endif

@@ -25,6 +25,7 @@ void main() {
     put4(f.scene_min);
     put4(f.scene_max);
     put4u(f.size);
+    put4u(f.maps);
     put4(f.shadow);
     put4(f.voxel_origin);
     put4u(f.voxel_dims);

@@ -67,15 +67,7 @@ pub fn evidence_dir() -> PathBuf {
 
 /// relMSE as the project defines it: mean over pixels and channels of (t − r)² / (r² + 0.01).
 pub fn rel_mse(test: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
-    assert_eq!(test.len(), reference.len());
-    let mut s = 0.0f64;
-    for (t, r) in test.iter().zip(reference) {
-        for c in 0..3 {
-            let (t, r) = (t[c] as f64, r[c] as f64);
-            s += (t - r) * (t - r) / (r * r + 0.01);
-        }
-    }
-    s / (3 * test.len()) as f64
+    bounce::metrics::Metrics::of(test, reference).rel_mse
 }
 
 /// Mean over pixels and channels.

@@ -100,3 +100,108 @@ fn dprsm_depth_matches_a_cpu_ray_cast_in_the_cornell_box() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     check_against_ray_cast(&scene, 64);
 }
+
+/// The reflective DPRSM: every texel's VPL against a CPU ray cast through the texel centre: position,
+/// light-facing normal, solid angle Δω = 4/(1+u²+v²)² (2/res)² and flux albedo · I · Δω; and the solid
+/// angles of all texels inside the unit disk add up to 4π (minus the ring the disk's texels miss).
+#[test]
+fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
+    let scene = big_floor_scene();
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let res = 64u32;
+    let s = FrameSettings { dprsm_res: res, ..FrameSettings::default() };
+    let [pos, nrm, flux] = r.render_vpls(&s).unwrap();
+    let bvh = Bvh::new(&scene);
+    let n = res as usize;
+    let (mut checked, mut edge) = (0usize, 0usize);
+    let mut omega_sum = [0.0f64; 2];
+    let mut bad = vec![];
+    for (li, light) in scene.lights.iter().enumerate() {
+        let lp = DVec3::new(light.position[0] as f64, light.position[1] as f64, light.position[2] as f64);
+        let intensity = light.intensity[0] as f64;
+        for face in 0..2 {
+            for j in 0..n {
+                for i in 0..n {
+                    let k = ((li * 2 + face) * n + j) * n + i;
+                    let uv = |di: f64, dj: f64| {
+                        ((i as f64 + 0.5 + di) / n as f64 * 2.0 - 1.0, (j as f64 + 0.5 + dj) / n as f64 * 2.0 - 1.0)
+                    };
+                    let dir = |(u, v): (f64, f64)| {
+                        let r2 = u * u + v * v;
+                        let d = DVec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
+                        if face == 0 {
+                            d
+                        } else {
+                            DVec3::new(d.x, d.y, -d.z)
+                        }
+                    };
+                    let (u, v) = uv(0.0, 0.0);
+                    let r2 = u * u + v * v;
+                    if r2 > 1.0 {
+                        assert_eq!(pos[k][3], 0.0, "texel outside the disk holds a VPL");
+                        continue;
+                    }
+                    let d_omega = 4.0 / ((1.0 + r2) * (1.0 + r2)) * (2.0 / n as f64).powi(2);
+                    if li == 0 {
+                        omega_sum[face] += d_omega;
+                    }
+                    let hit = bvh.intersect(lp, dir((u, v)));
+                    let tri = hit.as_ref().map(|h| h.tri);
+                    let near_edge = [(0.01, 0.0), (-0.01, 0.0), (0.0, 0.01), (0.0, -0.01)].iter().any(|&(di, dj)| {
+                        let (pu, pv) = uv(di, dj);
+                        pu * pu + pv * pv > 1.0 || bvh.intersect(lp, dir((pu, pv))).map(|h| h.tri) != tri
+                    });
+                    if near_edge {
+                        edge += 1;
+                        continue;
+                    }
+                    checked += 1;
+                    let Some(h) = hit else {
+                        if pos[k][3] != 0.0 {
+                            bad.push(format!("texel {k}: GPU has a VPL where the ray misses"));
+                        }
+                        continue;
+                    };
+                    let p = lp + dir((u, v)) * h.t;
+                    let g = DVec3::new(pos[k][0] as f64, pos[k][1] as f64, pos[k][2] as f64);
+                    if pos[k][3] != 1.0 || (g - p).length() > 1e-4 * h.t.max(1.0) {
+                        bad.push(format!("texel {k}: position {g:?} vs {p:?}"));
+                        continue;
+                    }
+                    // Face normal of the flat test scene, flipped to face the light.
+                    let tv = &scene.vertices[3 * h.tri as usize..3 * h.tri as usize + 3];
+                    let (a, b, c) =
+                        (tv[0].position().as_dvec3(), tv[1].position().as_dvec3(), tv[2].position().as_dvec3());
+                    let mut fnorm = (b - a).cross(c - a).normalize();
+                    if fnorm.dot(lp - p) < 0.0 {
+                        fnorm = -fnorm;
+                    }
+                    let gn = DVec3::new(nrm[k][0] as f64, nrm[k][1] as f64, nrm[k][2] as f64);
+                    if (gn - fnorm).length() > 1e-4 {
+                        bad.push(format!("texel {k}: normal {gn:?} vs {fnorm:?}"));
+                    }
+                    let albedo = scene.materials[scene.tri_material[h.tri as usize] as usize].kd().as_dvec3();
+                    let want = albedo * intensity * d_omega;
+                    let gf = DVec3::new(flux[k][0] as f64, flux[k][1] as f64, flux[k][2] as f64);
+                    if (gf - want).length() > 1e-5 * want.length()
+                        || ((flux[k][3] as f64) - d_omega).abs() > 1e-5 * d_omega
+                    {
+                        bad.push(format!("texel {k}: flux {gf:?} (Δω {}) vs {want:?} (Δω {d_omega})", flux[k][3]));
+                    }
+                }
+            }
+        }
+    }
+    eprintln!(
+        "reflective dprsm {res}²: {checked} texels checked, {edge} edge texels skipped; Σ Δω per face {omega_sum:?}"
+    );
+    assert!(bad.is_empty(), "{} bad texels: {}", bad.len(), bad[..bad.len().min(6)].join("; "));
+    assert!(edge * 20 < checked);
+    // Each face's texels inside the unit disk cover its hemisphere, 2π, except the ring of partly
+    // covered rim texels: at most one texel ring, ~π·2·(2/res)·(Δω per unit area at r=1 = 1) ≈ 0.2 sr.
+    for (f, sum) in omega_sum.iter().enumerate() {
+        let miss = 2.0 * std::f64::consts::PI - sum;
+        assert!((0.0..0.25).contains(&miss.abs()), "face {f}: Σ Δω = {sum}, 2π − Σ = {miss}");
+    }
+}

@@ -28,6 +28,7 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     f.scene_min = [next(), next(), next(), next()];
     f.scene_max = [next(), next(), next(), next()];
     f.size = [2001, 2002, 2003, 2004];
+    f.maps = [2501, 2502, 2503, 2504];
     f.shadow = [next(), next(), next(), next()];
     f.voxel_origin = [next(), next(), next(), next()];
     f.voxel_dims = [3001, 3002, 3003, 3004];

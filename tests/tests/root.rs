@@ -9,3 +9,5 @@ mod images;
 
 mod layout;
 mod validation;
+mod voxelize;
+mod vpl;

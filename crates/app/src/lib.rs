@@ -4,11 +4,12 @@
 //! Vulkan device or validation layer: things the user fixes); 1 a runtime failure. Every error is one
 //! line on stderr.
 
+pub mod metrics;
 pub mod output;
 
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions};
-use bounce_graph::frame::{Component, FrameSettings, Renderer};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::Scene;
 use clap::{Parser, Subcommand, ValueEnum};
 use output::RgbImage;
@@ -34,6 +35,8 @@ pub enum Command {
     Render(RenderArgs),
     /// List the Vulkan devices with the features and limits bounce uses.
     Info,
+    /// Error metrics of a test image against a reference image (both EXR).
+    Compare(CompareArgs),
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,6 +44,14 @@ pub enum ComponentArg {
     Direct,
     Indirect,
     Combined,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MethodArg {
+    /// N VPLs per pixel, uniformly among the non-empty DPRSM texels.
+    Uniform,
+    /// Every VPL (the converged VPL estimate; slow, tiled, with a progress bar).
+    All,
 }
 
 #[derive(clap::Args, Debug)]
@@ -59,8 +70,23 @@ pub struct RenderArgs {
     /// Image height (default: the scene's [render] height, else 256).
     #[arg(long)]
     pub height: Option<u32>,
-    #[arg(long, value_enum, default_value = "direct")]
+    #[arg(long, value_enum, default_value = "combined")]
     pub component: ComponentArg,
+    /// How the gather picks VPLs.
+    #[arg(long, value_enum, default_value = "uniform")]
+    pub method: MethodArg,
+    /// VPLs per pixel (sampled methods).
+    #[arg(long, default_value_t = 64)]
+    pub vpls: u32,
+    /// Reflective DPRSM resolution per face (VPLs: 2 × lights × res²).
+    #[arg(long, default_value_t = 512)]
+    pub dprsm_res: u32,
+    /// Voxels along the longest side of the scene (cubic cells).
+    #[arg(long, default_value_t = 128)]
+    pub voxels: u32,
+    /// Clamp 1/d² below this distance, as a fraction of the scene diagonal (0: off, unbiased).
+    #[arg(long, default_value_t = 0.0)]
+    pub clamp: f32,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -76,6 +102,15 @@ pub struct RenderArgs {
     /// Resolution per face of the paraboloid depth map used for direct-light shadows.
     #[arg(long, default_value_t = 2048)]
     pub shadow_res: u32,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct CompareArgs {
+    pub test: PathBuf,
+    pub reference: PathBuf,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// An error the user can fix by changing the input or the machine (exit code 2).
@@ -126,6 +161,7 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
     let r = match cli.command {
         Command::Render(a) => render(&a, out, err),
         Command::Info => info(out),
+        Command::Compare(a) => compare(&a, out),
     };
     match r {
         Ok(()) => 0,
@@ -139,6 +175,29 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
             }
         }
     }
+}
+
+fn compare(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {
+    let (t, _) = output::read_exr(&a.test).map_err(bad)?;
+    let (r, _) = output::read_exr(&a.reference).map_err(bad)?;
+    if (t.width, t.height) != (r.width, r.height) {
+        return Err(bad(anyhow::anyhow!(
+            "{} is {}x{} but {} is {}x{}",
+            a.test.display(),
+            t.width,
+            t.height,
+            a.reference.display(),
+            r.width,
+            r.height
+        )));
+    }
+    let m = metrics::Metrics::of(&t.pixels, &r.pixels);
+    if a.json {
+        writeln!(out, "{}", m.json())?;
+    } else {
+        writeln!(out, "{}", m.table())?;
+    }
+    Ok(())
 }
 
 fn info(out: &mut dyn Write) -> Result<()> {
@@ -175,7 +234,16 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             ComponentArg::Indirect => Component::Indirect,
             ComponentArg::Combined => Component::Combined,
         },
+        method: match a.method {
+            MethodArg::Uniform => Method::Uniform,
+            MethodArg::All => Method::All,
+        },
+        vpls: a.vpls,
+        seed: a.seed,
+        dprsm_res: a.dprsm_res,
         shadow_res: a.shadow_res,
+        voxels: a.voxels,
+        clamp: a.clamp,
         ..FrameSettings::default()
     };
     let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone() }).map_err(gpu_error)?;
@@ -207,10 +275,17 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     let meta = vec![
         ("scene", a.scene.display().to_string()),
         ("component", settings.component.name().to_string()),
-        ("method", "none".to_string()),
+        (
+            "method",
+            if settings.component == Component::Direct { "none".into() } else { settings.method.name().to_string() },
+        ),
+        ("vpls", settings.vpls.to_string()),
+        ("voxels", settings.voxels.to_string()),
+        ("clamp", settings.clamp.to_string()),
         ("seed", a.seed.to_string()),
         ("device", gpu.name.clone()),
         ("gpu_ms", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())),
+        ("dprsm_res", settings.dprsm_res.to_string()),
         ("shadow_res", settings.shadow_res.to_string()),
         ("non_finite_pixels", bad_px.to_string()),
     ];

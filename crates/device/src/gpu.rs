@@ -96,6 +96,11 @@ pub struct Shared {
     pub properties: vk::PhysicalDeviceProperties,
     pub name: String,
     pub timestamp_valid_bits: u32,
+    /// Loop iterations one shader invocation may run before the driver cuts its loops short, where the
+    /// driver has such a limit: llvmpipe (lavapipe) stops every loop of an invocation after 65535
+    /// iterations *in total*, silently (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`). Passes whose invocations
+    /// loop long split their work so that each dispatch stays under it.
+    pub loop_iteration_limit: Option<u32>,
     pub push_descriptor: khr::push_descriptor::Device,
     pub debug_utils: Option<ext::debug_utils::Device>,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
@@ -344,6 +349,10 @@ impl Gpu {
             .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
             .expect("check_suitable found a graphics+compute queue") as u32;
         let timestamp_valid_bits = qfs[queue_family as usize].timestamp_valid_bits;
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
+        let loop_iteration_limit = (driver.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(65535);
 
         let prio = [1.0f32];
         let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
@@ -398,6 +407,7 @@ impl Gpu {
             properties,
             name,
             timestamp_valid_bits,
+            loop_iteration_limit,
             push_descriptor,
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),

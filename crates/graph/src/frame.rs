@@ -1,14 +1,22 @@
 //! The frame recipe. [`build_frame`] is the one place that says what runs, in what order, on what data:
-//! gbuffer → dprsm → direct, handles flowing from call to call. [`Renderer`] owns the passes (their
-//! pipelines) and the uploaded scene; [`Renderer::render`] builds, executes and reads back one frame.
+//! gbuffer → dprsm (+ its depth map) → direct → voxelize → importance → cdf_reduce → gather, handles
+//! flowing from call to call. Passes whose outputs the asked component does not need are culled by the
+//! graph (`--component direct` records no VPL pass). [`Renderer`] owns the passes (their pipelines),
+//! the uploaded scene and the voxel grid (built once per scene and grid size); [`Renderer::render`]
+//! builds, executes and reads back one frame.
 
 use crate::gpu_scene::GpuScene;
-use crate::graph::{Graph, Handle, PassTiming};
+use crate::graph::{Graph, Handle, PassTiming, Persistent};
+use crate::passes::cdf_reduce::CdfReduce;
+use crate::passes::gather::{Gather, GatherInputs};
+use crate::passes::importance::Importance;
+use crate::passes::voxelize::{self, VoxelGridSpec, Voxelize};
 use crate::passes::{direct::Direct, dprsm::Dprsm, gbuffer::GBuffer, FrameInputs};
 use crate::scene::Scene;
-use crate::shader_types::FrameUniforms;
+use crate::shader_types::{FrameUniforms, GatherPush};
 use anyhow::{bail, Context, Result};
-use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, MemoryLocation};
+use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, ImageDesc, MemoryLocation};
+use std::cell::RefCell;
 
 /// Which radiance the frame computes (the scene contract's components).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,11 +36,41 @@ impl Component {
     }
 }
 
+/// How the gather picks its VPLs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// N VPLs per pixel, uniformly among the non-empty DPRSM texels.
+    Uniform,
+    /// Every VPL (p_v = 1): the converged VPL estimate, in tiles.
+    All,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Uniform => "uniform",
+            Method::All => "all",
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct FrameSettings {
     pub width: u32,
     pub height: u32,
     pub component: Component,
+    pub method: Method,
+    /// VPLs per pixel (sampled methods).
+    pub vpls: u32,
+    pub seed: u64,
+    /// Reflective DPRSM resolution per face (the VPLs: 2 × lights × res²).
+    pub dprsm_res: u32,
+    /// Voxels along the longest side of the scene bounds.
+    pub voxels: u32,
+    /// 1/d² clamp: minimum distance, as a fraction of the scene diagonal (0: off).
+    pub clamp: f32,
+    /// VPLs per tile of the exhaustive (`all`) gather: one submission each.
+    pub all_tile: u32,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
     /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
@@ -49,6 +87,13 @@ impl Default for FrameSettings {
             width: 256,
             height: 256,
             component: Component::Direct,
+            method: Method::Uniform,
+            vpls: 64,
+            seed: 1,
+            dprsm_res: 512,
+            voxels: 128,
+            clamp: 0.0,
+            all_tile: 4096,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
@@ -60,13 +105,30 @@ impl FrameSettings {
     /// Reject impossible settings with a message naming the setting and the device limit.
     pub fn validate(&self, gpu: &Gpu) -> Result<()> {
         let max = gpu.limits().max_image_dimension2_d;
-        for (what, v) in [("width", self.width), ("height", self.height), ("shadow map resolution", self.shadow_res)] {
+        for (what, v) in [
+            ("width", self.width),
+            ("height", self.height),
+            ("shadow map resolution", self.shadow_res),
+            ("DPRSM resolution", self.dprsm_res),
+        ] {
             if v == 0 {
                 bail!("{what} must be at least 1");
             }
             if v > max {
                 bail!("{what} {v} exceeds the device limit maxImageDimension2D ({max})");
             }
+        }
+        if self.vpls == 0 {
+            bail!("the VPL count must be at least 1");
+        }
+        if !(1..=1024).contains(&self.voxels) {
+            bail!("voxels must be between 1 and 1024 (got {})", self.voxels);
+        }
+        if self.all_tile == 0 {
+            bail!("the tile size must be at least 1");
+        }
+        if !(self.clamp.is_finite() && (0.0..1.0).contains(&self.clamp)) {
+            bail!("the clamp must be a fraction of the scene diagonal in [0, 1) (got {})", self.clamp);
         }
         let ok = |v: f32| v.is_finite() && v >= 0.0;
         if !ok(self.shadow_bias) || !ok(self.shadow_slope_bias) {
@@ -76,7 +138,14 @@ impl FrameSettings {
     }
 }
 
-/// Owns the passes and the uploaded scene.
+/// The voxel grid of the scene: built once per grid size, reused by every frame and method.
+struct VoxelState {
+    voxels: u32,
+    buffer: Persistent<Buffer>,
+    built: bool,
+}
+
+/// Owns the passes, the uploaded scene and the voxel grid.
 pub struct Renderer {
     pub gpu: Gpu,
     pub scene: GpuScene,
@@ -84,6 +153,11 @@ pub struct Renderer {
     gbuffer: GBuffer,
     dprsm: Dprsm,
     direct: Direct,
+    voxelize: Voxelize,
+    importance: Importance,
+    cdf_reduce: CdfReduce,
+    gather: Gather,
+    voxel_state: RefCell<Option<VoxelState>>,
 }
 
 /// A rendered frame, read back.
@@ -92,6 +166,7 @@ pub struct FrameOutput {
     pub height: u32,
     /// RGBA32F radiance, row-major, row 0 = top.
     pub radiance: Vec<[f32; 4]>,
+    /// Per pass GPU times; passes recorded several times (tiles) appear once per recording.
     pub timings: Vec<PassTiming>,
     pub ran: Vec<&'static str>,
     pub skipped: Vec<&'static str>,
@@ -103,22 +178,82 @@ impl FrameOutput {
     }
 }
 
-/// The frame recipe: gbuffer → dprsm → direct. Returns the radiance image of the asked component.
+/// What [`build_frame`] hands back: the image to read and, for the exhaustive method, what the tiled
+/// gathers read.
+pub struct FrameHandles {
+    /// The image of the asked component (for `all` with VPLs: `None`; the tiles produce it).
+    pub out: Option<Handle<Image>>,
+    pub direct: Handle<Image>,
+    pub gather_inputs: GatherInputs,
+}
+
+/// The frame recipe.
 pub fn build_frame<'a>(
     r: &'a Renderer,
     g: &mut Graph<'a>,
     f: FrameInputs<'a>,
     s: &FrameSettings,
-) -> Result<Handle<Image>> {
+    mut voxels: Handle<Buffer>,
+    voxels_built: bool,
+) -> FrameHandles {
     let gbuffer = r.gbuffer.add(g, f);
-    let shadow = r.dprsm.add(g, f);
+    let shadow = r.dprsm.add_depth(g, f);
     let direct = r.direct.add(g, f, &gbuffer, &shadow);
-    match s.component {
-        Component::Direct => Ok(direct),
-        Component::Indirect | Component::Combined => {
-            bail!("--component {} needs the VPL passes, which this build does not have yet", s.component.name())
-        }
+    let vpls = r.dprsm.add(g, f);
+    if !voxels_built {
+        r.voxelize.add(g, f, &mut voxels);
     }
+    let importance = r.importance.add_uniform(g, f, &vpls);
+    let rows = 2 * f.scene.light_count * f.dprsm_res;
+    let cdf = r.cdf_reduce.add(g, &importance, rows, f.dprsm_res);
+    let gather_inputs = GatherInputs::new(
+        &gbuffer,
+        &vpls,
+        voxels,
+        importance,
+        cdf,
+        (s.component == Component::Combined).then_some(direct),
+    );
+    let out = match (s.component, s.method) {
+        (Component::Direct, _) => Some(direct),
+        (_, Method::All) => None,
+        (_, Method::Uniform) => {
+            let mut out = g.create_image(radiance_desc("gather.radiance", f.width, f.height));
+            let push = GatherPush {
+                mode: crate::bindings::GATHER_SAMPLE,
+                samples: s.vpls,
+                first: 0,
+                last: s.vpls,
+                seed: seed32(s.seed),
+                add_direct: (s.component == Component::Combined) as u32,
+                clamp_d2: clamp_d2(s, f.scene),
+                ..GatherPush::default()
+            };
+            r.gather.add(g, f, &gather_inputs, &mut out, push);
+            Some(out)
+        }
+    };
+    FrameHandles { out, direct, gather_inputs }
+}
+
+fn radiance_desc(name: &str, w: u32, h: u32) -> ImageDesc {
+    ImageDesc::new(
+        name,
+        w,
+        h,
+        crate::passes::direct::RADIANCE_FORMAT,
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
+    )
+}
+
+/// Fold a 64-bit seed into the shader's 32-bit one.
+fn seed32(seed: u64) -> u32 {
+    (seed ^ (seed >> 32)) as u32
+}
+
+fn clamp_d2(s: &FrameSettings, scene: &GpuScene) -> f32 {
+    let d = s.clamp * scene.diagonal();
+    d * d
 }
 
 impl Renderer {
@@ -130,7 +265,28 @@ impl Renderer {
             gbuffer: GBuffer::new(gpu).context("creating the gbuffer pass")?,
             dprsm: Dprsm::new(gpu).context("creating the dprsm pass")?,
             direct: Direct::new(gpu).context("creating the direct pass")?,
+            voxelize: Voxelize::new(gpu).context("creating the voxelize pass")?,
+            importance: Importance::new(gpu).context("creating the importance pass")?,
+            cdf_reduce: CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,
+            gather: Gather::new(gpu).context("creating the gather pass")?,
+            voxel_state: RefCell::new(None),
         })
+    }
+
+    /// VPLs per gather dispatch under the device's loop iteration limit. Per VPL an invocation loops at
+    /// most: the march's steps (≤ dims.x + dims.y + dims.z + 3, each with its 3-axis inner loop: 4
+    /// iterations per step), plus a constant for the clip, reciprocals and the CDF's binary searches
+    /// (≤ 64 + 2 · log2(VPL slots)); the rest of the budget is kept for the loops outside (64).
+    pub fn vpls_per_dispatch(&self, s: &FrameSettings) -> u32 {
+        let Some(limit) = self.gpu.loop_iteration_limit else { return u32::MAX };
+        let dims = self.voxel_spec(s).dims;
+        let per_vpl = 4 * (dims.x + dims.y + dims.z + 3) + 64 + 2 * 32;
+        ((limit.saturating_sub(64)) / per_vpl).max(1)
+    }
+
+    /// The voxel grid spec for `s` (fitted to the bounds of geometry and lights).
+    pub fn voxel_spec(&self, s: &FrameSettings) -> VoxelGridSpec {
+        voxelize::fit(self.scene.bounds_min, self.scene.bounds_max, s.voxels)
     }
 
     /// The per-frame constants for `s`.
@@ -152,16 +308,19 @@ impl Renderer {
         let near = far_cam * 1e-5;
         // Paraboloid far: no light-to-surface distance exceeds the diagonal of bounds that hold both.
         let far_light = diag * 1.01;
+        let (voxel_origin, voxel_dims) = self.voxel_spec(s).uniforms_fields();
+        let vpl_slots = 2 * self.scene.light_count * s.dprsm_res * s.dprsm_res;
         FrameUniforms {
             // near and far swapped: reverse Z (see passes/gbuffer.rs).
             view_proj: self.camera.view_proj(s.width, s.height, far_cam, near).to_cols_array_2d(),
             eye: [eye.x, eye.y, eye.z, 0.0],
             scene_min: [lo.x, lo.y, lo.z, diag],
             scene_max: [hi.x, hi.y, hi.z, far_light],
-            size: [s.width, s.height, self.scene.light_count, s.shadow_res],
+            size: [s.width, s.height, self.scene.light_count, s.dprsm_res],
+            maps: [s.shadow_res, vpl_slots, 0, 0],
             shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
-            voxel_origin: [0.0; 4],
-            voxel_dims: [0; 4],
+            voxel_origin,
+            voxel_dims,
         }
     }
 
@@ -188,65 +347,205 @@ impl Renderer {
         2 * self.scene.light_count as u64 * (s.shadow_res as u64).pow(2) * 4
     }
 
+    /// Memory the reflective DPRSM takes: 3 RGBA32F images + depth, plus importance and CDF.
+    pub fn dprsm_bytes(&self, s: &FrameSettings) -> u64 {
+        2 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2) * (3 * 16 + 4 + 4 + 4)
+    }
+
     /// Reject settings this device or scene cannot run (bad input, not a runtime failure).
     pub fn check(&self, s: &FrameSettings) -> Result<()> {
         s.validate(&self.gpu)?;
-        const MAX_SHADOW_BYTES: u64 = 2 << 30;
-        let bytes = self.shadow_map_bytes(s);
-        if bytes > MAX_SHADOW_BYTES {
-            bail!(
-                "the shadow maps would take {} MiB ({} lights × 2 faces × {}²); lower --shadow-res (limit {} MiB)",
-                bytes >> 20,
-                self.scene.light_count,
-                s.shadow_res,
-                MAX_SHADOW_BYTES >> 20
-            );
+        const MAX_MAP_BYTES: u64 = 2 << 30;
+        for (what, bytes, flag) in [
+            ("shadow maps", self.shadow_map_bytes(s), "--shadow-res"),
+            ("reflective DPRSM", self.dprsm_bytes(s), "--dprsm-res"),
+        ] {
+            if bytes > MAX_MAP_BYTES {
+                bail!(
+                    "the {what} would take {} MiB ({} lights × 2 faces); lower {flag} (limit {} MiB)",
+                    bytes >> 20,
+                    self.scene.light_count,
+                    MAX_MAP_BYTES >> 20
+                );
+            }
+        }
+        let max_range = self.gpu.limits().max_storage_buffer_range as u64;
+        let cdf_bytes = 4
+            * (2 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2)
+                + 2 * self.scene.light_count as u64 * s.dprsm_res as u64
+                + 4);
+        if cdf_bytes > max_range {
+            bail!("the CDF would take {cdf_bytes} bytes, over the device limit maxStorageBufferRange ({max_range}); lower --dprsm-res");
         }
         Ok(())
     }
 
-    /// Build, execute and read back one frame.
+    /// Make sure the voxel grid for `s` exists (not necessarily built yet).
+    fn ensure_voxels(&self, s: &FrameSettings) -> Result<()> {
+        let mut st = self.voxel_state.borrow_mut();
+        if st.as_ref().is_some_and(|v| v.voxels == s.voxels) {
+            return Ok(());
+        }
+        let spec = self.voxel_spec(s);
+        let buffer = voxelize::create_grid_buffer(&self.gpu, &spec)?;
+        *st = Some(VoxelState { voxels: s.voxels, buffer: Persistent::new(buffer), built: false });
+        Ok(())
+    }
+
+    /// Build, execute and read back one frame. `progress(done, total)` is called between the tiles of
+    /// the exhaustive method.
     pub fn render(&self, s: &FrameSettings) -> Result<FrameOutput> {
+        self.render_with_progress(s, &mut |_, _| {})
+    }
+
+    pub fn render_with_progress(&self, s: &FrameSettings, progress: &mut dyn FnMut(u64, u64)) -> Result<FrameOutput> {
         self.check(s)?;
+        self.ensure_voxels(s)?;
         let uniforms = self.uniform_buffer(s)?;
-        let inputs = FrameInputs {
+        let f = FrameInputs {
             scene: &self.scene,
             uniforms: &uniforms,
             width: s.width,
             height: s.height,
             shadow_res: s.shadow_res,
+            dprsm_res: s.dprsm_res,
+            vpls_per_dispatch: self.vpls_per_dispatch(s),
         };
+        let vox_guard = self.voxel_state.borrow();
+        let vox = vox_guard.as_ref().expect("ensure_voxels made the grid");
         let mut g = Graph::new(&self.gpu);
-        let out = build_frame(self, &mut g, inputs, s)?;
-        g.export(&out);
-        let done = g.execute()?;
-        let bytes = done.read_image(&out)?;
-        let radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        let voxels = g.import_buffer(&vox.buffer);
+        let h = build_frame(self, &mut g, f, s, voxels, vox.built);
+        if let Some(out) = &h.out {
+            g.export(out);
+        } else {
+            // The tiles read these after this graph has run.
+            for img in h.gather_inputs.images() {
+                g.export(&img);
+            }
+            for b in h.gather_inputs.buffers() {
+                g.export(&b);
+            }
+        }
+        let mut done = g.execute()?;
+        let voxelized = done.ran.contains(&"voxelize");
+        let mut timings = done.timings.clone();
+        let mut ran = done.ran.clone();
+        let skipped = done.skipped.clone();
+        let radiance_bytes = if let Some(out) = &h.out {
+            done.read_image(out)?
+        } else {
+            // Keep what the tiles read: each tile is its own graph (and submission) importing these.
+            let i = h.gather_inputs;
+            let kept: Vec<Persistent<Image>> = i.images().iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
+            let importance = done.take_buffer(&i.importance)?;
+            let cdf = done.take_buffer(&i.cdf)?;
+            drop(done);
+            let out = Persistent::new(Image::new(&self.gpu, &radiance_desc("gather.radiance", s.width, s.height))?);
+            let total = 2 * self.scene.light_count * s.dprsm_res * s.dprsm_res;
+            let mut first = 0u32;
+            loop {
+                let last = first.saturating_add(s.all_tile).min(total);
+                let mut g = Graph::new(&self.gpu);
+                let imported: Vec<Handle<Image>> = kept.iter().map(|p| g.import_image(p)).collect();
+                let inputs = GatherInputs {
+                    g_position: imported[0],
+                    g_normal: imported[1],
+                    g_albedo: imported[2],
+                    vpl_position: imported[3],
+                    vpl_normal: imported[4],
+                    vpl_flux: imported[5],
+                    voxels: g.import_buffer(&vox.buffer),
+                    importance: g.import_buffer(&importance),
+                    cdf: g.import_buffer(&cdf),
+                    direct: imported.get(6).copied(),
+                };
+                let mut o = g.import_image(&out);
+                let push = GatherPush {
+                    mode: crate::bindings::GATHER_ALL,
+                    samples: 1,
+                    seed: seed32(s.seed),
+                    first,
+                    last,
+                    accumulate: (first > 0) as u32,
+                    add_direct: (first == 0 && s.component == Component::Combined) as u32,
+                    clamp_d2: clamp_d2(s, &self.scene),
+                };
+                self.gather.add(&mut g, f, &inputs, &mut o, push);
+                g.export(&o);
+                let d = g.execute()?;
+                timings.extend(d.timings.iter().cloned());
+                ran.extend(d.ran.iter().copied());
+                progress(last as u64, total as u64);
+                first = last;
+                if first >= total {
+                    break d.read_image(&o)?;
+                }
+            }
+        };
+        drop(vox_guard);
+        if voxelized {
+            self.voxel_state.borrow_mut().as_mut().expect("grid exists").built = true;
+        }
         Ok(FrameOutput {
             width: s.width,
             height: s.height,
-            radiance,
-            timings: done.timings.clone(),
-            ran: done.ran.clone(),
-            skipped: done.skipped.clone(),
+            radiance: bytemuck::pod_collect_to_vec(&radiance_bytes),
+            timings,
+            ran,
+            skipped,
         })
     }
 
-    /// Render the dual paraboloid depth maps alone (for tests and diagnostics): distance/far per texel.
+    /// The voxel grid as built on the GPU (its spec and occupancy bytes), if a frame has built it.
+    pub fn voxel_grid(&self) -> Result<Option<(VoxelGridSpec, Vec<u8>)>> {
+        let st = self.voxel_state.borrow();
+        let Some(v) = st.as_ref().filter(|v| v.built) else { return Ok(None) };
+        let bytes = v.buffer.res.read_back(v.buffer.last_access())?;
+        Ok(Some((self.voxel_spec(&FrameSettings { voxels: v.voxels, ..FrameSettings::default() }), bytes)))
+    }
+
+    /// Render one product of the dual paraboloid maps alone (for tests and diagnostics).
     pub fn render_dprsm(&self, s: &FrameSettings) -> Result<Vec<f32>> {
         self.check(s)?;
         let uniforms = self.uniform_buffer(s)?;
-        let inputs = FrameInputs {
+        let f = FrameInputs {
             scene: &self.scene,
             uniforms: &uniforms,
             width: s.width,
             height: s.height,
             shadow_res: s.shadow_res,
+            dprsm_res: s.dprsm_res,
+            vpls_per_dispatch: self.vpls_per_dispatch(s),
         };
         let mut g = Graph::new(&self.gpu);
-        let shadow = self.dprsm.add(&mut g, inputs);
+        let shadow = self.dprsm.add_depth(&mut g, f);
         g.export(&shadow.depth);
         let done = g.execute()?;
         Ok(bytemuck::pod_collect_to_vec(&done.read_image(&shadow.depth)?))
+    }
+
+    /// The reflective DPRSM read back: (position, normal, flux) RGBA32F per texel, layer after layer.
+    pub fn render_vpls(&self, s: &FrameSettings) -> Result<[Vec<[f32; 4]>; 3]> {
+        self.check(s)?;
+        let uniforms = self.uniform_buffer(s)?;
+        let f = FrameInputs {
+            scene: &self.scene,
+            uniforms: &uniforms,
+            width: s.width,
+            height: s.height,
+            shadow_res: s.shadow_res,
+            dprsm_res: s.dprsm_res,
+            vpls_per_dispatch: self.vpls_per_dispatch(s),
+        };
+        let mut g = Graph::new(&self.gpu);
+        let v = self.dprsm.add(&mut g, f);
+        for h in [&v.position, &v.normal, &v.flux] {
+            g.export(h);
+        }
+        let done = g.execute()?;
+        let read =
+            |h: &Handle<Image>| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&done.read_image(h)?)) };
+        Ok([read(&v.position)?, read(&v.normal)?, read(&v.flux)?])
     }
 }

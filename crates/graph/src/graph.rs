@@ -428,6 +428,27 @@ impl Executed<'_> {
         }
         Ok(bytes)
     }
+    /// Move a transient image out of the frame, with its last access, so a later graph can import it.
+    pub fn take_image(&mut self, h: &Handle<Image>) -> Result<Persistent<Image>> {
+        let r = &mut self.resources[h.id];
+        match &mut r.storage {
+            Storage::TransientImage(_, slot @ Some(_)) => {
+                Ok(Persistent { res: slot.take().unwrap(), last: Cell::new(r.state.last) })
+            }
+            _ => anyhow::bail!("image `{}` is not a realised transient image", r.name),
+        }
+    }
+    /// Move a transient buffer out of the frame (see [`Executed::take_image`]).
+    pub fn take_buffer(&mut self, h: &Handle<Buffer>) -> Result<Persistent<Buffer>> {
+        let r = &mut self.resources[h.id];
+        match &mut r.storage {
+            Storage::TransientBuffer(_, slot @ Some(_)) => {
+                Ok(Persistent { res: slot.take().unwrap(), last: Cell::new(r.state.last) })
+            }
+            _ => anyhow::bail!("buffer `{}` is not a realised transient buffer", r.name),
+        }
+    }
+
     /// Total GPU time of the passes that ran, if timestamps are available.
     pub fn gpu_ms(&self) -> Option<f64> {
         self.timings.iter().map(|t| t.ms).sum()

@@ -9,6 +9,7 @@
 
 pub mod camera;
 pub mod cpu_ref;
+pub mod cpu_voxel;
 pub mod frame;
 pub mod gpu_scene;
 pub mod graph;

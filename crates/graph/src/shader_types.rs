@@ -74,12 +74,40 @@ pub struct FrameUniforms {
     pub scene_min: [f32; 4],
     pub scene_max: [f32; 4],
     pub size: [u32; 4],
+    pub maps: [u32; 4],
     pub shadow: [f32; 4],
     pub voxel_origin: [f32; 4],
     pub voxel_dims: [u32; 4],
 }
-const _: () = assert!(size_of::<FrameUniforms>() == 176);
-const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 144);
+const _: () = assert!(size_of::<FrameUniforms>() == 192);
+const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 160);
 const _: () = assert!(offset_of!(FrameUniforms, eye) == 64);
 const _: () = assert!(offset_of!(FrameUniforms, size) == 112);
-const _: () = assert!(offset_of!(FrameUniforms, shadow) == 128);
+const _: () = assert!(offset_of!(FrameUniforms, maps) == 128);
+const _: () = assert!(offset_of!(FrameUniforms, shadow) == 144);
+
+/// gather push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GatherPush {
+    pub mode: u32,
+    pub samples: u32,
+    pub seed: u32,
+    pub first: u32,
+    pub last: u32,
+    pub accumulate: u32,
+    pub add_direct: u32,
+    pub clamp_d2: f32,
+}
+const _: () = assert!(size_of::<GatherPush>() == 32);
+
+/// cdf_reduce push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct CdfPush {
+    pub stage: u32,
+    pub row_length: u32,
+    pub rows: u32,
+    pub pad: u32,
+}
+const _: () = assert!(size_of::<CdfPush>() == 16);

@@ -2,7 +2,7 @@
 //!
 //! L_direct(x) = Σ_l albedo(x)/π · I_l · max(0, cos θ_l) / d_l² · V(x, l)   (the scene contract)
 //!
-//! Inputs: G-buffer position/normal/albedo, the `dprsm` depth array. Output: `radiance` RGBA32F W×H
+//! Inputs: G-buffer position/normal/albedo, the `dprsm_depth` array. Output: `radiance` RGBA32F W×H
 //! (rgb radiance, 0 where the camera ray hits nothing). Dispatch: ⌈W/8⌉ × ⌈H/8⌉ groups of 8×8.
 //!
 //! **Visibility and its bias.** x is projected into its light's paraboloid face and compared with the
@@ -20,7 +20,7 @@ use super::FrameInputs;
 use crate::bindings::*;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
-use crate::passes::dprsm::DprsmOut;
+use crate::passes::dprsm::DprsmDepth;
 use crate::passes::gbuffer::GBufferOut;
 use crate::shaders;
 use anyhow::Result;
@@ -53,7 +53,7 @@ impl Direct {
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         gb: &GBufferOut,
-        shadow: &DprsmOut,
+        shadow: &DprsmDepth,
     ) -> Handle<Image> {
         let mut radiance = g.create_image(ImageDesc::new(
             "direct.radiance",

@@ -1,11 +1,20 @@
-//! dprsm: the dual paraboloid map at each point light (depth part; the reflective attachments come with
-//! the VPL pass).
+//! dprsm: the dual paraboloid maps at each point light. Two products from the same shaders:
+//! - `dprsm_depth` (pass `add_depth`): the depth map that shadows direct light, `shadow_res`² per face.
+//! - `dprsm` (pass `add`): the reflective DPRSM, `dprsm_res`² per face, whose texels are the VPLs.
 //!
-//! Output: one D32 array image, `2 × lights` layers of `res × res` texels; layer `2l + f` is face `f`
-//! (0: +z hemisphere, 1: −z) of light `l`. Texel (i, j) has paraboloid coordinates
-//! (u, v) = ((i + ½)/res · 2 − 1, (j + ½)/res · 2 − 1) and stores, for the direction
-//! d = (2u, 2v, 1 − u² − v²)/(1 + u² + v²) (z mirrored on face 1), the distance t to the nearest surface
-//! divided by `far` (`FrameUniforms.scene_max.w`), or 1 where nothing is hit or u² + v² > 1.
+//! Both are array images of `2 × lights` layers; layer `2l + f` is face `f` (0: +z hemisphere, 1: −z)
+//! of light `l`. Texel (i, j) has paraboloid coordinates (u, v) = ((i + ½)/res · 2 − 1, (j + ½)/res · 2
+//! − 1) and stands for the direction d = (2u, 2v, 1 − u² − v²)/(1 + u² + v²) (z mirrored on face 1).
+//! The depth is the distance t to the nearest surface along d divided by `far`
+//! (`FrameUniforms.scene_max.w`), or 1 where nothing is hit or u² + v² > 1. The reflective map adds,
+//! per texel (RGBA32F each):
+//! - `position`: xyz of the hit, w = 1 (0: empty texel, never sampled);
+//! - `normal`: the interpolated shading normal flipped to face the light, w = t;
+//! - `flux`: the VPL's reflected flux Φ_v = albedo(v) · I · Δω_v, w = Δω_v, where
+//!   Δω_v = 4 / (1 + u² + v²)² · (2/res)² is the texel's solid angle seen from the light (the Jacobian of
+//!   the paraboloid map, dω = 4/(1 + u² + v²)² du dv). The thesis's eqs. 7.1–7.3 leave this factor
+//!   out; without it the VPL sum does not converge to the one-bounce integral. Σ_v Δω_v over both faces
+//!   is 4π up to the texels cut by the unit circle (the `dprsm` test checks both).
 //!
 //! **Why not rasterize the projected vertices.** The paraboloid projection (u, v) = (x, y)/(|p| + z)
 //! (thesis eq. 6.6; it is a stereographic projection of the direction) is not linear: a triangle's
@@ -31,77 +40,159 @@ use bounce_device::sync::Access;
 use bounce_device::{vk, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc};
 
 pub const DPRSM_DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+pub const VPL_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 pub struct Dprsm {
-    pipeline: GraphicsPipeline,
+    depth_only: GraphicsPipeline,
+    reflective: GraphicsPipeline,
 }
 
+/// The shadow depth map for direct light.
+#[derive(Clone, Copy, Debug)]
+pub struct DprsmDepth {
+    /// Distance / far per texel, `2 × lights` layers.
+    pub depth: Handle<Image>,
+}
+
+/// The reflective DPRSM: one VPL per non-empty texel.
 #[derive(Clone, Copy, Debug)]
 pub struct DprsmOut {
-    /// Distance / far per texel, `2 × lights` layers.
+    pub position: Handle<Image>,
+    pub normal: Handle<Image>,
+    pub flux: Handle<Image>,
     pub depth: Handle<Image>,
 }
 
 impl Dprsm {
     pub fn new(gpu: &Gpu) -> Result<Self> {
-        let pipeline = GraphicsPipeline::new(
-            gpu,
-            &GraphicsPipelineDesc {
-                name: "dprsm",
-                vertex: &crate::spirv(shaders::DPRSM_VERT),
-                geometry: Some(&crate::spirv(shaders::DPRSM_GEOM)),
-                fragment: &crate::spirv(shaders::DPRSM_FRAG),
-                color_formats: &[],
-                depth_format: Some(DPRSM_DEPTH_FORMAT),
-                depth_compare: vk::CompareOp::LESS,
-                bindings: &scene_bindings(),
-                push_constant_size: 0,
-                spec: &[],
-            },
-        )?;
-        Ok(Dprsm { pipeline })
+        let desc = |name, fragment: &'static [u8], colors: &'static [vk::Format]| -> Result<GraphicsPipeline> {
+            Ok(GraphicsPipeline::new(
+                gpu,
+                &GraphicsPipelineDesc {
+                    name,
+                    vertex: &crate::spirv(shaders::DPRSM_VERT),
+                    geometry: Some(&crate::spirv(shaders::DPRSM_GEOM)),
+                    fragment: &crate::spirv(fragment),
+                    color_formats: colors,
+                    depth_format: Some(DPRSM_DEPTH_FORMAT),
+                    depth_compare: vk::CompareOp::LESS,
+                    bindings: &scene_bindings(),
+                    push_constant_size: 4,
+                    spec: &[],
+                },
+            )?)
+        };
+        Ok(Dprsm {
+            depth_only: desc("dprsm_depth", shaders::DPRSM_FRAG, &[])?,
+            reflective: desc("dprsm", shaders::DPRSM_REFLECTIVE_FRAG, &[VPL_FORMAT; 3])?,
+        })
     }
 
+    fn depth_image(g: &mut Graph, name: &str, res: u32, layers: u32) -> Handle<Image> {
+        g.create_image(
+            ImageDesc::new(
+                name,
+                res,
+                res,
+                DPRSM_DEPTH_FORMAT,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
+            )
+            .layers(layers),
+        )
+    }
+
+    /// The depth map that shadows direct light (`shadow_res` per face).
+    pub fn add_depth<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>) -> DprsmDepth {
+        let layers = 2 * f.scene.light_count;
+        let mut out = DprsmDepth { depth: Self::depth_image(g, "dprsm_depth.depth", f.shadow_res, layers) };
+        let o = out;
+        g.add_pass("dprsm_depth")
+            .overwrite(&mut out.depth, Access::DepthAttachment)
+            .record(move |ctx| self.record(ctx, &self.depth_only, f, f.shadow_res, &[], &o.depth));
+        out
+    }
+
+    /// The reflective DPRSM (`dprsm_res` per face).
     pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>) -> DprsmOut {
         let layers = 2 * f.scene.light_count;
-        let mut out = DprsmOut {
-            depth: g.create_image(
+        let res = f.dprsm_res;
+        let color = |g: &mut Graph<'a>, name: &str| {
+            g.create_image(
                 ImageDesc::new(
-                    "dprsm.depth",
-                    f.shadow_res,
-                    f.shadow_res,
-                    DPRSM_DEPTH_FORMAT,
-                    vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                    name,
+                    res,
+                    res,
+                    VPL_FORMAT,
+                    vk::ImageUsageFlags::COLOR_ATTACHMENT
                         | vk::ImageUsageFlags::SAMPLED
                         | vk::ImageUsageFlags::TRANSFER_SRC,
                 )
                 .layers(layers),
-            ),
+            )
+        };
+        let mut out = DprsmOut {
+            position: color(g, "dprsm.position"),
+            normal: color(g, "dprsm.normal"),
+            flux: color(g, "dprsm.flux"),
+            depth: Self::depth_image(g, "dprsm.depth", res, layers),
         };
         let o = out;
-        g.add_pass("dprsm").overwrite(&mut out.depth, Access::DepthAttachment).record(move |ctx| {
-            let d = &ctx.gpu.device;
-            let extent = vk::Extent2D { width: f.shadow_res, height: f.shadow_res };
-            let depth = vk::RenderingAttachmentInfo::default()
-                .image_view(ctx.image(&o.depth).view)
-                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
-            // Layered rendering: the geometry shader routes each (light, face) instance to its layer.
-            let info = vk::RenderingInfo::default()
-                .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
-                .layer_count(layers)
-                .depth_attachment(&depth);
-            unsafe {
-                d.cmd_begin_rendering(ctx.cmd, &info);
-                if f.scene.triangle_count > 0 {
-                    self.pipeline.bind(ctx.cmd, extent, &f.scene.writes(f.uniforms), &[]);
-                    d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
-                }
-                d.cmd_end_rendering(ctx.cmd);
-            }
-        });
+        g.add_pass("dprsm")
+            .overwrite(&mut out.position, Access::ColorAttachment)
+            .overwrite(&mut out.normal, Access::ColorAttachment)
+            .overwrite(&mut out.flux, Access::ColorAttachment)
+            .overwrite(&mut out.depth, Access::DepthAttachment)
+            .record(move |ctx| {
+                let colors = [o.position, o.normal, o.flux].map(|h| ctx.image(&h).view);
+                self.record(ctx, &self.reflective, f, res, &colors, &o.depth)
+            });
         out
+    }
+
+    fn record(
+        &self,
+        ctx: &crate::graph::PassContext,
+        pipeline: &GraphicsPipeline,
+        f: FrameInputs,
+        res: u32,
+        colors: &[vk::ImageView],
+        depth: &Handle<Image>,
+    ) {
+        let d = &ctx.gpu.device;
+        let layers = 2 * f.scene.light_count;
+        let extent = vk::Extent2D { width: res, height: res };
+        let color_attachments: Vec<_> = colors
+            .iter()
+            .map(|&view| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(view)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
+            })
+            .collect();
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(ctx.image(depth).view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+        // Layered rendering: the geometry shader routes each (light, face) instance to its layer.
+        let info = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+            .layer_count(layers)
+            .color_attachments(&color_attachments)
+            .depth_attachment(&depth);
+        unsafe {
+            d.cmd_begin_rendering(ctx.cmd, &info);
+            if f.scene.triangle_count > 0 {
+                pipeline.bind(ctx.cmd, extent, &f.scene.writes(f.uniforms), bytemuck::bytes_of(&res));
+                d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
+            }
+            d.cmd_end_rendering(ctx.cmd);
+        }
     }
 }

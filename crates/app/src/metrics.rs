@@ -1,0 +1,94 @@
+//! Image error metrics, as the project defines them (linear radiance, all pixels and channels):
+//! RMSE; relMSE = mean of (t − r)² / (r² + 0.01); bias = mean(t) / mean(r); the 99th percentile of
+//! |t − r|; and the count of non-finite test pixels (which never count as agreeing).
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Metrics {
+    pub rmse: f64,
+    pub rel_mse: f64,
+    /// mean(test) / mean(reference).
+    pub mean_ratio: f64,
+    pub p99_abs: f64,
+    pub non_finite: usize,
+}
+
+impl Metrics {
+    pub fn of(test: &[[f32; 3]], reference: &[[f32; 3]]) -> Metrics {
+        assert_eq!(test.len(), reference.len(), "images of different sizes");
+        let (mut se, mut rel, mut st, mut sr) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let mut abs = Vec::with_capacity(test.len() * 3);
+        let mut non_finite = 0;
+        for (t, r) in test.iter().zip(reference) {
+            if t.iter().any(|c| !c.is_finite()) {
+                non_finite += 1;
+            }
+            for c in 0..3 {
+                let (t, r) = (t[c] as f64, r[c] as f64);
+                let t = if t.is_finite() { t } else { f64::INFINITY };
+                se += (t - r) * (t - r);
+                rel += (t - r) * (t - r) / (r * r + 0.01);
+                st += t;
+                sr += r;
+                abs.push((t - r).abs());
+            }
+        }
+        let n = abs.len().max(1) as f64;
+        abs.sort_by(|a, b| a.total_cmp(b));
+        let p99 =
+            abs.get(((abs.len() as f64 * 0.99) as usize).min(abs.len().saturating_sub(1))).copied().unwrap_or(0.0);
+        Metrics {
+            rmse: (se / n).sqrt(),
+            rel_mse: rel / n,
+            mean_ratio: if sr > 0.0 {
+                st / sr
+            } else if st == 0.0 {
+                1.0
+            } else {
+                f64::INFINITY
+            },
+            p99_abs: p99,
+            non_finite,
+        }
+    }
+
+    pub fn table(&self) -> String {
+        format!(
+            "RMSE        {:.6e}\nrelMSE      {:.6e}\nmean ratio  {:.6}\np99 |err|   {:.6e}\nnon-finite  {}",
+            self.rmse, self.rel_mse, self.mean_ratio, self.p99_abs, self.non_finite
+        )
+    }
+
+    pub fn json(&self) -> String {
+        format!(
+            "{{\"rmse\": {}, \"rel_mse\": {}, \"mean_ratio\": {}, \"p99_abs\": {}, \"non_finite\": {}}}",
+            self.rmse, self.rel_mse, self.mean_ratio, self.p99_abs, self.non_finite
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hand_computed_case() {
+        let r = [[1.0f32, 0.0, 0.0], [0.0, 0.0, 0.0]];
+        let t = [[2.0f32, 0.0, 0.0], [0.0, 0.1, 0.0]];
+        let m = Metrics::of(&t, &r);
+        // squared errors: 1, 0.01 over 6 entries
+        assert!((m.rmse - (1.01f64 / 6.0).sqrt()).abs() < 1e-9);
+        // relMSE: 1/(1 + 0.01) + 0.01/0.01 = 0.990099 + 1, over 6
+        assert!((m.rel_mse - (1.0 / 1.01 + 1.0) / 6.0).abs() < 1e-7);
+        assert!((m.mean_ratio - 2.1).abs() < 1e-6);
+        assert_eq!(m.non_finite, 0);
+    }
+
+    #[test]
+    fn non_finite_pixels_are_counted_and_poison_the_error() {
+        let r = [[1.0f32; 3]];
+        let t = [[f32::NAN, 1.0, 1.0]];
+        let m = Metrics::of(&t, &r);
+        assert_eq!(m.non_finite, 1);
+        assert!(!m.rmse.is_finite());
+    }
+}

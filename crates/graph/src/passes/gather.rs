@@ -1,0 +1,187 @@
+//! gather: one-bounce indirect radiance at every G-buffer pixel from VPLs.
+//!
+//!   L_ind(x) ≈ 1/N Σ_k albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / d² · V(x, v) / p_v
+//!
+//! Φ_v is the VPL's reflected flux (see `dprsm.rs`); Φ_v · cos θ_v / π is its radiant intensity toward
+//! x (a Lambertian emitter). V comes from an Amanatides–Woo march through the voxel grid
+//! (`glsl/shared/voxel.glsl` states where the march starts and stops). Modes:
+//! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
+//! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
+//!   (converged) VPL estimate, against which every sampling method is judged.
+//!
+//! The 1/d² singularity: `clamp_d2` replaces d² by max(d², clamp²). It bounds the contribution of VPLs
+//! next to x (corners), trading variance for a darkening bias near corners; 0 disables it (default; the
+//! bias is measured in BENCHMARKS.md). Inputs: G-buffer, reflective DPRSM, voxel grid, importance + CDF,
+//! and for the combined component the direct image. Output: RGBA32F radiance. Dispatch ⌈W/8⌉ × ⌈H/8⌉.
+
+use super::FrameInputs;
+use crate::bindings::*;
+use crate::gpu_scene::scene_bindings;
+use crate::graph::{Graph, Handle};
+use crate::passes::dprsm::DprsmOut;
+use crate::passes::gbuffer::GBufferOut;
+use crate::shader_types::GatherPush;
+use crate::shaders;
+use anyhow::Result;
+use bounce_device::sync::{self, Access};
+use bounce_device::{Binding, Buffer, ComputePipeline, Gpu, Image, Sampler};
+
+pub struct Gather {
+    pipeline: ComputePipeline,
+    sampler: Sampler,
+}
+
+/// Everything the gather reads.
+#[derive(Clone, Copy)]
+pub struct GatherInputs {
+    pub g_position: Handle<Image>,
+    pub g_normal: Handle<Image>,
+    pub g_albedo: Handle<Image>,
+    pub vpl_position: Handle<Image>,
+    pub vpl_normal: Handle<Image>,
+    pub vpl_flux: Handle<Image>,
+    pub voxels: Handle<Buffer>,
+    pub importance: Handle<Buffer>,
+    pub cdf: Handle<Buffer>,
+    /// Added to the result when set (the combined component).
+    pub direct: Option<Handle<Image>>,
+}
+
+impl GatherInputs {
+    pub fn new(
+        gbuffer: &GBufferOut,
+        vpls: &DprsmOut,
+        voxels: Handle<Buffer>,
+        importance: Handle<Buffer>,
+        cdf: Handle<Buffer>,
+        direct: Option<Handle<Image>>,
+    ) -> Self {
+        GatherInputs {
+            g_position: gbuffer.position,
+            g_normal: gbuffer.normal,
+            g_albedo: gbuffer.albedo,
+            vpl_position: vpls.position,
+            vpl_normal: vpls.normal,
+            vpl_flux: vpls.flux,
+            voxels,
+            importance,
+            cdf,
+            direct,
+        }
+    }
+
+    pub fn images(&self) -> Vec<Handle<Image>> {
+        let mut v =
+            vec![self.g_position, self.g_normal, self.g_albedo, self.vpl_position, self.vpl_normal, self.vpl_flux];
+        v.extend(self.direct);
+        v
+    }
+
+    pub fn buffers(&self) -> [Handle<Buffer>; 3] {
+        [self.voxels, self.importance, self.cdf]
+    }
+}
+
+impl Gather {
+    pub fn new(gpu: &Gpu) -> Result<Self> {
+        let mut bindings = scene_bindings();
+        bindings.extend([
+            Binding::sampled_image(B_GATHER_GPOSITION),
+            Binding::sampled_image(B_GATHER_GNORMAL),
+            Binding::sampled_image(B_GATHER_GALBEDO),
+            Binding::sampled_image(B_VPL_POSITION),
+            Binding::sampled_image(B_VPL_NORMAL),
+            Binding::sampled_image(B_VPL_FLUX),
+            Binding::storage_buffer(B_VOXELS),
+            Binding::storage_buffer(B_IMPORTANCE),
+            Binding::storage_buffer(B_CDF),
+            Binding::sampled_image(B_GATHER_DIRECT),
+            Binding::storage_image(B_GATHER_OUT),
+        ]);
+        let pipeline = ComputePipeline::new(
+            gpu,
+            "gather",
+            &crate::spirv(shaders::GATHER_COMP),
+            &bindings,
+            std::mem::size_of::<GatherPush>() as u32,
+            &[],
+        )?;
+        Ok(Gather { pipeline, sampler: Sampler::nearest(gpu)? })
+    }
+
+    /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
+    /// `GATHER_SAMPLE`) into `out`: overwritten when `push.accumulate == 0`, else added to. The range is
+    /// split into dispatches of at most `f.vpls_per_dispatch` (see `FrameInputs`), each adding to the
+    /// previous one's result. `direct` is bound only when `push.add_direct` is set; otherwise the G-buffer
+    /// albedo stands in for the unused binding.
+    pub fn add<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        i: &GatherInputs,
+        out: &mut Handle<Image>,
+        push: GatherPush,
+    ) {
+        let (i, o) = (*i, *out);
+        let mut b = g.add_pass("gather");
+        for h in i.images() {
+            b = b.read(&h, Access::ComputeRead);
+        }
+        for h in i.buffers() {
+            b = b.read(&h, Access::ComputeRead);
+        }
+        b = if push.accumulate != 0 {
+            b.write(out, Access::ComputeWrite)
+        } else {
+            b.overwrite(out, Access::ComputeWrite)
+        };
+        b.record(move |ctx| {
+            let s = self.sampler.raw;
+            let direct = match (&i.direct, push.add_direct) {
+                (Some(d), 1) => ctx.image(d),
+                _ => ctx.image(&i.g_albedo),
+            };
+            let writes = f
+                .scene
+                .writes(f.uniforms)
+                .sampled_image(B_GATHER_GPOSITION, ctx.image(&i.g_position), s)
+                .sampled_image(B_GATHER_GNORMAL, ctx.image(&i.g_normal), s)
+                .sampled_image(B_GATHER_GALBEDO, ctx.image(&i.g_albedo), s)
+                .sampled_image(B_VPL_POSITION, ctx.image(&i.vpl_position), s)
+                .sampled_image(B_VPL_NORMAL, ctx.image(&i.vpl_normal), s)
+                .sampled_image(B_VPL_FLUX, ctx.image(&i.vpl_flux), s)
+                .storage_buffer(B_VOXELS, ctx.buffer(&i.voxels))
+                .storage_buffer(B_IMPORTANCE, ctx.buffer(&i.importance))
+                .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
+                .sampled_image(B_GATHER_DIRECT, direct, s)
+                .storage_image(B_GATHER_OUT, ctx.image(&o));
+            let chunk = f.vpls_per_dispatch.max(1);
+            let mut first = push.first;
+            loop {
+                let last = first.saturating_add(chunk).min(push.last);
+                let p = GatherPush {
+                    first,
+                    last,
+                    accumulate: if first == push.first { push.accumulate } else { 1 },
+                    add_direct: if first == push.first { push.add_direct } else { 0 },
+                    ..push
+                };
+                if first != push.first {
+                    // The next chunk adds to what the previous one stored.
+                    sync::image_barrier(ctx.gpu, ctx.cmd, ctx.image(&o), Access::ComputeWrite, Access::ComputeWrite);
+                }
+                self.pipeline.dispatch(
+                    ctx.cmd,
+                    &writes,
+                    bytemuck::bytes_of(&p),
+                    [f.width, f.height, 1],
+                    [WG_2D, WG_2D, 1],
+                );
+                first = last;
+                if first >= push.last {
+                    break;
+                }
+            }
+        });
+    }
+}

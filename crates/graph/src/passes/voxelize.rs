@@ -1,0 +1,202 @@
+//! voxelize: the scene's binary occupancy grid, marched by the gather shaders for VPL visibility.
+//!
+//! Owns: the grid fitting ([`fit`], [`VoxelGridSpec`]), the grid buffer ([`create_grid_buffer`]) and the
+//! GPU voxelization ([`Voxelize`], `glsl/voxelize.comp`). The march lives in `glsl/shared/voxel.glsl`; the
+//! CPU twins of both are in [`crate::cpu_voxel`].
+//!
+//! **Grid.** Cubic cells of size `cell`, `dims` cells per axis, minimum corner `origin`. Grid units are
+//! g = (p − origin) · rcp(cell) (`rcp` = `voxel_rcp`, a division-free reciprocal that every device computes
+//! bit for bit alike), so cell (i, j, k) is the unit cube [i, i+1] × [j, j+1] × [k, k+1]. Cell
+//! c = x + dims.x · (y + dims.y · z) is bit c % 32 of word c / 32 of a buffer of u32 (binding `B_VOXELS`).
+//! `FrameUniforms.voxel_origin` = (origin, cell), `voxel_dims` = (dims, cells), from
+//! [`VoxelGridSpec::uniforms_fields`]; the buffer and the uniforms must come from the same spec.
+//!
+//! **Voxelization (conservative).** Cell B is marked iff the closed triangle T overlaps B grown by
+//! ε = [`VOXEL_EPS`] = 2⁻¹³ ≈ 1.2e-4 cell on every side:  T ∩ [i − ε, i + 1 + ε] × … ≠ ∅. The test is
+//! Akenine-Möller's separating-axis test with its 13 axes (3 box normals, the triangle normal, 9 edge ×
+//! box-axis cross products), each axis judged from all three vertex projections against the box radius
+//! h · (|a.x| + |a.y| + |a.z|), h = ½ + ε. ε absorbs float rounding of the grid coordinates, so a surface
+//! lying exactly on a cell face marks the cells on both sides. **Degenerate triangles** (zero area) are
+//! not skipped: with a zero normal the remaining axes are exactly the separating axes of a segment (or a
+//! point) against a box, so they mark the cells their segment or point touches, on CPU and GPU alike.
+//!
+//! **Dispatch.** Two graph passes: `voxelize_clear` (vkCmdFillBuffer 0, `TransferWrite`, so a grid kept
+//! across scenes or sizes never keeps stale bits) then `voxelize`: ⌈triangles / 64⌉ groups of 64, one
+//! invocation per triangle looping over the cells of its bounding box (clamped to the grid) and setting
+//! bits with `atomicOr`. Cost ∝ Σ over triangles of their bounding-box cell counts: a scene-sized floor at
+//! 128 cells is ~130² × 2 cells for one invocation, acceptable for a grid built once per scene.
+
+use super::FrameInputs;
+use crate::bindings::*;
+use crate::gpu_scene::{scene_bindings, GpuScene};
+use crate::graph::{Graph, Handle};
+use crate::shaders;
+use anyhow::{bail, Context, Result};
+use bounce_device::sync::Access;
+use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, Gpu};
+use glam::{UVec3, Vec3};
+
+/// Conservative margin of the voxelization, in cells (2⁻¹³; `VOXEL_EPS` in `glsl/shared/voxel.glsl`).
+pub const VOXEL_EPS: f32 = 1.0 / 8192.0;
+/// Default cells along the longest side of the scene (`--voxels`).
+pub const DEFAULT_VOXELS: u32 = 128;
+/// Most cells along the longest side that [`fit`] makes (1024³ bits = 128 MiB).
+pub const MAX_VOXELS: u32 = 1024;
+/// Smallest cell [`fit`] makes, relative to the largest |coordinate| of the bounds (at least 1): 2⁻²⁰.
+pub const MIN_CELL_ULPS: f64 = 1.0 / (1u64 << 20) as f64;
+/// Most cells a grid may have: the shaders index cells with a u32.
+pub const MAX_CELLS: u64 = 1 << 31;
+
+/// A voxel grid: cubic cells of size `cell`, `dims` cells per axis, minimum corner `origin`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelGridSpec {
+    pub origin: Vec3,
+    pub cell: f32,
+    pub dims: UVec3,
+}
+
+/// [`VoxelGridSpec::fit`].
+pub fn fit(bounds_min: Vec3, bounds_max: Vec3, voxels_longest: u32) -> VoxelGridSpec {
+    VoxelGridSpec::fit(bounds_min, bounds_max, voxels_longest)
+}
+
+impl VoxelGridSpec {
+    /// The grid around the box [bounds_min, bounds_max] with `voxels_longest` cells (clamped to
+    /// 1..=[`MAX_VOXELS`]) along its longest side.
+    ///
+    /// Each side gets a margin m = 1 cell + 10⁻³ · L (L = longest extent; no whole-cell margin when
+    /// `voxels_longest` < 3, there is no room for one), so surfaces on the bounds are never on the grid's
+    /// outer faces: cell = L · (1 + 2·10⁻³) / (N − 2), the longest axis has exactly N cells, the others
+    /// ⌈(extent + 2m) / cell⌉ (≥ 1), and each axis is centred on the bounds. Computed in f64.
+    ///
+    /// Never fails: non-finite or inverted bounds (an empty scene) become a point at the origin, and the
+    /// cell is at least 2⁻²⁰ · max(1, |coordinate|) (8 f32 ulps of the coordinates), so a point, a flat or
+    /// a one-triangle scene still gets a positive, finite cell that f32 can resolve at the bounds'
+    /// magnitude (the grid is then larger than the bounds need, still centred on them).
+    pub fn fit(bounds_min: Vec3, bounds_max: Vec3, voxels_longest: u32) -> VoxelGridSpec {
+        let n = voxels_longest.clamp(1, MAX_VOXELS);
+        let (mut lo, mut hi) = (bounds_min.as_dvec3(), bounds_max.as_dvec3());
+        if !(lo.is_finite() && hi.is_finite()) || lo.cmpgt(hi).any() {
+            lo = glam::DVec3::ZERO;
+            hi = glam::DVec3::ZERO;
+        }
+        let extent = hi - lo;
+        let longest = extent.max_element();
+        let margin_cells = if n >= 3 { 1.0 } else { 0.0 };
+        // At least 8 f32 ulps of the coordinates: the f32 corner and cell size then keep the margin.
+        let magnitude = lo.abs().max(hi.abs()).max_element().max(1.0);
+        let cell = (longest * (1.0 + 2e-3) / (n as f64 - 2.0 * margin_cells)).max(magnitude * MIN_CELL_ULPS);
+        let margin = margin_cells * cell + 1e-3 * longest;
+        let centre = (lo + hi) * 0.5;
+        // The longest axis (the first of equals) gets exactly n cells; ceil() there could round up to n + 1.
+        let long = (0..3).fold(0, |best, k| if extent[k] > extent[best] { k } else { best });
+        let mut dims = UVec3::ONE;
+        let mut origin = Vec3::ZERO;
+        for k in 0..3 {
+            let cells = if k == long { n } else { (((extent[k] + 2.0 * margin) / cell).ceil() as u32).clamp(1, n) };
+            dims[k] = cells;
+            origin[k] = (centre[k] - 0.5 * cells as f64 * cell) as f32;
+        }
+        VoxelGridSpec { origin, cell: cell as f32, dims }
+    }
+
+    /// Total cells.
+    pub fn cells(&self) -> u64 {
+        self.dims.x as u64 * self.dims.y as u64 * self.dims.z as u64
+    }
+
+    /// u32 words of the occupancy bits: ⌈cells / 32⌉.
+    pub fn words(&self) -> u32 {
+        self.cells().div_ceil(32).min(u32::MAX as u64) as u32
+    }
+
+    /// `(FrameUniforms.voxel_origin, FrameUniforms.voxel_dims)`: (origin, cell) and (dims, cells).
+    pub fn uniforms_fields(&self) -> ([f32; 4], [u32; 4]) {
+        let o = self.origin;
+        let d = self.dims;
+        ([o.x, o.y, o.z, self.cell], [d.x, d.y, d.z, self.cells().min(u32::MAX as u64) as u32])
+    }
+
+    /// The world-space box the grid covers.
+    pub fn world_max(&self) -> Vec3 {
+        self.origin + self.dims.as_vec3() * self.cell
+    }
+
+    /// Rejects grids the shaders cannot index or map (for hand-made specs; [`fit`] always passes).
+    pub fn validate(&self) -> Result<()> {
+        if self.dims.min_element() == 0 {
+            bail!("voxel grid {} has an empty axis", self.dims);
+        }
+        if self.cells() > MAX_CELLS {
+            bail!(
+                "voxel grid {} has {} cells, more than the {} the shaders can index",
+                self.dims,
+                self.cells(),
+                MAX_CELLS
+            );
+        }
+        // voxel_rcp's first guess needs a normal float whose reciprocal is normal too.
+        if !(self.cell.is_finite() && (1e-30..=1e30).contains(&self.cell)) {
+            bail!("voxel cell size {} is not a positive size between 1e-30 and 1e30", self.cell);
+        }
+        if !self.origin.is_finite() {
+            bail!("voxel grid origin {} is not finite", self.origin);
+        }
+        Ok(())
+    }
+}
+
+/// The occupancy buffer for `spec`: `words × 4` bytes, storage + transfer src/dst, device-local. Its
+/// contents are undefined until the `voxelize` passes ran.
+pub fn create_grid_buffer(gpu: &Gpu, spec: &VoxelGridSpec) -> Result<Buffer> {
+    spec.validate()?;
+    let bytes = spec.words() as u64 * 4;
+    let max_range = gpu.limits().max_storage_buffer_range as u64;
+    if bytes > max_range {
+        bail!(
+            "the voxel grid ({}×{}×{} cells, {bytes} bytes) exceeds the device limit maxStorageBufferRange \
+             ({max_range} bytes); lower --voxels",
+            spec.dims.x,
+            spec.dims.y,
+            spec.dims.z
+        );
+    }
+    Buffer::new(gpu, &BufferDesc::storage("voxels", bytes)).context("creating the voxel grid buffer")
+}
+
+pub struct Voxelize {
+    pipeline: ComputePipeline,
+}
+
+impl Voxelize {
+    pub fn new(gpu: &Gpu) -> Result<Self> {
+        let mut bindings = scene_bindings();
+        bindings.push(Binding::storage_buffer(B_VOXELS));
+        let pipeline = ComputePipeline::new(gpu, "voxelize", &crate::spirv(shaders::VOXELIZE_COMP), &bindings, 0, &[])?;
+        Ok(Voxelize { pipeline })
+    }
+
+    /// Clear `grid` and voxelize the scene into it, with the grid of `f.uniforms` (see the module doc).
+    pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, grid: &mut Handle<Buffer>) {
+        self.add_scene(g, f.scene, f.uniforms, grid);
+    }
+
+    /// [`Voxelize::add`] from what it really reads: the grid depends on the scene and the uniforms' voxel
+    /// fields only, not on the frame size, so it can be built without a frame.
+    pub fn add_scene<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        scene: &'a GpuScene,
+        uniforms: &'a Buffer,
+        grid: &mut Handle<Buffer>,
+    ) {
+        let h = *grid;
+        g.add_pass("voxelize_clear").overwrite(grid, Access::TransferWrite).record(move |ctx| unsafe {
+            ctx.gpu.device.cmd_fill_buffer(ctx.cmd, ctx.buffer(&h).raw, 0, vk::WHOLE_SIZE, 0);
+        });
+        g.add_pass("voxelize").write(grid, Access::ComputeWrite).record(move |ctx| {
+            let writes = scene.writes(uniforms).storage_buffer(B_VOXELS, ctx.buffer(&h));
+            self.pipeline.dispatch(ctx.cmd, &writes, &[], [scene.triangle_count, 1, 1], [WG_1D, 1, 1]);
+        });
+    }
+}

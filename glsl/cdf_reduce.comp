@@ -1,0 +1,40 @@
+#version 460
+// cdf_reduce: importance per texel → a two-level CDF (per-row inclusive prefixes, then a prefix over the
+// row totals). Stage CDF_ROWS: one invocation per row; stage CDF_TOTALS: one invocation. See
+// crates/graph/src/passes/cdf_reduce.rs for why two levels.
+#include "shared/types.glsl"
+#include "shared/bindings.glsl"
+
+layout(local_size_x = WG_1D) in;
+layout(push_constant) uniform Push { CdfPush pc; };
+layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
+layout(std430, set = 0, binding = B_CDF_OUT) buffer Cdf { float cdf[]; };
+
+const uint CDF_HEADER = 4u;
+
+void main() {
+    uint rows = pc.rows, len = pc.row_length;
+    if (pc.stage == CDF_ROWS) {
+        uint r = gl_GlobalInvocationID.x;
+        if (r >= rows) return;
+        float acc = 0.0;
+        uint base = CDF_HEADER + rows + r * len;
+        for (uint i = 0u; i < len; i++) {
+            float x = importance[r * len + i];
+            acc += (x > 0.0 && x < 1e30) ? x : 0.0;
+            cdf[base + i] = acc;
+        }
+        cdf[CDF_HEADER + r] = acc; // the row total, turned into a prefix by CDF_TOTALS
+    } else {
+        if (gl_GlobalInvocationID.x != 0u) return;
+        float acc = 0.0;
+        for (uint r = 0u; r < rows; r++) {
+            acc += cdf[CDF_HEADER + r];
+            cdf[CDF_HEADER + r] = acc;
+        }
+        cdf[0] = acc;
+        cdf[1] = uintBitsToFloat(rows);
+        cdf[2] = uintBitsToFloat(len);
+        cdf[3] = 0.0;
+    }
+}

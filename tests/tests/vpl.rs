@@ -1,0 +1,150 @@
+//! The VPL core against closed forms and against itself:
+//! - inside a closed sphere of radius R, uniform albedo ρ, a point light of intensity I anywhere inside,
+//!   the one-bounce indirect radiance is ρ²·I/(π·R²) everywhere (cos θ_x cos θ_y / d² = 1/(4R²) on a
+//!   sphere, so the bounce irradiance is ρ·Φ/(4πR²) with Φ = 4πI, and radiance = ρ/π · that);
+//! - `uniform` is unbiased with respect to `all`: the mean over K seeds approaches it at the 1/√K rate.
+
+use bounce_graph::camera::Camera;
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+use bounce_graph::scene::{point_light, Scene};
+use bounce_tests::TestGpu;
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// A UV sphere of radius `r` (lat × 2·lat quads, two triangles each), uniform albedo, seen from inside.
+pub fn sphere_scene(r: f32, lat: usize, albedo: f32, light: Vec3, intensity: f32) -> Scene {
+    let lon = 2 * lat;
+    let p = |i: usize, j: usize| {
+        let th = PI * i as f32 / lat as f32;
+        let ph = 2.0 * PI * j as f32 / lon as f32;
+        Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()) * r
+    };
+    let mut tris = vec![];
+    for i in 0..lat {
+        for j in 0..lon {
+            let (a, b, c, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+            if i != 0 {
+                tris.push([a, c, d]);
+            }
+            if i != lat - 1 {
+                tris.push([a, b, c]);
+            }
+        }
+    }
+    let albedo = vec![Vec3::splat(albedo); tris.len()];
+    let camera =
+        Camera { eye: Vec3::new(0.1, -0.2, 0.6 * r), target: Vec3::new(0.0, 0.0, -r), up: Vec3::Y, fov_y_deg: 70.0 };
+    Scene::from_triangles(&tris, &albedo, camera, &[point_light(light, Vec3::splat(intensity))])
+}
+
+fn indirect(
+    r: &Renderer,
+    method: Method,
+    seed: u64,
+    vpls: u32,
+    w: u32,
+    h: u32,
+    dprsm_res: u32,
+    voxels: u32,
+) -> Vec<[f32; 3]> {
+    let s = FrameSettings {
+        width: w,
+        height: h,
+        component: Component::Indirect,
+        method,
+        vpls,
+        seed,
+        dprsm_res,
+        voxels,
+        ..FrameSettings::default()
+    };
+    let f = r.render(&s).unwrap();
+    assert!(f.radiance.iter().all(|p| p.iter().all(|c| c.is_finite())), "non-finite radiance");
+    f.radiance.iter().map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+/// Tolerances: the tessellation (48 × 96 quads) moves the surface by under 0.1% of R and tilts facets
+/// by under 2°, and the 64² DPRSM is a midpoint quadrature of a smooth integrand (flux ∝ Δω, G
+/// constant): together well under 1%; the issue asks for 2% on the mean. Per pixel `all` must be within
+/// 3% (facet-scale variation of cos terms near x), `uniform` with 256 VPLs within 15% RMS (its noise:
+/// the flux per texel varies 4× from a face's centre to its rim).
+#[test]
+fn sphere_closed_form_all_and_uniform() {
+    let (radius, rho, intensity) = (1.0f32, 0.5f32, 2.0f32);
+    let scene = sphere_scene(radius, 48, rho, Vec3::new(0.25, 0.3, -0.15), intensity);
+    let want = rho * rho * intensity / (PI * radius * radius);
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    for (method, vpls, mean_tol, pixel_tol) in [(Method::Uniform, 256, 0.02, 0.15), (Method::All, 1, 0.02, 0.03)] {
+        let img = indirect(&r, method, 7, vpls, 24, 24, 64, 32);
+        let vals: Vec<f32> = img.iter().map(|p| p[0]).collect();
+        assert!(img.iter().all(|p| p[0] == p[1] && p[1] == p[2]), "grey scene, grey result");
+        let mean = vals.iter().sum::<f32>() / vals.len() as f32;
+        let rms = (vals.iter().map(|v| ((v - want) / want).powi(2)).sum::<f32>() / vals.len() as f32).sqrt();
+        let worst = vals.iter().map(|v| ((v - want) / want).abs()).fold(0.0f32, f32::max);
+        eprintln!(
+            "sphere {}: mean {mean:.5} vs closed form {want:.5} ({:+.2}%), per-pixel rms {:.2}%, worst {:.2}%",
+            method.name(),
+            100.0 * (mean - want) / want,
+            100.0 * rms,
+            100.0 * worst
+        );
+        assert!(((mean - want) / want).abs() <= mean_tol, "{}: mean {mean} vs {want}", method.name());
+        if method == Method::All {
+            assert!(worst <= pixel_tol, "all: worst pixel off by {:.2}%", 100.0 * worst);
+        } else {
+            assert!(rms <= pixel_tol, "uniform: per-pixel rms {:.2}%", 100.0 * rms);
+        }
+    }
+}
+
+/// Mean of K seeds of `uniform` against `all` on the Cornell box (occlusion, corners): the squared error
+/// of the K-seed mean falls like 1/K (1/√K in RMS), and the image-mean difference stays within 4
+/// standard errors (estimated from the seeds' spread) of zero.
+#[test]
+fn uniform_converges_to_all_at_the_monte_carlo_rate() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = (24, 24, 32, 32);
+    let all = indirect(&r, Method::All, 0, 1, w, h, res, vox);
+    let k_max = 16usize;
+    let runs: Vec<Vec<[f32; 3]>> =
+        (0..k_max).map(|k| indirect(&r, Method::Uniform, 1000 + k as u64, 8, w, h, res, vox)).collect();
+    let mse_of_mean = |k: usize| {
+        let mut s = 0.0f64;
+        for px in 0..all.len() {
+            for c in 0..3 {
+                let m = runs[..k].iter().map(|img| img[px][c] as f64).sum::<f64>() / k as f64;
+                s += (m - all[px][c] as f64).powi(2);
+            }
+        }
+        s / (3 * all.len()) as f64
+    };
+    let image_mean =
+        |img: &[[f32; 3]]| img.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * img.len()) as f64;
+    // Average the single-seed error over all seeds, so the rate is measured against a stable baseline.
+    let mse1 = (0..k_max)
+        .map(|k| {
+            runs[k]
+                .iter()
+                .zip(&all)
+                .map(|(a, b)| (0..3).map(|c| (a[c] as f64 - b[c] as f64).powi(2)).sum::<f64>())
+                .sum::<f64>()
+                / (3 * all.len()) as f64
+        })
+        .sum::<f64>()
+        / k_max as f64;
+    let mse16 = mse_of_mean(k_max);
+    let ratio = mse16 / (mse1 / k_max as f64);
+    let means: Vec<f64> = runs.iter().map(|r| image_mean(r)).collect();
+    let m = means.iter().sum::<f64>() / k_max as f64;
+    let sd = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k_max - 1) as f64).sqrt();
+    let stderr = sd / (k_max as f64).sqrt();
+    let target = image_mean(&all);
+    eprintln!(
+        "uniform vs all: MSE(1 seed) {mse1:.3e}, MSE(mean of {k_max}) {mse16:.3e} = {ratio:.2} × MSE1/{k_max}; image mean {m:.5} ± {stderr:.5} vs all {target:.5}"
+    );
+    assert!((0.4..2.5).contains(&ratio), "the error of the mean does not fall like 1/K: ratio {ratio}");
+    assert!((m - target).abs() <= 4.0 * stderr.max(1e-9), "biased: {m} vs {target} (stderr {stderr})");
+}
