@@ -17,27 +17,33 @@ float cdf_mass(uint v) {
     return (x > 0.0 && x < 1e30) ? x : 0.0;
 }
 
+// The largest float below a positive x.
+float cdf_below(float x) {
+    return uintBitsToFloat(floatBitsToUint(x) - 1u);
+}
+
 // Draw a texel with probability mass(v) / total by inverse transform: u in [0, 1). Returns the texel and
-// writes its discrete probability. Rows are searched first (first row whose prefix exceeds u·total), then
-// the texel within the row; a strict "exceeds" skips zero-mass entries, and a rounding slip onto a
-// zero-mass texel at a row's end is walked back to the nearest texel with mass, whose probability is
-// what the estimator divides by. Call only with cdf_total() > 0.
+// writes its discrete probability. The rows are searched first (the first row whose prefix exceeds
+// u·total), then the texel within the row (the first whose in-row prefix exceeds the rest).
+// Why this never returns a texel without mass: a zero weight leaves a float prefix unchanged
+// (acc + 0 = acc), so "first prefix > t" can only stop where the prefix grew, i.e. at a texel with
+// mass; and clamping each target just below its total (u → 1 and rounding could otherwise reach it)
+// guarantees such a prefix exists. The probability the estimator divides by is the drawn texel's own
+// weight over the total. Call only with cdf_total() > 0.
 uint cdf_sample(float u, out float prob) {
     float total = cdf[0];
     uint rows = floatBitsToUint(cdf[1]);
     uint len = floatBitsToUint(cdf[2]);
-    float target = u * total;
+    float target = min(u * total, cdf_below(total));
     uint lo = 0u, hi = rows - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
         if (cdf[CDF_HEADER + mid] > target) hi = mid; else lo = mid + 1u;
     }
     uint r = lo;
-    // Skip back over rows without mass (only reachable through rounding at u → 1).
-    while (r > 0u && cdf[CDF_HEADER + r] - cdf[CDF_HEADER + r - 1u] <= 0.0) r--;
     float before = r > 0u ? cdf[CDF_HEADER + r - 1u] : 0.0;
-    float t = target - before;
     uint base = CDF_HEADER + rows + r * len;
+    float t = min(max(target - before, 0.0), cdf_below(cdf[base + len - 1u]));
     lo = 0u;
     hi = len - 1u;
     while (lo < hi) {
@@ -45,15 +51,6 @@ uint cdf_sample(float u, out float prob) {
         if (cdf[base + mid] > t) hi = mid; else lo = mid + 1u;
     }
     uint v = r * len + lo;
-    if (cdf_mass(v) <= 0.0) {
-        uint k = lo;
-        while (k > 0u && cdf_mass(r * len + k) <= 0.0) k--;
-        if (cdf_mass(r * len + k) <= 0.0) {
-            k = lo;
-            while (k + 1u < len && cdf_mass(r * len + k) <= 0.0) k++;
-        }
-        v = r * len + k;
-    }
     prob = cdf_mass(v) / total;
     return v;
 }

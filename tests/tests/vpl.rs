@@ -148,3 +148,50 @@ fn uniform_converges_to_all_at_the_monte_carlo_rate() {
     assert!((0.4..2.5).contains(&ratio), "the error of the mean does not fall like 1/K: ratio {ratio}");
     assert!((m - target).abs() <= 4.0 * stderr.max(1e-9), "biased: {m} vs {target} (stderr {stderr})");
 }
+
+/// The CPU one-bounce path tracer (`cpu_ref::indirect_at_pixel`) must itself reproduce the closed form,
+/// within its own Monte Carlo error, before it can judge the VPL estimate.
+#[test]
+fn the_cpu_one_bounce_reference_matches_the_sphere_closed_form() {
+    let (radius, rho, intensity) = (1.0f32, 0.5f32, 2.0f32);
+    let scene = sphere_scene(radius, 48, rho, Vec3::new(0.25, 0.3, -0.15), intensity);
+    let want = (rho * rho * intensity / (PI * radius * radius)) as f64;
+    let bvh = bounce_graph::cpu_ref::Bvh::new(&scene);
+    let img = bounce_graph::cpu_ref::render_indirect(&scene, &bvh, 8, 8, 256, 3);
+    let mean = img.iter().map(|(m, _)| m[0] as f64).sum::<f64>() / img.len() as f64;
+    let se = (img.iter().map(|(_, e)| (e[0] as f64).powi(2)).sum::<f64>()).sqrt() / img.len() as f64;
+    eprintln!("cpu one-bounce on the sphere: {mean:.5} ± {se:.5} vs {want:.5}");
+    // 4 standard errors, plus 0.5 % for the tessellation (see sphere_closed_form_all_and_uniform).
+    assert!((mean - want).abs() <= 4.0 * se + 0.005 * want, "{mean} vs {want}");
+}
+
+/// `all` (the converged VPL estimate, voxel visibility) against the exact one-bounce integral on the
+/// Cornell box, at the acceptance setting (DPRSM 128² per face).
+#[test]
+fn all_agrees_with_the_exact_one_bounce_reference_in_the_cornell_box() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let (w, h) = (24, 24);
+    let bvh = bounce_graph::cpu_ref::Bvh::new(&scene);
+    let reference = bounce_graph::cpu_ref::render_indirect(&scene, &bvh, w, h, 2048, 11);
+    let r_img: Vec<[f32; 3]> = reference.iter().map(|(m, _)| *m).collect();
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let all = indirect(&r, Method::All, 0, 1, w, h, 128, 128);
+    let e = bounce_tests::rel_mse(&all, &r_img);
+    let (ma, mr) = (bounce_tests::mean(&all), bounce_tests::mean(&r_img));
+    // The reference's own noise, in the same metric.
+    let noise = reference
+        .iter()
+        .map(|(m, s)| (0..3).map(|c| (s[c] as f64).powi(2) / ((m[c] as f64).powi(2) + 0.01)).sum::<f64>())
+        .sum::<f64>()
+        / (3 * reference.len()) as f64;
+    eprintln!(
+        "all vs exact one-bounce: relMSE {e:.4} (reference noise {noise:.4}), mean {ma:.5} vs {mr:.5} ({:+.2}%)",
+        100.0 * (ma - mr) / mr
+    );
+    // The acceptance bar for `all` against an independent one-bounce tracer. What separates
+    // them: the DPRSM's discretisation, the voxel march (conservative cells fatten occluders: darker)
+    // and the VPL singularity at corners (brighter); the reference's own noise is in `noise`.
+    assert!(e <= 0.02, "relMSE {e}");
+    assert!(((ma - mr) / mr).abs() <= 0.03, "mean {ma} vs {mr}");
+}

@@ -159,6 +159,7 @@ fn check_suitable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::resu
         (v13.synchronization2, "the feature synchronization2"),
         // SPIR-V 1.6 (Vulkan 1.3 target) compiles GLSL `discard` to OpDemoteToHelperInvocation.
         (v13.shader_demote_to_helper_invocation, "the feature shaderDemoteToHelperInvocation"),
+        (v13.maintenance4, "the feature maintenance4"),
         (f.geometry_shader, "the feature geometryShader"),
         (f.fragment_stores_and_atomics, "the feature fragmentStoresAndAtomics"),
         (f.vertex_pipeline_stores_and_atomics, "the feature vertexPipelineStoresAndAtomics"),
@@ -360,7 +361,10 @@ impl Gpu {
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)
-            .shader_demote_to_helper_invocation(true);
+            .shader_demote_to_helper_invocation(true)
+            // Relaxed interface matching: spirv-opt removes fragment inputs a shader never reads (the
+            // depth-only dprsm fragment shader), which is legal with maintenance4 (mandatory in 1.3).
+            .maintenance4(true);
         let base = vk::PhysicalDeviceFeatures::default()
             .geometry_shader(true)
             .fragment_stores_and_atomics(true)

@@ -678,6 +678,86 @@ pub fn sample_image(scene: &Scene, bvh: &Bvh, w: u32, h: u32) -> Vec<Option<Dire
     per_pixel(w, h, |i, j| direct_at_pixel(scene, bvh, i, j, w, h))
 }
 
+/// A small PCG32 stream for the Monte Carlo reference (deterministic per pixel and seed).
+struct Pcg(u64);
+
+impl Pcg {
+    fn new(i: u32, j: u32, seed: u64) -> Pcg {
+        let mut p = Pcg((u64::from(i) << 32 | u64::from(j)) ^ seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        p.next();
+        p.next();
+        p
+    }
+    fn next(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        xorshifted.rotate_right((old >> 59) as u32)
+    }
+    /// Uniform in [0, 1) with 32 bits.
+    fn uniform(&mut self) -> f64 {
+        self.next() as f64 * (1.0 / 4294967296.0)
+    }
+}
+
+/// One-bounce indirect radiance at pixel (i, j), by Monte Carlo with `spp` cosine-distributed bounce
+/// rays around the shading normal, traced exactly (BVH) to the first hit y, whose direct light (normal
+/// flipped toward x, exact shadow rays) is the incoming radiance:
+///   L_ind(x) = ∫ albedo(x)/π · L_direct(y → x) cos θ dω ≈ albedo(x) · 1/spp Σ L_direct(y_k → x)
+/// (the cosine pdf cos θ/π cancels the BRDF's 1/π and the cosine). Independent of everything on the
+/// GPU: the reference the VPL estimate converges to. Returns (mean, standard error of the mean).
+pub fn indirect_at_pixel(
+    scene: &Scene,
+    bvh: &Bvh,
+    i: u32,
+    j: u32,
+    w: u32,
+    h: u32,
+    spp: u32,
+    seed: u64,
+) -> (Vec3, Vec3) {
+    let (eye, dir) = primary_ray(scene, i as f32 + 0.5, j as f32 + 0.5, w, h);
+    let Some(hit) = bvh.intersect(eye, dir) else { return (Vec3::ZERO, Vec3::ZERO) };
+    let s = surface(scene, bvh, &hit, eye);
+    // An orthonormal frame around the shading normal.
+    let n = s.n;
+    let t = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X }.cross(n).normalize();
+    let b = n.cross(t);
+    let mut rng = Pcg::new(i, j, seed);
+    let (mut sum, mut sum2) = (DVec3::ZERO, DVec3::ZERO);
+    let origin = s.x + s.ng * (1e-6 * (1.0 + s.x.abs().max_element()));
+    for _ in 0..spp {
+        // Cosine-distributed direction (Malley's method).
+        let (u1, u2) = (rng.uniform(), rng.uniform());
+        let r = u1.sqrt();
+        let phi = 2.0 * std::f64::consts::PI * u2;
+        let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+        let value = match bvh.intersect(origin, d) {
+            Some(hy) => {
+                let y = surface(scene, bvh, &hy, s.x);
+                let (l, _) = shade(scene, bvh, &y);
+                l.as_dvec3()
+            }
+            None => DVec3::ZERO,
+        };
+        sum += value;
+        sum2 += value * value;
+    }
+    let k = spp.max(1) as f64;
+    let mean = sum / k;
+    let var = (sum2 / k - mean * mean).max(DVec3::ZERO) / (k - 1.0).max(1.0);
+    let a = s.albedo.as_dvec3();
+    ((a * mean).as_vec3(), (a * var.map(f64::sqrt)).as_vec3())
+}
+
+/// [`indirect_at_pixel`] for every pixel, on all cores: (radiance, standard error) per pixel.
+pub fn render_indirect(scene: &Scene, bvh: &Bvh, w: u32, h: u32, spp: u32, seed: u64) -> Vec<([f32; 3], [f32; 3])> {
+    per_pixel(w, h, |i, j| {
+        let (m, e) = indirect_at_pixel(scene, bvh, i, j, w, h, spp, seed);
+        (m.to_array(), e.to_array())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

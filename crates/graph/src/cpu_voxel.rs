@@ -25,6 +25,8 @@ pub const VOXEL_HALF: f32 = 0.5 + VOXEL_EPS;
 pub const VOXEL_OFFSET_CELLS: f32 = 2.0;
 /// Direction components (grid units) below this (2⁻³⁰) count as parallel to that axis's planes.
 pub const VOXEL_MIN_DIR: f32 = 1.0 / 1_073_741_824.0;
+/// The exit parameter of an axis the segment does not move along (`VOXEL_NEVER`).
+const VOXEL_NEVER: f32 = 3.0e38;
 
 type V = [f32; 3];
 
@@ -32,16 +34,18 @@ fn sub(a: V, b: V) -> V {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-/// `voxel_rcp` of `voxel.glsl`: 1/c within ~2 ulp for |c| in [2⁻¹⁰⁰, 2¹⁰⁰], from the integer first guess
-/// 0x7EF311C3 − bits(|c|) (≤ 12 % off) and four Newton steps r ← r · (2 − |c| · r). Only × and −, so
-/// every device computes the same bits (unlike `/`).
+/// `voxel_rcp` of `voxel.glsl`: 1/c with relative error below 2⁻²³ for |c| in [2⁻¹⁰⁰, 2¹⁰⁰] (exact for
+/// powers of two), from the integer first guess 0x7EF311C3 − bits(|c|) (≤ 12 % off) and four Newton steps
+/// in correction form r ← r + r · (1 − |c| · r). Only ×, + and −, so every device computes the same bits
+/// (unlike `/`).
 pub fn rcp(c: f32) -> f32 {
     let a = c.abs();
     let mut r = f32::from_bits(0x7EF3_11C3u32.wrapping_sub(a.to_bits()));
     for _ in 0..4 {
         let ar = a * r;
-        let corr = 2.0 - ar;
-        r *= corr;
+        let e = 1.0 - ar;
+        let re = r * e;
+        r += re;
     }
     if c < 0.0 {
         -r
@@ -100,12 +104,6 @@ impl CpuGrid {
     /// Marked cells.
     pub fn count(&self) -> u64 {
         self.bits.iter().map(|w| w.count_ones() as u64).sum()
-    }
-
-    /// The cell holding world point `p` (may be outside the grid), by the shaders' mapping.
-    pub fn cell_of(&self, p: Vec3) -> IVec3 {
-        let g = to_grid(&self.spec, p, rcp(self.spec.cell));
-        IVec3::new(g[0].floor() as i32, g[1].floor() as i32, g[2].floor() as i32)
     }
 
     /// Every marked cell, in bit order.
@@ -184,11 +182,6 @@ fn separated(p0: f32, p1: f32, p2: f32, r: f32) -> bool {
     p0.min(p1).min(p2) > r || p0.max(p1).max(p2) < -r
 }
 
-/// Whether the closed triangle `g` (grid units) overlaps cell `c` grown by ε (the GPU's per-cell test).
-pub fn triangle_overlaps_cell(g: [[f32; 3]; 3], c: IVec3) -> bool {
-    TriAxes::new(g).overlaps(c.to_array())
-}
-
 /// Mark the cells of one world-space triangle, as one `voxelize.comp` invocation does.
 pub fn voxelize_triangle(grid: &mut CpuGrid, tri: &[Vec3; 3]) {
     let spec = grid.spec;
@@ -260,28 +253,29 @@ pub fn march(spec: &VoxelGridSpec, x: Vec3, nx: Vec3, y: Vec3, ny: Vec3, mut vis
     let d = sub(b, a);
     let s = sub(gy, gx);
     let along = (d[0] * s[0] + d[1] * s[1]) + d[2] * s[2];
-    if !(along > 0.0) {
+    // `!(along > 0.0)` in the GLSL: NaN (an overflowed segment) is visible too.
+    if along.is_nan() || along <= 0.0 {
         return false;
     }
 
+    // Clip a + t·d, t ∈ [0, 1], to the grid box [0, dims] (voxel_clip_axis per axis).
     let (mut t0, mut t1) = (0.0f32, 1.0f32);
     let mut invd = [0.0f32; 3];
     let mut moving = [false; 3];
+    let mut outside = false;
     for k in 0..3 {
-        if d[k].abs() < VOXEL_MIN_DIR {
-            if a[k] < 0.0 || a[k] > dimsf[k] {
-                return false;
-            }
-        } else {
-            moving[k] = true;
-            invd[k] = rcp(d[k]);
-            let ta = (0.0 - a[k]) * invd[k];
-            let tb = (dimsf[k] - a[k]) * invd[k];
-            t0 = t0.max(ta.min(tb));
-            t1 = t1.min(ta.max(tb));
+        moving[k] = d[k].abs() >= VOXEL_MIN_DIR;
+        if !moving[k] {
+            outside |= a[k] < 0.0 || a[k] > dimsf[k];
+            continue;
         }
+        invd[k] = rcp(d[k]);
+        let ta = (0.0 - a[k]) * invd[k];
+        let tb = (dimsf[k] - a[k]) * invd[k];
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
     }
-    if t0 > t1 {
+    if outside || t0 > t1 {
         return false;
     }
 
@@ -295,20 +289,22 @@ pub fn march(spec: &VoxelGridSpec, x: Vec3, nx: Vec3, y: Vec3, ny: Vec3, mut vis
         if visit(IVec3::from_array(cell)) {
             return true;
         }
-        let mut best = 3.0e38f32;
-        let mut m = None;
-        for k in 0..3 {
+        // voxel_exit_t per axis; the nearest wins, x before y before z on ties.
+        let exit = |k: usize| {
             if !moving[k] {
-                continue;
+                return VOXEL_NEVER;
             }
             let plane = (cell[k] + i32::from(d[k] > 0.0)) as f32;
-            let tk = (plane - a[k]) * invd[k];
-            if tk < best {
-                best = tk;
-                m = Some(k);
+            (plane - a[k]) * invd[k]
+        };
+        let (mut best, mut m) = (exit(0), 0);
+        for k in 1..3 {
+            let t = exit(k);
+            if t < best {
+                (best, m) = (t, k);
             }
         }
-        let Some(m) = m else { break };
+        // Past the end (this also ends a segment that moves along no axis: best = VOXEL_NEVER).
         if best > t1 {
             break;
         }

@@ -274,13 +274,13 @@ impl Renderer {
     }
 
     /// VPLs per gather dispatch under the device's loop iteration limit. Per VPL an invocation loops at
-    /// most: the march's steps (≤ dims.x + dims.y + dims.z + 3, each with its 3-axis inner loop: 4
-    /// iterations per step), plus a constant for the clip, reciprocals and the CDF's binary searches
-    /// (≤ 64 + 2 · log2(VPL slots)); the rest of the budget is kept for the loops outside (64).
+    /// most: the march's steps (≤ dims.x + dims.y + dims.z + 3; its small loops are unrolled, one loop
+    /// iteration per cell) and the CDF's two binary searches (≤ 2 · 32), plus 64 for the rest;
+    /// another 64 are kept for the loops outside.
     pub fn vpls_per_dispatch(&self, s: &FrameSettings) -> u32 {
         let Some(limit) = self.gpu.loop_iteration_limit else { return u32::MAX };
         let dims = self.voxel_spec(s).dims;
-        let per_vpl = 4 * (dims.x + dims.y + dims.z + 3) + 64 + 2 * 32;
+        let per_vpl = (dims.x + dims.y + dims.z + 3) + 64 + 2 * 32;
         ((limit.saturating_sub(64)) / per_vpl).max(1)
     }
 

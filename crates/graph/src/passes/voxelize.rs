@@ -21,10 +21,14 @@
 //! point) against a box, so they mark the cells their segment or point touches, on CPU and GPU alike.
 //!
 //! **Dispatch.** Two graph passes: `voxelize_clear` (vkCmdFillBuffer 0, `TransferWrite`, so a grid kept
-//! across scenes or sizes never keeps stale bits) then `voxelize`: ⌈triangles / 64⌉ groups of 64, one
-//! invocation per triangle looping over the cells of its bounding box (clamped to the grid) and setting
-//! bits with `atomicOr`. Cost ∝ Σ over triangles of their bounding-box cell counts: a scene-sized floor at
-//! 128 cells is ~130² × 2 cells for one invocation, acceptable for a grid built once per scene.
+//! across scenes or sizes never keeps stale bits) then `voxelize`: ⌈triangles / 64⌉ × S groups of 64×1,
+//! invocation (t, s) testing share s of the candidate cells of triangle t (its bounding box, grown by half
+//! a cell and clamped to the grid) in one flat loop, setting bits with `atomicOr`. On a device without a
+//! loop limit S = 1: one invocation per triangle. llvmpipe silently cuts an invocation's loops after 65535
+//! iterations in total (`Gpu::loop_iteration_limit`), so there each share is at most half that many cells
+//! and S = ⌈grid cells / share⌉ (the grid bounds any bounding box; shares past a small triangle's box
+//! return at once). Cost ∝ Σ over triangles of their bounding-box cell counts: a scene-sized floor at 128
+//! cells is ~130² × 2 cells, acceptable for a grid built once per scene.
 
 use super::FrameInputs;
 use crate::bindings::*;
@@ -44,8 +48,9 @@ pub const DEFAULT_VOXELS: u32 = 128;
 pub const MAX_VOXELS: u32 = 1024;
 /// Smallest cell [`fit`] makes, relative to the largest |coordinate| of the bounds (at least 1): 2⁻²⁰.
 pub const MIN_CELL_ULPS: f64 = 1.0 / (1u64 << 20) as f64;
-/// Most cells a grid may have: the shaders index cells with a u32.
-pub const MAX_CELLS: u64 = 1 << 31;
+/// Most cells a grid may have (1024³): the shaders index cells with a u32, and under llvmpipe's loop limit
+/// the voxelize dispatch needs ⌈cells / 32767⌉ ≤ 65535 invocations per triangle in y.
+pub const MAX_CELLS: u64 = 1 << 30;
 
 /// A voxel grid: cubic cells of size `cell`, `dims` cells per axis, minimum corner `origin`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,7 +72,8 @@ impl VoxelGridSpec {
     /// Each side gets a margin m = 1 cell + 10⁻³ · L (L = longest extent; no whole-cell margin when
     /// `voxels_longest` < 3, there is no room for one), so surfaces on the bounds are never on the grid's
     /// outer faces: cell = L · (1 + 2·10⁻³) / (N − 2), the longest axis has exactly N cells, the others
-    /// ⌈(extent + 2m) / cell⌉ (≥ 1), and each axis is centred on the bounds. Computed in f64.
+    /// ⌈(extent + 2m) / cell⌉ (≥ 1), and each axis is centred on the bounds. Computed in f64; rounding the
+    /// corner to f32 can take up to half an f32 ulp of the coordinates (< 1/16 cell) off the margin.
     ///
     /// Never fails: non-finite or inverted bounds (an empty scene) become a point at the origin, and the
     /// cell is at least 2⁻²⁰ · max(1, |coordinate|) (8 f32 ulps of the coordinates), so a point, a flat or
@@ -172,7 +178,7 @@ impl Voxelize {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         let mut bindings = scene_bindings();
         bindings.push(Binding::storage_buffer(B_VOXELS));
-        let pipeline = ComputePipeline::new(gpu, "voxelize", &crate::spirv(shaders::VOXELIZE_COMP), &bindings, 0, &[])?;
+        let pipeline = ComputePipeline::new(gpu, "voxelize", &crate::spirv(shaders::VOXELIZE_COMP), &bindings, 8, &[])?;
         Ok(Voxelize { pipeline })
     }
 
@@ -195,8 +201,31 @@ impl Voxelize {
             ctx.gpu.device.cmd_fill_buffer(ctx.cmd, ctx.buffer(&h).raw, 0, vk::WHOLE_SIZE, 0);
         });
         g.add_pass("voxelize").write(grid, Access::ComputeWrite).record(move |ctx| {
-            let writes = scene.writes(uniforms).storage_buffer(B_VOXELS, ctx.buffer(&h));
-            self.pipeline.dispatch(ctx.cmd, &writes, &[], [scene.triangle_count, 1, 1], [WG_1D, 1, 1]);
+            let buffer = ctx.buffer(&h);
+            let (per_invocation, shares) = shares(ctx.gpu.loop_iteration_limit, buffer.size / 4 * 32);
+            let writes = scene.writes(uniforms).storage_buffer(B_VOXELS, buffer);
+            // Batches of at most maxComputeWorkGroupCount[0] groups; no barrier between them (atomicOr).
+            let batch = ctx.gpu.limits().max_compute_work_group_count[0].min(65535) * WG_1D;
+            let mut first = 0;
+            while first < scene.triangle_count {
+                let n = batch.min(scene.triangle_count - first);
+                let push: Vec<u8> = [per_invocation, first].iter().flat_map(|v| v.to_ne_bytes()).collect();
+                self.pipeline.dispatch(ctx.cmd, &writes, &push, [n, shares, 1], [WG_1D, 1, 1]);
+                first += n;
+            }
         });
+    }
+}
+
+/// (candidate cells per invocation, invocations per triangle) under a loop iteration `limit`, for a grid of
+/// at most `cells` cells. Half the limit goes to the cell loop; the other half is headroom for the few
+/// iterations of the rest of the shader, whatever the compiler leaves of them.
+fn shares(limit: Option<u32>, cells: u64) -> (u32, u32) {
+    match limit {
+        None => (u32::MAX, 1),
+        Some(limit) => {
+            let per = (limit / 2).max(1);
+            (per, cells.div_ceil(per as u64).clamp(1, u32::MAX as u64) as u32)
+        }
     }
 }
