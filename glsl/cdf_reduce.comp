@@ -14,27 +14,30 @@ const uint CDF_HEADER = 4u;
 
 void main() {
     uint rows = pc.rows, len = pc.row_length;
+    // Section s: importance at s·rows·len, its CDF at s·(header + rows + rows·len).
+    uint in_base = pc.section * rows * len;
+    uint out_base = pc.section * (CDF_HEADER + rows + rows * len);
     if (pc.stage == CDF_ROWS) {
         uint r = gl_GlobalInvocationID.x;
         if (r >= rows) return;
         float acc = 0.0;
-        uint base = CDF_HEADER + rows + r * len;
+        uint base = out_base + CDF_HEADER + rows + r * len;
         for (uint i = 0u; i < len; i++) {
-            float x = importance[r * len + i];
+            float x = importance[in_base + r * len + i];
             acc += (x > 0.0 && x < 1e30) ? x : 0.0;
             cdf[base + i] = acc;
         }
-        cdf[CDF_HEADER + r] = acc; // the row total, turned into a prefix by CDF_TOTALS
+        cdf[out_base + CDF_HEADER + r] = acc; // the row total, turned into a prefix by CDF_TOTALS
     } else {
         if (gl_GlobalInvocationID.x != 0u) return;
         float acc = 0.0;
         for (uint r = 0u; r < rows; r++) {
-            acc += cdf[CDF_HEADER + r];
-            cdf[CDF_HEADER + r] = acc;
+            acc += cdf[out_base + CDF_HEADER + r];
+            cdf[out_base + CDF_HEADER + r] = acc;
         }
-        cdf[0] = acc;
-        cdf[1] = uintBitsToFloat(rows);
-        cdf[2] = uintBitsToFloat(len);
-        cdf[3] = 0.0;
+        cdf[out_base] = acc;
+        cdf[out_base + 1u] = uintBitsToFloat(rows);
+        cdf[out_base + 2u] = uintBitsToFloat(len);
+        cdf[out_base + 3u] = 0.0;
     }
 }

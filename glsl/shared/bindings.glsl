@@ -40,6 +40,18 @@
 #define B_CDF_OUT 22
 #define B_GATHER_DIRECT 23
 
+// importance modes
+#define IMP_UNIFORM 0
+#define IMP_GLOBAL 1
+#define IMP_STRATIFIED 2
+#define IMP_LOCAL 3
+#define IMP_GBG_SCATTER 4
+#define IMP_GBG_RESOLVE 5
+#define B_GBG_SUM 24
+#define B_GBG_COUNT 25
+#define FACE_RR 0
+#define FACE_UNIFORM 1
+
 #define GATHER_SAMPLE 0
 #define GATHER_ALL 1
 #define CDF_ROWS 0

@@ -51,6 +51,22 @@ struct GatherPush {
     uint accumulate;  // 1: add to the output image (later tiles); 0: overwrite it
     uint add_direct;  // 1: add the direct image (the combined component)
     float clamp_d2;   // the squared distance below which 1/d² is clamped (0: no clamp)
+    uint sections;    // method CDF sections after the validity section (1; `local`: the regions)
+    float defensive;  // ε: the share of samples drawn uniformly among the VPLs (0 for `uniform`)
+    uint face_mode;   // FACE_RR: faces in proportion to their importance; FACE_UNIFORM: equally
+    uint cdf_len;     // floats per CDF section
+};
+
+// importance push constants.
+struct ImportancePush {
+    uint mode;        // IMP_UNIFORM, IMP_GLOBAL, IMP_STRATIFIED, IMP_LOCAL, IMP_GBG_SCATTER, IMP_GBG_RESOLVE
+    uint samples;     // gather points per CDF (global/stratified/local) or rays per pixel (gbg)
+    uint seed;
+    uint regions;     // local: regions per side (regions = side²)
+    float min_d2;     // importance only: 1/d² is clamped below this squared distance
+    float fixed_scale;// gbg: fixed-point units per unit of contribution (u64 atomics: deterministic sums)
+    uint section;     // the section written (IMP_LOCAL: first region's section; one dispatch z per region)
+    uint pad;
 };
 
 // cdf_reduce push constants.
@@ -58,7 +74,7 @@ struct CdfPush {
     uint stage;       // CDF_ROWS: prefix per row; CDF_TOTALS: prefix over the row totals
     uint row_length;  // texels per row
     uint rows;        // rows in all (2 faces × lights × rows per face)
-    uint pad;
+    uint section;     // which section: importance at section·rows·row_length, CDF at section·cdf_len
 };
 
 #endif

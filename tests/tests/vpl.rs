@@ -5,7 +5,7 @@
 //! - `uniform` is unbiased with respect to `all`: the mean over K seeds approaches it at the 1/√K rate.
 
 use bounce_graph::camera::Camera;
-use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, Renderer};
 use bounce_graph::scene::{point_light, Scene};
 use bounce_tests::TestGpu;
 use glam::Vec3;
@@ -37,6 +37,7 @@ pub fn sphere_scene(r: f32, lat: usize, albedo: f32, light: Vec3, intensity: f32
     Scene::from_triangles(&tris, &albedo, camera, &[point_light(light, Vec3::splat(intensity))])
 }
 
+#[allow(clippy::too_many_arguments)]
 fn indirect(
     r: &Renderer,
     method: Method,
@@ -47,17 +48,11 @@ fn indirect(
     dprsm_res: u32,
     voxels: u32,
 ) -> Vec<[f32; 3]> {
-    let s = FrameSettings {
-        width: w,
-        height: h,
-        component: Component::Indirect,
-        method,
-        vpls,
-        seed,
-        dprsm_res,
-        voxels,
-        ..FrameSettings::default()
-    };
+    indirect_with(r, FrameSettings { method, seed, vpls, ..FrameSettings::default() }, w, h, dprsm_res, voxels)
+}
+
+fn indirect_with(r: &Renderer, base: FrameSettings, w: u32, h: u32, dprsm_res: u32, voxels: u32) -> Vec<[f32; 3]> {
+    let s = FrameSettings { width: w, height: h, component: Component::Indirect, dprsm_res, voxels, ..base };
     let f = r.render(&s).unwrap();
     assert!(f.radiance.iter().all(|p| p.iter().all(|c| c.is_finite())), "non-finite radiance");
     f.radiance.iter().map(|p| [p[0], p[1], p[2]]).collect()
@@ -98,19 +93,34 @@ fn sphere_closed_form_all_and_uniform() {
     }
 }
 
-/// Mean of K seeds of `uniform` against `all` on the Cornell box (occlusion, corners): the squared error
-/// of the K-seed mean falls like 1/K (1/√K in RMS), and the image-mean difference stays within 4
-/// standard errors (estimated from the seeds' spread) of zero.
+/// Mean of K seeds of each sampling method against `all` on the Cornell box (occlusion, corners): the
+/// squared error of the K-seed mean falls like 1/K (1/√K in RMS), and the image-mean difference stays
+/// within 4 standard errors (estimated from the seeds' spread) of zero.
 #[test]
-fn uniform_converges_to_all_at_the_monte_carlo_rate() {
+fn every_method_converges_to_all_at_the_monte_carlo_rate() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (24, 24, 32, 32);
     let all = indirect(&r, Method::All, 0, 1, w, h, res, vox);
+    for (method, face) in [
+        (Method::Uniform, FaceMode::RussianRoulette),
+        (Method::Global, FaceMode::RussianRoulette),
+        (Method::Stratified, FaceMode::RussianRoulette),
+        (Method::Local, FaceMode::RussianRoulette),
+        (Method::Gbg, FaceMode::RussianRoulette),
+        (Method::Gbg, FaceMode::Uniform),
+    ] {
+        let settings =
+            |seed| FrameSettings { method, face, seed, vpls: 8, cdf_samples: 16, ..FrameSettings::default() };
+        let name = format!("{} (face {:?})", method.name(), face);
+        converges_to(&name, &all, |seed| indirect_with(&r, settings(seed), w, h, res, vox));
+    }
+}
+
+fn converges_to(name: &str, all: &[[f32; 3]], run: impl Fn(u64) -> Vec<[f32; 3]>) {
     let k_max = 16usize;
-    let runs: Vec<Vec<[f32; 3]>> =
-        (0..k_max).map(|k| indirect(&r, Method::Uniform, 1000 + k as u64, 8, w, h, res, vox)).collect();
+    let runs: Vec<Vec<[f32; 3]>> = (0..k_max).map(|k| run(1000 + k as u64)).collect();
     let mse_of_mean = |k: usize| {
         let mut s = 0.0f64;
         for px in 0..all.len() {
@@ -128,7 +138,7 @@ fn uniform_converges_to_all_at_the_monte_carlo_rate() {
         .map(|k| {
             runs[k]
                 .iter()
-                .zip(&all)
+                .zip(all)
                 .map(|(a, b)| (0..3).map(|c| (a[c] as f64 - b[c] as f64).powi(2)).sum::<f64>())
                 .sum::<f64>()
                 / (3 * all.len()) as f64
@@ -143,10 +153,10 @@ fn uniform_converges_to_all_at_the_monte_carlo_rate() {
     let stderr = sd / (k_max as f64).sqrt();
     let target = image_mean(&all);
     eprintln!(
-        "uniform vs all: MSE(1 seed) {mse1:.3e}, MSE(mean of {k_max}) {mse16:.3e} = {ratio:.2} × MSE1/{k_max}; image mean {m:.5} ± {stderr:.5} vs all {target:.5}"
+        "{name} vs all: MSE(1 seed) {mse1:.3e}, MSE(mean of {k_max}) {mse16:.3e} = {ratio:.2} × MSE1/{k_max}; image mean {m:.5} ± {stderr:.5} vs all {target:.5}"
     );
-    assert!((0.4..2.5).contains(&ratio), "the error of the mean does not fall like 1/K: ratio {ratio}");
-    assert!((m - target).abs() <= 4.0 * stderr.max(1e-9), "biased: {m} vs {target} (stderr {stderr})");
+    assert!((0.4..2.5).contains(&ratio), "{name}: the error of the mean does not fall like 1/K: ratio {ratio}");
+    assert!((m - target).abs() <= 4.0 * stderr.max(1e-9), "{name} biased: {m} vs {target} (stderr {stderr})");
 }
 
 /// The CPU one-bounce path tracer (`cpu_ref::indirect_at_pixel`) must itself reproduce the closed form,

@@ -9,7 +9,7 @@ pub mod output;
 
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions};
-use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, Renderer};
 use bounce_graph::scene::Scene;
 use clap::{Parser, Subcommand, ValueEnum};
 use output::RgbImage;
@@ -52,6 +52,22 @@ pub enum MethodArg {
     Uniform,
     /// Every VPL (the converged VPL estimate; slow, tiled, with a progress bar).
     All,
+    /// Ritschel et al. 2011: a CDF from --cdf-samples random gather points.
+    Global,
+    /// The global CDF with its gather points spread over the 4 screen quarters (thesis §7.3.2).
+    Stratified,
+    /// One CDF per screen region (--regions), every pixel sampling all of them (thesis §7.3.3).
+    Local,
+    /// The gathering-based global CDF: --gather-rays cosine rays per pixel (thesis §7.3.4).
+    Gbg,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceArg {
+    /// Russian roulette by each face's total importance (thesis alg. 9).
+    Rr,
+    /// Every face with importance equally likely (thesis alg. 4).
+    Uniform,
 }
 
 #[derive(clap::Args, Debug)]
@@ -87,6 +103,21 @@ pub struct RenderArgs {
     /// Clamp 1/d² below this distance, as a fraction of the scene diagonal (0: off, unbiased).
     #[arg(long, default_value_t = 0.0)]
     pub clamp: f32,
+    /// Gather points per CDF (global, stratified, local).
+    #[arg(long, default_value_t = 64)]
+    pub cdf_samples: u32,
+    /// Screen regions of `local` (a perfect square).
+    #[arg(long, default_value_t = 4)]
+    pub regions: u32,
+    /// Cosine rays per gather point (gbg).
+    #[arg(long, default_value_t = 4)]
+    pub gather_rays: u32,
+    /// Share of samples drawn uniformly among all VPLs by the CDF methods (keeps every VPL's pdf > 0).
+    #[arg(long, default_value_t = 0.1)]
+    pub defensive: f32,
+    /// How CDF methods choose the paraboloid face.
+    #[arg(long, value_enum, default_value = "rr")]
+    pub face: FaceArg,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -237,6 +268,18 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         method: match a.method {
             MethodArg::Uniform => Method::Uniform,
             MethodArg::All => Method::All,
+            MethodArg::Global => Method::Global,
+            MethodArg::Stratified => Method::Stratified,
+            MethodArg::Local => Method::Local,
+            MethodArg::Gbg => Method::Gbg,
+        },
+        cdf_samples: a.cdf_samples,
+        regions: a.regions,
+        gather_rays: a.gather_rays,
+        defensive: a.defensive,
+        face: match a.face {
+            FaceArg::Rr => FaceMode::RussianRoulette,
+            FaceArg::Uniform => FaceMode::Uniform,
         },
         vpls: a.vpls,
         seed: a.seed,

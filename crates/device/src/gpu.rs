@@ -151,10 +151,13 @@ fn check_suitable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::resu
         return Err("the extension VK_KHR_push_descriptor".into());
     }
     let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13);
+    let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13).push_next(&mut v12);
     unsafe { instance.get_physical_device_features2(pd, &mut f2) };
     let f = f2.features;
     for (ok, what) in [
+        (v12.shader_buffer_int64_atomics, "the feature shaderBufferInt64Atomics"),
+        (f.shader_int64, "the feature shaderInt64"),
         (v13.dynamic_rendering, "the feature dynamicRendering"),
         (v13.synchronization2, "the feature synchronization2"),
         // SPIR-V 1.6 (Vulkan 1.3 target) compiles GLSL `discard` to OpDemoteToHelperInvocation.
@@ -365,11 +368,14 @@ impl Gpu {
             // Relaxed interface matching: spirv-opt removes fragment inputs a shader never reads (the
             // depth-only dprsm fragment shader), which is legal with maintenance4 (mandatory in 1.3).
             .maintenance4(true);
+        // u64 atomics: the gbg importance sums fixed-point contributions (order-independent results).
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
         let base = vk::PhysicalDeviceFeatures::default()
+            .shader_int64(true)
             .geometry_shader(true)
             .fragment_stores_and_atomics(true)
             .vertex_pipeline_stores_and_atomics(true);
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v13);
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v13).push_next(&mut v12);
         let dinfo = vk::DeviceCreateInfo::default()
             .queue_create_infos(&qinfo)
             .enabled_extension_names(&dev_exts)

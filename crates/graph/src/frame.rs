@@ -9,7 +9,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::{Graph, Handle, PassTiming, Persistent};
 use crate::passes::cdf_reduce::CdfReduce;
 use crate::passes::gather::{Gather, GatherInputs};
-use crate::passes::importance::Importance;
+use crate::passes::importance::{Importance, ImportanceKind, ImportanceParams};
 use crate::passes::voxelize::{self, VoxelGridSpec, Voxelize};
 use crate::passes::{direct::Direct, dprsm::Dprsm, gbuffer::GBuffer, FrameInputs};
 use crate::scene::Scene;
@@ -43,6 +43,14 @@ pub enum Method {
     Uniform,
     /// Every VPL (p_v = 1): the converged VPL estimate, in tiles.
     All,
+    /// Ritschel et al. 2011: a CDF from S random gather points (unshadowed).
+    Global,
+    /// Thesis §7.3.2: the global CDF from gather points spread over 4 screen quarters.
+    Stratified,
+    /// Thesis §7.3.3: one CDF per screen region, all sampled by every pixel (a mixture: no seams).
+    Local,
+    /// Thesis §7.3.4: the gathering-based global CDF (cosine rays, per-texel averages, median holes).
+    Gbg,
 }
 
 impl Method {
@@ -50,8 +58,22 @@ impl Method {
         match self {
             Method::Uniform => "uniform",
             Method::All => "all",
+            Method::Global => "global",
+            Method::Stratified => "stratified",
+            Method::Local => "local",
+            Method::Gbg => "gbg",
         }
     }
+}
+
+/// How a CDF method chooses the paraboloid face of a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceMode {
+    /// Russian roulette by each face's total importance (thesis alg. 9). Equivalent to sampling the
+    /// method's CDF over both faces at once.
+    RussianRoulette,
+    /// Every face with importance equally likely (the thesis's 0.5 baseline, alg. 4).
+    Uniform,
 }
 
 #[derive(Clone, Debug)]
@@ -71,6 +93,15 @@ pub struct FrameSettings {
     pub clamp: f32,
     /// VPLs per tile of the exhaustive (`all`) gather: one submission each.
     pub all_tile: u32,
+    /// Gather points per CDF (global, stratified, local).
+    pub cdf_samples: u32,
+    /// Screen regions of `local` (a perfect square: side × side).
+    pub regions: u32,
+    /// Cosine rays per gather point (gbg).
+    pub gather_rays: u32,
+    /// Share of samples drawn uniformly among the VPLs by the CDF methods (defensive sampling).
+    pub defensive: f32,
+    pub face: FaceMode,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
     /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
@@ -94,6 +125,11 @@ impl Default for FrameSettings {
             voxels: 128,
             clamp: 0.0,
             all_tile: 4096,
+            cdf_samples: 64,
+            regions: 4,
+            gather_rays: 4,
+            defensive: 0.1,
+            face: FaceMode::RussianRoulette,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
@@ -127,6 +163,19 @@ impl FrameSettings {
         if self.all_tile == 0 {
             bail!("the tile size must be at least 1");
         }
+        if !(1..=4096).contains(&self.cdf_samples) {
+            bail!("--cdf-samples must be between 1 and 4096 (got {})", self.cdf_samples);
+        }
+        let side = (self.regions as f64).sqrt().round() as u32;
+        if self.regions == 0 || side * side != self.regions || side > 8 {
+            bail!("--regions must be a perfect square from 1 to 64 (got {})", self.regions);
+        }
+        if !(1..=256).contains(&self.gather_rays) {
+            bail!("--gather-rays must be between 1 and 256 (got {})", self.gather_rays);
+        }
+        if !(self.defensive.is_finite() && (0.0..=1.0).contains(&self.defensive)) {
+            bail!("--defensive must be in [0, 1] (got {})", self.defensive);
+        }
         if !(self.clamp.is_finite() && (0.0..1.0).contains(&self.clamp)) {
             bail!("the clamp must be a fraction of the scene diagonal in [0, 1) (got {})", self.clamp);
         }
@@ -150,6 +199,8 @@ pub struct Renderer {
     pub gpu: Gpu,
     pub scene: GpuScene,
     pub camera: crate::camera::Camera,
+    /// The largest intensity component of any light (for the gbg fixed-point scale).
+    max_intensity: f32,
     gbuffer: GBuffer,
     dprsm: Dprsm,
     direct: Direct,
@@ -203,21 +254,21 @@ pub fn build_frame<'a>(
     if !voxels_built {
         r.voxelize.add(g, f, &mut voxels);
     }
-    let importance = r.importance.add_uniform(g, f, &vpls);
+    let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, r.importance_params(s));
     let rows = 2 * f.scene.light_count * f.dprsm_res;
-    let cdf = r.cdf_reduce.add(g, &importance, rows, f.dprsm_res);
+    let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
     let gather_inputs = GatherInputs::new(
         &gbuffer,
         &vpls,
         voxels,
-        importance,
+        imp.importance,
         cdf,
         (s.component == Component::Combined).then_some(direct),
     );
     let out = match (s.component, s.method) {
         (Component::Direct, _) => Some(direct),
         (_, Method::All) => None,
-        (_, Method::Uniform) => {
+        (_, _) => {
             let mut out = g.create_image(radiance_desc("gather.radiance", f.width, f.height));
             let push = GatherPush {
                 mode: crate::bindings::GATHER_SAMPLE,
@@ -227,6 +278,13 @@ pub fn build_frame<'a>(
                 seed: seed32(s.seed),
                 add_direct: (s.component == Component::Combined) as u32,
                 clamp_d2: clamp_d2(s, f.scene),
+                sections: imp.sections - 1,
+                defensive: if s.method == Method::Uniform { 0.0 } else { s.defensive },
+                face_mode: match s.face {
+                    FaceMode::RussianRoulette => crate::bindings::FACE_RR,
+                    FaceMode::Uniform => crate::bindings::FACE_UNIFORM,
+                },
+                cdf_len: CdfReduce::section_len(rows, f.dprsm_res) as u32,
                 ..GatherPush::default()
             };
             r.gather.add(g, f, &gather_inputs, &mut out, push);
@@ -262,6 +320,7 @@ impl Renderer {
             gpu: gpu.clone(),
             scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
             camera: scene.camera,
+            max_intensity: scene.lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max),
             gbuffer: GBuffer::new(gpu).context("creating the gbuffer pass")?,
             dprsm: Dprsm::new(gpu).context("creating the dprsm pass")?,
             direct: Direct::new(gpu).context("creating the direct pass")?,
@@ -280,8 +339,35 @@ impl Renderer {
     pub fn vpls_per_dispatch(&self, s: &FrameSettings) -> u32 {
         let Some(limit) = self.gpu.loop_iteration_limit else { return u32::MAX };
         let dims = self.voxel_spec(s).dims;
-        let per_vpl = (dims.x + dims.y + dims.z + 3) + 64 + 2 * 32;
+        // Sampling adds loops over the CDF sections and, with uniform face choice, over the faces.
+        let sections = 1 + self.importance_params(s).kind.method_sections();
+        let faces = 2 * self.scene.light_count;
+        let per_vpl = (dims.x + dims.y + dims.z + 3) + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
         ((limit.saturating_sub(64)) / per_vpl).max(1)
+    }
+
+    /// The importance pass's parameters for `s`.
+    pub fn importance_params(&self, s: &FrameSettings) -> ImportanceParams {
+        let cell = self.voxel_spec(s).cell;
+        let min_d = cell.max(s.clamp * self.scene.diagonal());
+        // gbg fixed point: a contribution of c_ref (the largest a VPL can give at distance min_d:
+        // albedo ≤ 1, the texel of largest solid angle 4·(2/res)², the brightest light) maps to 2³²;
+        // smaller ones keep ≥ 2³²·(min_d/d)² units, plenty for a weight.
+        let i_max = self.max_intensity.max(1e-30);
+        let c_ref = i_max * 4.0 * (2.0 / s.dprsm_res as f32).powi(2) / (std::f32::consts::PI.powi(2) * min_d * min_d);
+        ImportanceParams {
+            kind: match s.method {
+                Method::Uniform | Method::All => ImportanceKind::Uniform,
+                Method::Global => ImportanceKind::Global,
+                Method::Stratified => ImportanceKind::Stratified,
+                Method::Local => ImportanceKind::Local { side: (s.regions as f64).sqrt().round() as u32 },
+                Method::Gbg => ImportanceKind::Gbg { rays: s.gather_rays },
+            },
+            samples: s.cdf_samples,
+            seed: seed32(s.seed ^ 0xC0FFEE),
+            min_d2: min_d * min_d,
+            fixed_scale: (4294967296.0 / c_ref as f64).min(f32::MAX as f64) as f32,
+        }
     }
 
     /// The voxel grid spec for `s` (fitted to the bounds of geometry and lights).
@@ -470,6 +556,7 @@ impl Renderer {
                     accumulate: (first > 0) as u32,
                     add_direct: (first == 0 && s.component == Component::Combined) as u32,
                     clamp_d2: clamp_d2(s, &self.scene),
+                    ..GatherPush::default()
                 };
                 self.gather.add(&mut g, f, &inputs, &mut o, push);
                 g.export(&o);

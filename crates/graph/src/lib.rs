@@ -8,6 +8,7 @@
 //! and shared structs come from `glsl/shared/` and are mirrored in [`bindings`] and [`shader_types`].
 
 pub mod camera;
+pub mod cpu_cdf;
 pub mod cpu_ref;
 pub mod cpu_voxel;
 pub mod frame;

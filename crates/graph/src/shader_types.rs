@@ -98,8 +98,27 @@ pub struct GatherPush {
     pub accumulate: u32,
     pub add_direct: u32,
     pub clamp_d2: f32,
+    pub sections: u32,
+    pub defensive: f32,
+    pub face_mode: u32,
+    pub cdf_len: u32,
 }
-const _: () = assert!(size_of::<GatherPush>() == 32);
+const _: () = assert!(size_of::<GatherPush>() == 48);
+
+/// importance push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ImportancePush {
+    pub mode: u32,
+    pub samples: u32,
+    pub seed: u32,
+    pub regions: u32,
+    pub min_d2: f32,
+    pub fixed_scale: f32,
+    pub section: u32,
+    pub pad: u32,
+}
+const _: () = assert!(size_of::<ImportancePush>() == 32);
 
 /// cdf_reduce push constants.
 #[repr(C)]
@@ -108,6 +127,6 @@ pub struct CdfPush {
     pub stage: u32,
     pub row_length: u32,
     pub rows: u32,
-    pub pad: u32,
+    pub section: u32,
 }
 const _: () = assert!(size_of::<CdfPush>() == 16);

@@ -43,14 +43,22 @@ impl CdfReduce {
         Ok(CdfReduce { pipeline })
     }
 
+    /// Floats per CDF section.
+    pub fn section_len(rows: u32, row_length: u32) -> u64 {
+        CDF_HEADER + rows as u64 + rows as u64 * row_length as u64
+    }
+
+    /// The CDF of every section of `importance` (`sections` arrays of `rows × row_length` weights, one
+    /// after the other; section s's CDF starts at float s · [`CdfReduce::section_len`]).
     pub fn add<'a>(
         &'a self,
         g: &mut Graph<'a>,
         importance: &Handle<Buffer>,
         rows: u32,
         row_length: u32,
+        sections: u32,
     ) -> Handle<Buffer> {
-        let n = CDF_HEADER + rows as u64 + rows as u64 * row_length as u64;
+        let n = Self::section_len(rows, row_length) * sections as u64;
         let mut cdf = g.create_buffer(BufferDesc::storage("cdf", 4 * n));
         let (imp, out) = (*importance, cdf);
         g.add_pass("cdf_reduce").read(&imp, Access::ComputeRead).overwrite(&mut cdf, Access::ComputeWrite).record(
@@ -58,29 +66,18 @@ impl CdfReduce {
                 let writes = DescriptorWrites::new()
                     .storage_buffer(B_IMPORTANCE, ctx.buffer(&imp))
                     .storage_buffer(B_CDF_OUT, ctx.buffer(&out));
-                let push = |stage| CdfPush { stage, row_length, rows, pad: 0 };
-                self.pipeline.dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&push(CDF_ROWS)),
-                    [rows, 1, 1],
-                    [WG_1D, 1, 1],
-                );
+                let push = |stage, section| CdfPush { stage, row_length, rows, section };
+                for section in 0..sections {
+                    let p = push(CDF_ROWS, section);
+                    self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [rows, 1, 1], [WG_1D, 1, 1]);
+                }
                 // The totals stage reads the row totals the rows stage wrote: a barrier inside the pass.
-                sync::buffer_barrier(
-                    ctx.gpu,
-                    ctx.cmd,
-                    ctx.buffer(&out).raw,
-                    Access::ComputeWrite,
-                    Access::ComputeWrite,
-                );
-                self.pipeline.dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&push(CDF_TOTALS)),
-                    [1, 1, 1],
-                    [WG_1D, 1, 1],
-                );
+                let raw = ctx.buffer(&out).raw;
+                sync::buffer_barrier(ctx.gpu, ctx.cmd, raw, Access::ComputeWrite, Access::ComputeWrite);
+                for section in 0..sections {
+                    let p = push(CDF_TOTALS, section);
+                    self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [1, 1, 1], [WG_1D, 1, 1]);
+                }
             },
         );
         cdf
