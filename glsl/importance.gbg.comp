@@ -28,30 +28,7 @@ layout(std430, set = 0, binding = B_GBG_SUM) buffer Sums { uint64_t sums[]; };
 layout(std430, set = 0, binding = B_GBG_COUNT) buffer Counts { uint counts[]; };
 
 #include "shared/vpl.glsl"
-
-// First occupied cell along o + t·d (grid units), t in (0, tmax]: its entry parameter, or −1.
-float voxel_first_hit(vec3 o, vec3 d, float tmax) {
-    ivec3 dims = ivec3(frame.voxel_dims.xyz);
-    vec3 inv = vec3(abs(d.x) > 1e-12 ? 1.0 / d.x : 1e30, abs(d.y) > 1e-12 ? 1.0 / d.y : 1e30, abs(d.z) > 1e-12 ? 1.0 / d.z : 1e30);
-    vec3 ta = (vec3(0.0) - o) * inv, tb = (vec3(dims) - o) * inv;
-    float t0 = max(max(max(min(ta.x, tb.x), min(ta.y, tb.y)), min(ta.z, tb.z)), 0.0);
-    float t1 = min(min(min(max(ta.x, tb.x), max(ta.y, tb.y)), max(ta.z, tb.z)), tmax);
-    if (t0 > t1) return -1.0;
-    ivec3 cell = ivec3(clamp(floor(o + d * t0), vec3(0.0), vec3(dims) - 1.0));
-    ivec3 step = ivec3(sign(d));
-    vec3 next = (vec3(cell) + max(vec3(step), vec3(0.0)) - o) * inv;
-    vec3 delta = abs(inv);
-    float t = t0;
-    int max_steps = dims.x + dims.y + dims.z + 3;
-    for (int n = 0; n < max_steps; n++) {
-        if (voxel_occupied(cell)) return t;
-        if (next.x <= next.y && next.x <= next.z) { t = next.x; next.x += delta.x; cell.x += step.x; }
-        else if (next.y <= next.z) { t = next.y; next.y += delta.y; cell.y += step.y; }
-        else { t = next.z; next.z += delta.z; cell.z += step.z; }
-        if (t > t1 || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, dims))) break;
-    }
-    return -1.0;
-}
+#include "shared/gathering.glsl"
 
 void scatter(ivec2 px) {
     vec4 gp = texelFetch(g_position, px, 0);
@@ -60,28 +37,19 @@ void scatter(ivec2 px) {
     vec3 n = texelFetch(g_normal, px, 0).xyz;
     vec3 a = texelFetch(g_albedo, px, 0).rgb;
     float cell = frame.voxel_origin.w;
-    vec3 t1 = normalize(abs(n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), n) : cross(vec3(1.0, 0.0, 0.0), n));
-    vec3 t2 = cross(n, t1);
-    uint res = frame.size.w;
     uint rng = pcg_hash(pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x5bd1e995u);
     for (uint r = 0u; r < pc.samples; r++) {
         float u1 = rand01(rng), u2 = rand01(rng);
-        float rad = sqrt(u1), phi = 2.0 * PI * u2;
-        vec3 d = t1 * (rad * cos(phi)) + t2 * (rad * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0));
-        // Start 2 cells off the surface (the march's rule), in grid units.
+        vec3 d = cosine_direction(n, u1, u2);
+        // One march per ray (2 cells off the surface, the march's rule), then each light's VPL there.
         vec3 o = (x - frame.voxel_origin.xyz) / cell + n * 2.0;
         float t = voxel_first_hit(o, d, 4.0 * float(frame.voxel_dims.x + frame.voxel_dims.y + frame.voxel_dims.z));
         if (t < 0.0) continue;
         vec3 p = frame.voxel_origin.xyz + (o + d * t) * cell;
         for (uint l = 0u; l < frame.size.z; l++) {
-            vec3 local = p - lights[l].position.xyz;
-            uint face = local.z >= 0.0 ? 0u : 1u;
-            vec2 uv = paraboloid_project(to_face(local, face));
-            uvec2 texel = uvec2(clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(int(res) - 1)));
-            uint v = ((2u * l + face) * res + texel.y) * res + texel.x;
-            Vpl vpl = vpl_fetch(v);
-            if (!vpl.valid || distance(vpl.position, p) > 3.0 * cell) continue;
-            float c = luminance(vpl_unshadowed(x, n, a, vpl, pc.min_d2));
+            uint v = vpl_at_point(p, l);
+            if (v == NO_VPL) continue;
+            float c = luminance(vpl_unshadowed(x, n, a, vpl_fetch(v), pc.min_d2));
             if (!(c > 0.0)) continue;
             atomicAdd(sums[v], uint64_t(min(c * pc.fixed_scale, 4294967296.0)));
             atomicAdd(counts[v], 1u);

@@ -54,6 +54,8 @@
 
 #define GATHER_SAMPLE 0
 #define GATHER_ALL 1
+#define MIS_CONSISTENT 2
+#define MIS_THESIS 3
 #define CDF_ROWS 0
 #define CDF_TOTALS 1
 

@@ -55,6 +55,10 @@ struct GatherPush {
     float defensive;  // ε: the share of samples drawn uniformly among the VPLs (0 for `uniform`)
     uint face_mode;   // FACE_RR: faces in proportion to their importance; FACE_UNIFORM: equally
     uint cdf_len;     // floats per CDF section
+    uint rays;        // mis: gathering rays per pixel (n_g)
+    uint pad0;
+    uint pad1;
+    uint pad2;
 };
 
 // importance push constants.

@@ -5,7 +5,7 @@
 //! - `uniform` is unbiased with respect to `all`: the mean over K seeds approaches it at the 1/√K rate.
 
 use bounce_graph::camera::Camera;
-use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, Renderer};
+use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, MisWeights, Renderer};
 use bounce_graph::scene::{point_light, Scene};
 use bounce_tests::TestGpu;
 use glam::Vec3;
@@ -204,4 +204,39 @@ fn all_agrees_with_the_exact_one_bounce_reference_in_the_cornell_box() {
     // and the VPL singularity at corners (brighter); the reference's own noise is in `noise`.
     assert!(e <= 0.02, "relMSE {e}");
     assert!(((ma - mr) / mr).abs() <= 0.03, "mean {ma} vs {mr}");
+}
+
+/// `mis` (both weight variants) renders finite, validation-clean images. It is *not* in the unbiasedness
+/// test above: its gathering strategy divides by a modelled probability (cos θ/π times the solid angle
+/// of the VPL's planar patch) while the real ray → voxel hit → DPRSM texel mapping is only cell-accurate,
+/// and the mean of 16 seeds is ~10 % below `all` in the Cornell box (README, Known issues). The bias is
+/// printed so a fix shows up here.
+#[test]
+fn mis_renders_finite_images_and_reports_its_bias() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = (24, 24, 32, 32);
+    let all = indirect(&r, Method::All, 0, 1, w, h, res, vox);
+    let target = bounce_tests::mean(&all);
+    for weights in [MisWeights::Consistent, MisWeights::Thesis] {
+        let means: Vec<f64> = (0..8)
+            .map(|k| {
+                let s = FrameSettings {
+                    method: Method::Mis,
+                    mis_weights: weights,
+                    seed: 300 + k,
+                    vpls: 8,
+                    ..FrameSettings::default()
+                };
+                bounce_tests::mean(&indirect_with(&r, s, w, h, res, vox))
+            })
+            .collect();
+        let m = means.iter().sum::<f64>() / means.len() as f64;
+        eprintln!(
+            "mis {weights:?}: mean of 8 seeds {m:.5} vs all {target:.5} ({:+.1}%)",
+            100.0 * (m - target) / target
+        );
+        assert!(m.is_finite() && m > 0.0);
+    }
 }

@@ -9,7 +9,7 @@ pub mod output;
 
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions};
-use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, Renderer};
+use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, MisWeights, Renderer};
 use bounce_graph::scene::Scene;
 use clap::{Parser, Subcommand, ValueEnum};
 use output::RgbImage;
@@ -60,6 +60,16 @@ pub enum MethodArg {
     Local,
     /// The gathering-based global CDF: --gather-rays cosine rays per pixel (thesis §7.3.4).
     Gbg,
+    /// Cosine gathering (--gather-rays) and gbg CDF sampling (--vpls) by the balance heuristic (§7.4).
+    Mis,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MisWeightsArg {
+    /// Both densities in solid angle (unbiased).
+    Consistent,
+    /// The thesis's literal weights (mixed measures; for comparison).
+    Thesis,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -118,6 +128,9 @@ pub struct RenderArgs {
     /// How CDF methods choose the paraboloid face.
     #[arg(long, value_enum, default_value = "rr")]
     pub face: FaceArg,
+    /// MIS weights (--method mis).
+    #[arg(long, value_enum, default_value = "consistent")]
+    pub mis_weights: MisWeightsArg,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -272,6 +285,11 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             MethodArg::Stratified => Method::Stratified,
             MethodArg::Local => Method::Local,
             MethodArg::Gbg => Method::Gbg,
+            MethodArg::Mis => Method::Mis,
+        },
+        mis_weights: match a.mis_weights {
+            MisWeightsArg::Consistent => MisWeights::Consistent,
+            MisWeightsArg::Thesis => MisWeights::Thesis,
         },
         cdf_samples: a.cdf_samples,
         regions: a.regions,

@@ -51,6 +51,17 @@ pub enum Method {
     Local,
     /// Thesis §7.3.4: the gathering-based global CDF (cosine rays, per-texel averages, median holes).
     Gbg,
+    /// Thesis §7.4: cosine gathering and gbg CDF sampling combined by the balance heuristic.
+    Mis,
+}
+
+/// Which MIS weights (`Method::Mis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MisWeights {
+    /// Both densities in solid angle: unbiased combination.
+    Consistent,
+    /// The thesis's literal weights (eqs. 7.10–7.11: cos θ sin θ/π against a discrete pdf).
+    Thesis,
 }
 
 impl Method {
@@ -62,6 +73,7 @@ impl Method {
             Method::Stratified => "stratified",
             Method::Local => "local",
             Method::Gbg => "gbg",
+            Method::Mis => "mis",
         }
     }
 }
@@ -102,6 +114,7 @@ pub struct FrameSettings {
     /// Share of samples drawn uniformly among the VPLs by the CDF methods (defensive sampling).
     pub defensive: f32,
     pub face: FaceMode,
+    pub mis_weights: MisWeights,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
     /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
@@ -130,6 +143,7 @@ impl Default for FrameSettings {
             gather_rays: 4,
             defensive: 0.1,
             face: FaceMode::RussianRoulette,
+            mis_weights: MisWeights::Consistent,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
@@ -208,6 +222,7 @@ pub struct Renderer {
     importance: Importance,
     cdf_reduce: CdfReduce,
     gather: Gather,
+    mis: Gather,
     voxel_state: RefCell<Option<VoxelState>>,
 }
 
@@ -285,9 +300,22 @@ pub fn build_frame<'a>(
                     FaceMode::Uniform => crate::bindings::FACE_UNIFORM,
                 },
                 cdf_len: CdfReduce::section_len(rows, f.dprsm_res) as u32,
+                rays: s.gather_rays,
                 ..GatherPush::default()
             };
-            r.gather.add(g, f, &gather_inputs, &mut out, push);
+            if s.method == Method::Mis {
+                let push = GatherPush {
+                    mode: match s.mis_weights {
+                        MisWeights::Consistent => crate::bindings::MIS_CONSISTENT,
+                        MisWeights::Thesis => crate::bindings::MIS_THESIS,
+                    },
+                    last: s.vpls + s.gather_rays,
+                    ..push
+                };
+                r.mis.add(g, f, &gather_inputs, &mut out, push);
+            } else {
+                r.gather.add(g, f, &gather_inputs, &mut out, push);
+            }
             Some(out)
         }
     };
@@ -328,6 +356,7 @@ impl Renderer {
             importance: Importance::new(gpu).context("creating the importance pass")?,
             cdf_reduce: CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,
             gather: Gather::new(gpu).context("creating the gather pass")?,
+            mis: crate::passes::mis::Mis::new(gpu).context("creating the mis pass")?,
             voxel_state: RefCell::new(None),
         })
     }
@@ -342,7 +371,11 @@ impl Renderer {
         // Sampling adds loops over the CDF sections and, with uniform face choice, over the faces.
         let sections = 1 + self.importance_params(s).kind.method_sections();
         let faces = 2 * self.scene.light_count;
-        let per_vpl = (dims.x + dims.y + dims.z + 3) + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
+        let march = dims.x + dims.y + dims.z + 3;
+        let per_vpl = march + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
+        // A MIS gathering ray marches once per light to find its VPL and once more for visibility.
+        let per_vpl =
+            if s.method == Method::Mis { per_vpl + 2 * self.scene.light_count * (march + 64) } else { per_vpl };
         ((limit.saturating_sub(64)) / per_vpl).max(1)
     }
 
@@ -361,7 +394,7 @@ impl Renderer {
                 Method::Global => ImportanceKind::Global,
                 Method::Stratified => ImportanceKind::Stratified,
                 Method::Local => ImportanceKind::Local { side: (s.regions as f64).sqrt().round() as u32 },
-                Method::Gbg => ImportanceKind::Gbg { rays: s.gather_rays },
+                Method::Gbg | Method::Mis => ImportanceKind::Gbg { rays: s.gather_rays },
             },
             samples: s.cdf_samples,
             seed: seed32(s.seed ^ 0xC0FFEE),

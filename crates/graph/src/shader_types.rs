@@ -102,8 +102,10 @@ pub struct GatherPush {
     pub defensive: f32,
     pub face_mode: u32,
     pub cdf_len: u32,
+    pub rays: u32,
+    pub pad: [u32; 3],
 }
-const _: () = assert!(size_of::<GatherPush>() == 48);
+const _: () = assert!(size_of::<GatherPush>() == 64);
 
 /// importance push constants.
 #[repr(C)]

@@ -27,6 +27,7 @@ use bounce_device::sync::{self, Access};
 use bounce_device::{Binding, Buffer, ComputePipeline, Gpu, Image, Sampler};
 
 pub struct Gather {
+    name: &'static str,
     pipeline: ComputePipeline,
     sampler: Sampler,
 }
@@ -84,6 +85,11 @@ impl GatherInputs {
 
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
+        Self::with_shader(gpu, "gather", shaders::GATHER_COMP)
+    }
+
+    /// A gather-shaped pass (same bindings and push constants) running another shader: `mis`.
+    pub fn with_shader(gpu: &Gpu, name: &'static str, spirv: &[u8]) -> Result<Self> {
         let mut bindings = scene_bindings();
         bindings.extend([
             Binding::sampled_image(B_GATHER_GPOSITION),
@@ -100,13 +106,13 @@ impl Gather {
         ]);
         let pipeline = ComputePipeline::new(
             gpu,
-            "gather",
-            &crate::spirv(shaders::GATHER_COMP),
+            name,
+            &crate::spirv(spirv),
             &bindings,
             std::mem::size_of::<GatherPush>() as u32,
             &[],
         )?;
-        Ok(Gather { pipeline, sampler: Sampler::nearest(gpu)? })
+        Ok(Gather { name, pipeline, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
@@ -123,7 +129,7 @@ impl Gather {
         push: GatherPush,
     ) {
         let (i, o) = (*i, *out);
-        let mut b = g.add_pass("gather");
+        let mut b = g.add_pass(self.name);
         for h in i.images() {
             b = b.read(&h, Access::ComputeRead);
         }

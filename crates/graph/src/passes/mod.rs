@@ -7,6 +7,7 @@ pub mod dprsm;
 pub mod gather;
 pub mod gbuffer;
 pub mod importance;
+pub mod mis;
 pub mod voxelize;
 
 use crate::gpu_scene::GpuScene;

@@ -1,0 +1,66 @@
+// Gathering through the voxel grid: the first occupied cell along a ray, and the VPL a hit point
+// corresponds to. Used by the gbg importance (thesis §7.3.4) and the MIS gathering strategy (§7.4).
+// Include after voxel.glsl and vpl.glsl.
+#ifndef BOUNCE_GATHERING_GLSL
+#define BOUNCE_GATHERING_GLSL
+
+const uint NO_VPL = 0xFFFFFFFFu;
+
+// First occupied cell along o + t·d (grid units), t in (0, tmax]: its entry parameter, or −1.
+float voxel_first_hit(vec3 o, vec3 d, float tmax) {
+    ivec3 dims = ivec3(frame.voxel_dims.xyz);
+    vec3 inv = vec3(abs(d.x) > 1e-12 ? 1.0 / d.x : 1e30, abs(d.y) > 1e-12 ? 1.0 / d.y : 1e30, abs(d.z) > 1e-12 ? 1.0 / d.z : 1e30);
+    vec3 ta = (vec3(0.0) - o) * inv, tb = (vec3(dims) - o) * inv;
+    float t0 = max(max(max(min(ta.x, tb.x), min(ta.y, tb.y)), min(ta.z, tb.z)), 0.0);
+    float t1 = min(min(min(max(ta.x, tb.x), max(ta.y, tb.y)), max(ta.z, tb.z)), tmax);
+    if (t0 > t1) return -1.0;
+    ivec3 cell = ivec3(clamp(floor(o + d * t0), vec3(0.0), vec3(dims) - 1.0));
+    ivec3 step = ivec3(sign(d));
+    vec3 next = (vec3(cell) + max(vec3(step), vec3(0.0)) - o) * inv;
+    vec3 delta = abs(inv);
+    float t = t0;
+    int max_steps = dims.x + dims.y + dims.z + 3;
+    for (int n = 0; n < max_steps; n++) {
+        if (voxel_occupied(cell)) return t;
+        if (next.x <= next.y && next.x <= next.z) { t = next.x; next.x += delta.x; cell.x += step.x; }
+        else if (next.y <= next.z) { t = next.y; next.y += delta.y; cell.y += step.y; }
+        else { t = next.z; next.z += delta.z; cell.z += step.z; }
+        if (t > t1 || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, dims))) break;
+    }
+    return -1.0;
+}
+
+// The VPL of light l whose texel sees point p: p projected into the light's DPRSM, accepted when that
+// texel's VPL lies within 3 voxel cells of p (the light sees the surface the ray hit; the hit point of a
+// voxel march is only known to a cell). NO_VPL otherwise.
+uint vpl_at_point(vec3 p, uint l) {
+    uint res = frame.size.w;
+    vec3 local = p - lights[l].position.xyz;
+    uint face = local.z >= 0.0 ? 0u : 1u;
+    vec2 uv = paraboloid_project(to_face(local, face));
+    uvec2 texel = uvec2(clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(int(res) - 1)));
+    uint v = ((2u * l + face) * res + texel.y) * res + texel.x;
+    Vpl vpl = vpl_fetch(v);
+    if (!vpl.valid || distance(vpl.position, p) > 3.0 * frame.voxel_origin.w) return NO_VPL;
+    return v;
+}
+
+// A cosine-distributed direction around unit n, from two uniforms (Malley's method).
+vec3 cosine_direction(vec3 n, float u1, float u2) {
+    vec3 t1 = normalize(abs(n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), n) : cross(vec3(1.0, 0.0, 0.0), n));
+    vec3 t2 = cross(n, t1);
+    float rad = sqrt(u1), phi = 2.0 * PI * u2;
+    return t1 * (rad * cos(phi)) + t2 * (rad * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0));
+}
+
+// The first VPL a ray from x (unit normal n) in direction d reaches through the voxel grid, for light l,
+// or NO_VPL. The ray starts 2 cells off the surface, as the visibility march does.
+uint gathering_vpl(vec3 x, vec3 n, vec3 d, uint l) {
+    float cell = frame.voxel_origin.w;
+    vec3 o = (x - frame.voxel_origin.xyz) / cell + n * 2.0;
+    float t = voxel_first_hit(o, d, 4.0 * float(frame.voxel_dims.x + frame.voxel_dims.y + frame.voxel_dims.z));
+    if (t < 0.0) return NO_VPL;
+    return vpl_at_point(frame.voxel_origin.xyz + (o + d * t) * cell, l);
+}
+
+#endif

@@ -1,0 +1,93 @@
+// The VPL sampling mixture of the CDF methods and the shadowed VPL contribution, shared by gather.comp
+// and mis.comp. Include after cdf.glsl, vpl.glsl and voxel.glsl, with `pc` a GatherPush.
+#ifndef BOUNCE_SAMPLING_GLSL
+#define BOUNCE_SAMPLING_GLSL
+
+uint vpl_slots() { return 2u * frame.size.z * frame.size.w * frame.size.w; }
+uint face_rows() { return frame.size.w; }
+uint faces() { return 2u * frame.size.z; }
+
+// Number of faces with weight in method section s (the faces FACE_UNIFORM chooses among).
+uint live_faces(uint cb) {
+    uint n = 0u;
+    for (uint f = 0u; f < faces(); f++) {
+        if (cdf_rows_total(cb, f * face_rows(), (f + 1u) * face_rows()) > 0.0) n++;
+    }
+    return n;
+}
+
+// Probability that method section s (CDF at cb) draws v, given its face choice (exact: see
+// cdf_prob_rows).
+float section_prob(uint cb, uint v, uint nlive) {
+    uint all_rows = faces() * face_rows();
+    if (pc.face_mode == FACE_RR) return cdf_prob_rows(cb, v, 0u, all_rows);
+    uint f = v / (face_rows() * face_rows());
+    if (!(cdf_rows_total(cb, f * face_rows(), (f + 1u) * face_rows()) > 0.0)) return 0.0;
+    return cdf_prob_rows(cb, v, f * face_rows(), (f + 1u) * face_rows()) / float(nlive);
+}
+
+// The sampling mixture: with probability ε (or when no method section has weight) uniformly among the
+// VPLs (section 0); otherwise a method section s chosen uniformly (local: the regions; else the one),
+// whose face is chosen by its weight (Russian roulette, thesis alg. 9) or uniformly among the faces
+// with weight, then the texel by the face's CDF. Returns v and its exact mixture probability
+//   p_v = ε_eff · valid_v / #VPLs + (1 − ε_eff) · 1/S Σ_s P_s(v).
+uint draw_vpl(inout uint rng, out float prob) {
+    uint len = pc.cdf_len;
+    uint n = vpl_slots();
+    uint sections = pc.sections;
+    float eps = pc.defensive;
+    uint live = 0u;
+    for (uint s = 1u; s <= sections; s++) live += cdf_total_at(s * len) > 0.0 ? 1u : 0u;
+    if (live == 0u) eps = 1.0; // all-zero importance: uniform (the host warns)
+    float u0 = rand01(rng), u1 = rand01(rng), u2 = rand01(rng);
+    uint v;
+    if (u0 < eps) {
+        v = cdf_sample_rows(0u, 0u, u1, 0u, faces() * face_rows());
+    } else {
+        // A section uniformly among those with weight (a local region whose gather points all missed
+        // has none).
+        uint pick = min(uint(u1 * float(live)), live - 1u);
+        uint s = 1u;
+        for (uint k = 1u; k <= sections; k++) {
+            if (cdf_total_at(k * len) > 0.0) {
+                if (pick == 0u) { s = k; break; }
+                pick--;
+            }
+        }
+        uint cb = s * len;
+        if (pc.face_mode == FACE_RR) {
+            v = cdf_sample_rows(cb, s * n, u2, 0u, faces() * face_rows());
+        } else {
+            uint nlive = live_faces(cb);
+            pick = min(uint(u2 * float(nlive)), nlive - 1u);
+            float u3 = rand01(rng);
+            uint f = 0u;
+            for (uint k = 0u; k < faces(); k++) {
+                if (cdf_rows_total(cb, k * face_rows(), (k + 1u) * face_rows()) > 0.0) {
+                    if (pick == 0u) { f = k; break; }
+                    pick--;
+                }
+            }
+            v = cdf_sample_rows(cb, s * n, u3, f * face_rows(), (f + 1u) * face_rows());
+        }
+    }
+    // The mixture probability of v.
+    float method = 0.0;
+    for (uint s = 1u; s <= sections; s++) {
+        uint cb = s * len;
+        if (!(cdf_total_at(cb) > 0.0)) continue;
+        method += section_prob(cb, v, pc.face_mode == FACE_UNIFORM ? live_faces(cb) : 0u);
+    }
+    float uniform_p = cdf_prob_rows(0u, v, 0u, faces() * face_rows());
+    prob = eps * uniform_p + (live > 0u ? (1.0 - eps) * method / float(live) : 0.0);
+    return v;
+}
+
+vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
+    Vpl vpl = vpl_fetch(v);
+    vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
+    if (c == vec3(0.0)) return c;
+    return c * voxel_visibility(x, nx, vpl.position, vpl.normal);
+}
+
+#endif
