@@ -240,3 +240,82 @@ fn mis_renders_finite_images_and_reports_its_bias() {
         assert!(m.is_finite() && m > 0.0);
     }
 }
+
+/// Two rooms joined by a door: the light is in the right room, the camera in the left one looking at
+/// its walls, so most VPLs (the right room's) are invisible from every gather point.
+pub fn corner_scene() -> Scene {
+    let quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| [[a, b, c], [a, c, d]];
+    let v = Vec3::new;
+    let mut tris = vec![];
+    // The outer box [−2, 2] × [0, 2] × [−2, 2].
+    tris.extend(quad(v(-2.0, 0.0, -2.0), v(2.0, 0.0, -2.0), v(2.0, 0.0, 2.0), v(-2.0, 0.0, 2.0)));
+    tris.extend(quad(v(-2.0, 2.0, -2.0), v(2.0, 2.0, -2.0), v(2.0, 2.0, 2.0), v(-2.0, 2.0, 2.0)));
+    tris.extend(quad(v(-2.0, 0.0, -2.0), v(-2.0, 2.0, -2.0), v(-2.0, 2.0, 2.0), v(-2.0, 0.0, 2.0)));
+    tris.extend(quad(v(2.0, 0.0, -2.0), v(2.0, 2.0, -2.0), v(2.0, 2.0, 2.0), v(2.0, 0.0, 2.0)));
+    tris.extend(quad(v(-2.0, 0.0, -2.0), v(2.0, 0.0, -2.0), v(2.0, 2.0, -2.0), v(-2.0, 2.0, -2.0)));
+    tris.extend(quad(v(-2.0, 0.0, 2.0), v(2.0, 0.0, 2.0), v(2.0, 2.0, 2.0), v(-2.0, 2.0, 2.0)));
+    // The dividing wall at x = 0, with a door at z ∈ [1, 2].
+    tris.extend(quad(v(0.0, 0.0, -2.0), v(0.0, 2.0, -2.0), v(0.0, 2.0, 1.0), v(0.0, 0.0, 1.0)));
+    let albedo = vec![Vec3::splat(0.7); tris.len()];
+    let camera = Camera { eye: v(-1.8, 1.0, 1.8), target: v(-1.0, 0.8, -2.0), up: Vec3::Y, fov_y_deg: 60.0 };
+    Scene::from_triangles(&tris, &albedo, camera, &[point_light(v(1.2, 1.6, -1.4), Vec3::splat(100.0))])
+}
+
+/// The thesis's claim, checked: with the light around a corner, the gathering-based CDF and MIS beat
+/// `uniform` and `global` at equal VPL count (relMSE against `all`, averaged over seeds).
+///
+/// Measured (32 VPLs, defaults: 64 gather points for global, 4 rays for gbg): uniform 0.41, global
+/// 0.11, gbg 0.15, mis 0.013. So gbg beats uniform but *not* global here, and mis beats both but
+/// carries the bias documented in `mis_renders_finite_images_and_reports_its_bias`. The test asserts
+/// what holds and prints the rest; BENCHMARKS.md and the README report it as found.
+#[test]
+fn around_a_corner_cdf_methods_beat_uniform() {
+    let scene = corner_scene();
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = (32, 32, 64, 64);
+    let all = indirect(&r, Method::All, 0, 1, w, h, res, vox);
+    eprintln!("around the corner: mean indirect radiance {:.4}", bounce_tests::mean(&all));
+    let mut err = std::collections::BTreeMap::new();
+    for method in [Method::Uniform, Method::Global, Method::Gbg, Method::Mis] {
+        let e = (0..3)
+            .map(|k| {
+                let s = FrameSettings { method, seed: 40 + k, vpls: 32, ..FrameSettings::default() };
+                bounce_tests::rel_mse(&indirect_with(&r, s, w, h, res, vox), &all)
+            })
+            .sum::<f64>()
+            / 3.0;
+        eprintln!("around the corner, 32 VPLs: {} relMSE {e:.4}", method.name());
+        err.insert(method.name(), e);
+    }
+    for (good, base) in [("gbg", "uniform"), ("global", "uniform"), ("mis", "uniform"), ("mis", "global")] {
+        assert!(err[good] < err[base], "{good} ({}) is not better than {base} ({})", err[good], err[base]);
+    }
+    eprintln!("gbg vs global (the thesis claims gbg < global): {:.4} vs {:.4}", err["gbg"], err["global"]);
+}
+
+/// `local` has no seam: every pixel samples the mixture of all region CDFs, so the error (against `all`)
+/// of the columns on either side of the vertical region border has the same mean, within noise.
+#[test]
+fn local_has_no_seam_at_region_borders() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = (32, 32, 32, 32);
+    let all = indirect(&r, Method::All, 0, 1, w, h, res, vox);
+    let mut diffs = vec![];
+    for k in 0..12 {
+        let s = FrameSettings { method: Method::Local, regions: 4, seed: 70 + k, vpls: 8, ..FrameSettings::default() };
+        let img = indirect_with(&r, s, w, h, res, vox);
+        for y in 0..h as usize {
+            let (l, rr) = (y * w as usize + w as usize / 2 - 1, y * w as usize + w as usize / 2);
+            let lum = |p: [f32; 3]| (p[0] + p[1] + p[2]) as f64 / 3.0;
+            diffs.push((lum(img[l]) - lum(all[l])) - (lum(img[rr]) - lum(all[rr])));
+        }
+    }
+    let n = diffs.len() as f64;
+    let m = diffs.iter().sum::<f64>() / n;
+    let se = (diffs.iter().map(|d| (d - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+    eprintln!("local seam: mean error difference across the border {m:.5} ± {se:.5}");
+    assert!(m.abs() <= 4.0 * se, "a seam: {m} ± {se}");
+}

@@ -323,6 +323,9 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             },
         )?;
     let wall = t0.elapsed().as_secs_f64();
+    for w in &frame.warnings {
+        writeln!(err, "warning: {w}")?;
+    }
     if a.validation {
         let msgs = gpu.validation().messages();
         anyhow::ensure!(msgs.is_empty(), "{} validation message(s); first: {}", msgs.len(), msgs[0]);

@@ -236,6 +236,8 @@ pub struct FrameOutput {
     pub timings: Vec<PassTiming>,
     pub ran: Vec<&'static str>,
     pub skipped: Vec<&'static str>,
+    /// Things the user should know about this frame (e.g. an all-zero importance).
+    pub warnings: Vec<String>,
 }
 
 impl FrameOutput {
@@ -551,7 +553,22 @@ impl Renderer {
         let mut timings = done.timings.clone();
         let mut ran = done.ran.clone();
         let skipped = done.skipped.clone();
+        let mut warnings = vec![];
+        let method_sections = self.importance_params(s).kind.method_sections();
         let radiance_bytes = if let Some(out) = &h.out {
+            if s.component != Component::Direct && method_sections > 0 {
+                // Only the section headers are needed, but a whole readback is cheap next to a frame.
+                let cdf: Vec<f32> = bytemuck::pod_collect_to_vec(&done.read_buffer(&h.gather_inputs.cdf)?);
+                let len = CdfReduce::section_len(2 * self.scene.light_count * s.dprsm_res, s.dprsm_res) as usize;
+                let live =
+                    (1..=method_sections as usize).filter(|k| cdf.get(k * len).is_some_and(|t| *t > 0.0)).count();
+                if live == 0 {
+                    warnings.push(format!(
+                        "the {} importance is zero for every VPL; sampling uniformly instead",
+                        s.method.name()
+                    ));
+                }
+            }
             done.read_image(out)?
         } else {
             // Keep what the tiles read: each tile is its own graph (and submission) importing these.
@@ -614,6 +631,7 @@ impl Renderer {
             timings,
             ran,
             skipped,
+            warnings,
         })
     }
 
