@@ -129,6 +129,15 @@ fn a_missing_scene_file_and_impossible_sizes_are_exit_2() {
     );
     let r = bounce(&["render", scene.to_str().unwrap(), "--component", "sideways"]);
     assert_eq!(r.code, 2);
+    for (flag, value, named) in [
+        ("--regions", "3", "regions"),
+        ("--vpls", "0", "VPL count"),
+        ("--defensive", "1.5", "defensive"),
+        ("--gather-rays", "0", "gather-rays"),
+        ("--voxels", "0", "voxels"),
+    ] {
+        expect_bad_input(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), flag, value], named, &out);
+    }
 }
 
 #[test]
