@@ -136,7 +136,11 @@ fn a_missing_scene_file_and_impossible_sizes_are_exit_2() {
         ("--gather-rays", "0", "gather-rays"),
         ("--voxels", "0", "voxels"),
     ] {
-        expect_bad_input(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), flag, value], named, &out);
+        expect_bad_input(
+            &["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), flag, value],
+            named,
+            &out,
+        );
     }
 }
 

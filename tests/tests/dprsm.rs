@@ -28,6 +28,23 @@ pub fn big_floor_scene() -> Scene {
     Scene::from_triangles(&tris, &albedo, camera, &[light, light2])
 }
 
+/// Paraboloid coordinates of texel (i, j) of an n² face, offset by (di, dj) texels from its centre.
+fn texel_uv(i: usize, j: usize, n: usize, di: f64, dj: f64) -> (f64, f64) {
+    ((i as f64 + 0.5 + di) / n as f64 * 2.0 - 1.0, (j as f64 + 0.5 + dj) / n as f64 * 2.0 - 1.0)
+}
+
+/// The unit direction of paraboloid coordinates (u, v) on face 0 (+z) or 1 (−z), in f64: the inverse of
+/// the map the shaders use (`paraboloid_direction` in glsl/shared/common.glsl).
+fn paraboloid_dir((u, v): (f64, f64), face: usize) -> DVec3 {
+    let r2 = u * u + v * v;
+    let d = DVec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
+    if face == 0 {
+        d
+    } else {
+        DVec3::new(d.x, d.y, -d.z)
+    }
+}
+
 fn check_against_ray_cast(scene: &Scene, res: u32) {
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, scene).unwrap();
@@ -44,18 +61,8 @@ fn check_against_ray_cast(scene: &Scene, res: u32) {
             for j in 0..n {
                 for i in 0..n {
                     let gpu_d = depth[((li * 2 + face) * n + j) * n + i] as f64;
-                    let uv = |di: f64, dj: f64| {
-                        ((i as f64 + 0.5 + di) / n as f64 * 2.0 - 1.0, (j as f64 + 0.5 + dj) / n as f64 * 2.0 - 1.0)
-                    };
-                    let dir = |(u, v): (f64, f64)| {
-                        let r2 = u * u + v * v;
-                        let d = DVec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
-                        if face == 0 {
-                            d
-                        } else {
-                            DVec3::new(d.x, d.y, -d.z)
-                        }
-                    };
+                    let uv = |di: f64, dj: f64| texel_uv(i, j, n, di, dj);
+                    let dir = |uv: (f64, f64)| paraboloid_dir(uv, face);
                     let (u, v) = uv(0.0, 0.0);
                     if u * u + v * v > 1.0 {
                         assert_eq!(gpu_d, 1.0, "texel ({i},{j}) outside the unit disk was written");
@@ -120,22 +127,13 @@ fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
     for (li, light) in scene.lights.iter().enumerate() {
         let lp = DVec3::new(light.position[0] as f64, light.position[1] as f64, light.position[2] as f64);
         let intensity = light.intensity[0] as f64;
+        #[allow(clippy::needless_range_loop)] // `face` also selects the layer and the mirrored direction
         for face in 0..2 {
             for j in 0..n {
                 for i in 0..n {
                     let k = ((li * 2 + face) * n + j) * n + i;
-                    let uv = |di: f64, dj: f64| {
-                        ((i as f64 + 0.5 + di) / n as f64 * 2.0 - 1.0, (j as f64 + 0.5 + dj) / n as f64 * 2.0 - 1.0)
-                    };
-                    let dir = |(u, v): (f64, f64)| {
-                        let r2 = u * u + v * v;
-                        let d = DVec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
-                        if face == 0 {
-                            d
-                        } else {
-                            DVec3::new(d.x, d.y, -d.z)
-                        }
-                    };
+                    let uv = |di: f64, dj: f64| texel_uv(i, j, n, di, dj);
+                    let dir = |uv: (f64, f64)| paraboloid_dir(uv, face);
                     let (u, v) = uv(0.0, 0.0);
                     let r2 = u * u + v * v;
                     if r2 > 1.0 {

@@ -151,7 +151,7 @@ fn converges_to(name: &str, all: &[[f32; 3]], run: impl Fn(u64) -> Vec<[f32; 3]>
     let m = means.iter().sum::<f64>() / k_max as f64;
     let sd = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k_max - 1) as f64).sqrt();
     let stderr = sd / (k_max as f64).sqrt();
-    let target = image_mean(&all);
+    let target = image_mean(all);
     eprintln!(
         "{name} vs all: MSE(1 seed) {mse1:.3e}, MSE(mean of {k_max}) {mse16:.3e} = {ratio:.2} × MSE1/{k_max}; image mean {m:.5} ± {stderr:.5} vs all {target:.5}"
     );
@@ -329,7 +329,9 @@ fn a_seed_gives_one_image() {
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, &scene).unwrap();
     for method in [Method::Uniform, Method::Gbg, Method::Mis] {
-        let run = |seed| indirect_with(&r, FrameSettings { method, seed, vpls: 4, ..FrameSettings::default() }, 16, 16, 32, 32);
+        let run = |seed| {
+            indirect_with(&r, FrameSettings { method, seed, vpls: 4, ..FrameSettings::default() }, 16, 16, 32, 32)
+        };
         let (a, b, c) = (run(9), run(9), run(10));
         assert_eq!(a, b, "{}: the same seed gave two images", method.name());
         assert_ne!(a, c, "{}: another seed gave the same image", method.name());

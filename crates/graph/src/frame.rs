@@ -358,7 +358,7 @@ impl Renderer {
             importance: Importance::new(gpu).context("creating the importance pass")?,
             cdf_reduce: CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,
             gather: Gather::new(gpu).context("creating the gather pass")?,
-            mis: crate::passes::mis::Mis::new(gpu).context("creating the mis pass")?,
+            mis: crate::passes::mis::create(gpu).context("creating the mis pass")?,
             voxel_state: RefCell::new(None),
         })
     }
@@ -445,6 +445,19 @@ impl Renderer {
         }
     }
 
+    /// The per-frame inputs every pass reads, for settings `s` and their uniform buffer.
+    fn frame_inputs<'a>(&'a self, s: &FrameSettings, uniforms: &'a Buffer) -> FrameInputs<'a> {
+        FrameInputs {
+            scene: &self.scene,
+            uniforms,
+            width: s.width,
+            height: s.height,
+            shadow_res: s.shadow_res,
+            dprsm_res: s.dprsm_res,
+            vpls_per_dispatch: self.vpls_per_dispatch(s),
+        }
+    }
+
     /// A host-visible uniform buffer holding [`Renderer::uniforms`] (written once, before recording).
     fn uniform_buffer(&self, s: &FrameSettings) -> Result<Buffer> {
         let mut uniforms = Buffer::new(
@@ -523,15 +536,7 @@ impl Renderer {
         self.check(s)?;
         self.ensure_voxels(s)?;
         let uniforms = self.uniform_buffer(s)?;
-        let f = FrameInputs {
-            scene: &self.scene,
-            uniforms: &uniforms,
-            width: s.width,
-            height: s.height,
-            shadow_res: s.shadow_res,
-            dprsm_res: s.dprsm_res,
-            vpls_per_dispatch: self.vpls_per_dispatch(s),
-        };
+        let f = self.frame_inputs(s, &uniforms);
         let vox_guard = self.voxel_state.borrow();
         let vox = vox_guard.as_ref().expect("ensure_voxels made the grid");
         let mut g = Graph::new(&self.gpu);
@@ -647,15 +652,7 @@ impl Renderer {
     pub fn render_dprsm(&self, s: &FrameSettings) -> Result<Vec<f32>> {
         self.check(s)?;
         let uniforms = self.uniform_buffer(s)?;
-        let f = FrameInputs {
-            scene: &self.scene,
-            uniforms: &uniforms,
-            width: s.width,
-            height: s.height,
-            shadow_res: s.shadow_res,
-            dprsm_res: s.dprsm_res,
-            vpls_per_dispatch: self.vpls_per_dispatch(s),
-        };
+        let f = self.frame_inputs(s, &uniforms);
         let mut g = Graph::new(&self.gpu);
         let shadow = self.dprsm.add_depth(&mut g, f);
         g.export(&shadow.depth);
@@ -667,15 +664,7 @@ impl Renderer {
     pub fn render_vpls(&self, s: &FrameSettings) -> Result<[Vec<[f32; 4]>; 3]> {
         self.check(s)?;
         let uniforms = self.uniform_buffer(s)?;
-        let f = FrameInputs {
-            scene: &self.scene,
-            uniforms: &uniforms,
-            width: s.width,
-            height: s.height,
-            shadow_res: s.shadow_res,
-            dprsm_res: s.dprsm_res,
-            vpls_per_dispatch: self.vpls_per_dispatch(s),
-        };
+        let f = self.frame_inputs(s, &uniforms);
         let mut g = Graph::new(&self.gpu);
         let v = self.dprsm.add(&mut g, f);
         for h in [&v.position, &v.normal, &v.flux] {

@@ -14,6 +14,7 @@
 //!   per-texel average (sum / hits) is the weight, and texels no ray reached take the median of their
 //!   reached 3×3 neighbours ("hole filling"). Sums are u64 fixed point, so the result is independent of
 //!   thread order.
+//!
 //! In all of them 1/d² is clamped below one voxel cell (importance only: the estimator stays exact).
 //! Dispatch: res × res × layers per section (gbg: W × H for the rays, then res × res × layers).
 

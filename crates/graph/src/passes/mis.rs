@@ -14,10 +14,6 @@ use anyhow::Result;
 use bounce_device::Gpu;
 
 /// The `mis` pass: the gather's recording with `glsl/mis.comp`.
-pub struct Mis;
-
-impl Mis {
-    pub fn new(gpu: &Gpu) -> Result<Gather> {
-        Gather::with_shader(gpu, "mis", shaders::MIS_COMP)
-    }
+pub fn create(gpu: &Gpu) -> Result<Gather> {
+    Gather::with_shader(gpu, "mis", shaders::MIS_COMP)
 }
