@@ -151,3 +151,48 @@ fn info_lists_the_device() {
     assert!(r.stdout.contains("usable by bounce: yes"), "{}", r.stdout);
     assert!(r.stdout.contains("timestampValidBits"), "{}", r.stdout);
 }
+
+#[test]
+fn bench_writes_csv_markdown_and_a_plot() {
+    let d = scratch("bench");
+    let scene = bounce_tests::default_scene();
+    let args = [
+        "bench",
+        scene.to_str().unwrap(),
+        "--out",
+        d.to_str().unwrap(),
+        "--methods",
+        "uniform,gbg",
+        "--vpls",
+        "2,4",
+        "--repeats",
+        "2",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--dprsm-res",
+        "16",
+        "--voxels",
+        "16",
+        "--validation",
+    ];
+    let r = bounce(&args);
+    assert_eq!(r.code, 0, "stderr: {}", r.stderr);
+    let csv = std::fs::read_to_string(d.join("bench.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2 * 2 * 2, "one row per frame:\n{csv}");
+    assert!(csv.lines().skip(1).all(|l| l
+        .split(',')
+        .nth(6)
+        .and_then(|v| v.parse::<f64>().ok())
+        .is_some_and(|v| v.is_finite())));
+    let md = std::fs::read_to_string(d.join("bench.md")).unwrap();
+    assert!(md.contains("| uniform |") && md.contains("| gbg |"), "{md}");
+    assert_eq!(&std::fs::read(d.join("time_vs_error.png")).unwrap()[1..4], b"PNG");
+    // The reference is cached: a second run does not render it again.
+    let r2 = bounce(&args);
+    assert_eq!(r2.code, 0);
+    assert!(r2.stderr.contains("(cached)"), "{}", r2.stderr);
+    let bad = bounce(&["bench", scene.to_str().unwrap(), "--out", d.to_str().unwrap(), "--methods", "all"]);
+    assert_eq!(bad.code, 2);
+}

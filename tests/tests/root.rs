@@ -1,6 +1,7 @@
 //! The lavapipe integration tests: one binary, one module per subject. Every test that touches the GPU
 //! uses `bounce_tests::TestGpu`, which fails the test on any validation message.
 
+mod bvh;
 mod cdf;
 mod cli;
 mod direct;

@@ -4,8 +4,10 @@
 //! Vulkan device or validation layer: things the user fixes); 1 a runtime failure. Every error is one
 //! line on stderr.
 
+pub mod bench;
 pub mod metrics;
 pub mod output;
+pub mod plot;
 
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions};
@@ -37,6 +39,8 @@ pub enum Command {
     Info,
     /// Error metrics of a test image against a reference image (both EXR).
     Compare(CompareArgs),
+    /// Run time against error for methods × VPL counts: bench.csv, bench.md, time_vs_error.png.
+    Bench(BenchArgs),
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -149,6 +153,39 @@ pub struct RenderArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Output folder (also caches the reference image).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Methods to sweep, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "uniform,global,stratified,local,gbg,mis")]
+    pub methods: Vec<MethodArg>,
+    /// VPL counts per pixel, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "16,64,256")]
+    pub vpls: Vec<u32>,
+    /// Frames (seeds 1..=K) per method and VPL count; medians are reported.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    #[arg(long, default_value_t = 128)]
+    pub width: u32,
+    #[arg(long, default_value_t = 128)]
+    pub height: u32,
+    /// Reflective DPRSM resolution per face.
+    #[arg(long, default_value_t = 128)]
+    pub dprsm_res: u32,
+    #[arg(long, default_value_t = 128)]
+    pub voxels: u32,
+    #[arg(long, default_value_t = 0.0)]
+    pub clamp: f32,
+    #[arg(long)]
+    pub device: Option<String>,
+    #[arg(long)]
+    pub validation: bool,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct CompareArgs {
     pub test: PathBuf,
     pub reference: PathBuf,
@@ -206,6 +243,7 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
         Command::Render(a) => render(&a, out, err),
         Command::Info => info(out),
         Command::Compare(a) => compare(&a, out),
+        Command::Bench(a) => bench(&a, out, err),
     };
     match r {
         Ok(()) => 0,
@@ -219,6 +257,59 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
             }
         }
     }
+}
+
+fn method_of(m: MethodArg) -> Method {
+    match m {
+        MethodArg::Uniform => Method::Uniform,
+        MethodArg::All => Method::All,
+        MethodArg::Global => Method::Global,
+        MethodArg::Stratified => Method::Stratified,
+        MethodArg::Local => Method::Local,
+        MethodArg::Gbg => Method::Gbg,
+        MethodArg::Mis => Method::Mis,
+    }
+}
+
+fn bench(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    let scene = Scene::load(&a.scene).map_err(bad)?;
+    writeln!(err, "{}", scene.summary())?;
+    if a.methods.is_empty() || a.vpls.is_empty() || a.repeats == 0 {
+        return Err(bad(anyhow::anyhow!("--methods, --vpls and --repeats must not be empty or zero")));
+    }
+    if a.methods.contains(&MethodArg::All) {
+        return Err(bad(anyhow::anyhow!("`all` is the reference of `bounce bench`, not a method to sweep")));
+    }
+    let base = FrameSettings {
+        width: a.width,
+        height: a.height,
+        component: Component::Indirect,
+        dprsm_res: a.dprsm_res,
+        voxels: a.voxels,
+        clamp: a.clamp,
+        ..FrameSettings::default()
+    };
+    let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone() }).map_err(gpu_error)?;
+    let renderer = Renderer::new(&gpu, &scene)?;
+    for &n in &a.vpls {
+        renderer.check(&FrameSettings { vpls: n, ..base.clone() }).map_err(bad)?;
+    }
+    let plan = bench::BenchPlan {
+        methods: a.methods.iter().map(|m| method_of(*m)).collect(),
+        vpls: a.vpls.clone(),
+        repeats: a.repeats,
+        base,
+    };
+    let samples = bench::run(&renderer, &plan, &a.scene, &a.out, err)?;
+    if a.validation {
+        let msgs = gpu.validation().messages();
+        anyhow::ensure!(msgs.is_empty(), "{} validation message(s); first: {}", msgs.len(), msgs[0]);
+    }
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    bench::write_outputs(&a.out, &plan, &samples, &gpu.name, &command)?;
+    writeln!(out, "{}", std::fs::read_to_string(a.out.join("bench.md")).unwrap_or_default())?;
+    writeln!(err, "wrote {}/bench.csv, bench.md, time_vs_error.png", a.out.display())?;
+    Ok(())
 }
 
 fn compare(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {

@@ -41,6 +41,11 @@ fn ascii(s: &str) -> String {
     s.chars().map(|c| if c.is_ascii() && !c.is_ascii_control() { c } else { '?' }).collect()
 }
 
+/// Write a text file (temporary file, then rename).
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    write_atomic(path, |tmp| std::fs::write(tmp, text).with_context(|| format!("writing {}", path.display())))
+}
+
 /// Write linear float32 RGB with `metadata` as EXR string attributes (`bounce.<key>`).
 pub fn write_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Result<()> {
     use exr::prelude::*;

@@ -7,6 +7,7 @@
 //! used by the tests. Shaders are compiled at build time from `glsl/` (see `build.rs`); binding numbers
 //! and shared structs come from `glsl/shared/` and are mirrored in [`bindings`] and [`shader_types`].
 
+pub mod bvh;
 pub mod camera;
 pub mod cpu_cdf;
 pub mod cpu_ref;

@@ -1,0 +1,231 @@
+//! `bounce bench`: run time against error for every method and VPL count.
+//!
+//! For each method × VPL count it renders `--repeats` frames (seeds 1..=K) of the indirect component
+//! and records, per frame, the GPU time (sum of pass timestamps) and each pass's time, the wall time of
+//! `Renderer::render`, and the error against a reference image. The reference is the exhaustive VPL sum
+//! (`--method all`) on the same VPL set, rendered once and cached in the output folder under a name
+//! keyed by the scene and the settings that change it. It writes:
+//! - `bench.csv`: one row per frame (method, VPLs, seed, GPU ms, wall ms, RMSE, relMSE, mean ratio,
+//!   p99 |error|, then one column per pass);
+//! - `bench.md`: the medians over repeats, shaped like the thesis's Tables 7.1 and 7.2 (methods in rows,
+//!   VPL counts in columns, time and error per cell) and a per-pass time table (Fig. 7.19's breakdown);
+//! - `time_vs_error.png`: median relMSE against median GPU time, log–log, one line per method (points at
+//!   the VPL counts), so equal-time comparisons read off a vertical line.
+
+use crate::metrics::Metrics;
+use crate::output::{self, RgbImage};
+use anyhow::{Context, Result};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+/// One measured frame.
+#[derive(Clone, Debug)]
+pub struct Sample {
+    pub method: Method,
+    pub vpls: u32,
+    pub seed: u64,
+    pub gpu_ms: f64,
+    pub wall_ms: f64,
+    pub passes: BTreeMap<&'static str, f64>,
+    pub metrics: Metrics,
+}
+
+pub struct BenchPlan {
+    pub methods: Vec<Method>,
+    pub vpls: Vec<u32>,
+    pub repeats: u32,
+    pub base: FrameSettings,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The cached reference (`all`) for the plan's settings, rendering it when absent.
+fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<[f32; 3]>> {
+    let b = &plan.base;
+    let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let parent =
+        scene.parent().and_then(|p| p.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = format!(
+        "reference-all-{parent}-{stem}-{}x{}-dprsm{}-vox{}-clamp{}.exr",
+        b.width, b.height, b.dprsm_res, b.voxels, b.clamp
+    );
+    let path = dir.join(name);
+    if path.exists() {
+        let (img, _) = output::read_exr(&path)?;
+        if (img.width, img.height) == (b.width, b.height) {
+            writeln!(err, "reference: {} (cached)", path.display())?;
+            return Ok(img.pixels);
+        }
+    }
+    writeln!(err, "reference: rendering every VPL (method all) into {}", path.display())?;
+    let bar = indicatif::ProgressBar::new(0);
+    let s = FrameSettings { method: Method::All, component: Component::Indirect, ..b.clone() };
+    let f = r.render_with_progress(&s, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    bar.finish_and_clear();
+    let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+    output::write_exr(&path, &img, &[("component", "indirect".into()), ("method", "all".into())])?;
+    Ok(img.pixels)
+}
+
+pub fn run(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<Sample>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let reference = reference(r, plan, scene, dir, err)?;
+    let total = (plan.methods.len() * plan.vpls.len()) as u64 * plan.repeats as u64;
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("bench {bar:40} {pos}/{len} frames ({msg}), eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    // One untimed frame first: it builds what every later frame reuses (the voxel grid) and warms the
+    // driver's shader caches, so the first timed frame is not charged for them.
+    r.render(&FrameSettings { method: plan.methods[0], vpls: 1, component: Component::Indirect, ..plan.base.clone() })?;
+    let mut samples = vec![];
+    for &method in &plan.methods {
+        for &vpls in &plan.vpls {
+            for seed in 1..=plan.repeats as u64 {
+                bar.set_message(format!("{} {vpls}", method.name()));
+                let s = FrameSettings { method, vpls, seed, component: Component::Indirect, ..plan.base.clone() };
+                let t0 = Instant::now();
+                let f = r.render(&s)?;
+                let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
+                let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+                let mut passes = BTreeMap::new();
+                for t in &f.timings {
+                    *passes.entry(t.name).or_insert(0.0) += t.ms.unwrap_or(f64::NAN);
+                }
+                samples.push(Sample {
+                    method,
+                    vpls,
+                    seed,
+                    gpu_ms: f.gpu_ms().unwrap_or(f64::NAN),
+                    wall_ms,
+                    passes,
+                    metrics: Metrics::of(&img.pixels, &reference),
+                });
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    Ok(samples)
+}
+
+/// Write bench.csv, bench.md and time_vs_error.png (each through a temporary file).
+pub fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &str, command: &str) -> Result<()> {
+    let pass_names: Vec<&str> = {
+        let mut v: Vec<&str> = samples.iter().flat_map(|s| s.passes.keys().copied()).collect();
+        v.sort();
+        v.dedup();
+        v
+    };
+    let mut csv = String::from("method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs");
+    for p in &pass_names {
+        csv.push_str(&format!(",pass_{p}_ms"));
+    }
+    csv.push('\n');
+    for s in samples {
+        csv.push_str(&format!(
+            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e}",
+            s.method.name(),
+            s.vpls,
+            s.seed,
+            s.gpu_ms,
+            s.wall_ms,
+            s.metrics.rmse,
+            s.metrics.rel_mse,
+            s.metrics.mean_ratio,
+            s.metrics.p99_abs
+        ));
+        for p in &pass_names {
+            csv.push_str(&format!(",{:.4}", s.passes.get(p).copied().unwrap_or(0.0)));
+        }
+        csv.push('\n');
+    }
+    output::write_text(&dir.join("bench.csv"), &csv)?;
+
+    let cell = |m: Method, n: u32| -> (f64, f64, f64) {
+        let sel: Vec<&Sample> = samples.iter().filter(|s| s.method == m && s.vpls == n).collect();
+        (
+            median(sel.iter().map(|s| s.gpu_ms).collect()),
+            median(sel.iter().map(|s| s.metrics.rel_mse).collect()),
+            median(sel.iter().map(|s| s.metrics.mean_ratio).collect()),
+        )
+    };
+    let b = &plan.base;
+    let mut md = format!(
+        "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {} repeat(s) \
+         (seeds 1..={}); medians over repeats. Reference: the exhaustive VPL sum (`--method all`). GPU time: the sum of \
+         the frame's pass timestamps.\n\n## GPU time (ms) and relMSE against the reference\n\n| method |",
+        b.width, b.height, b.dprsm_res, b.voxels, b.clamp, plan.repeats, plan.repeats
+    );
+    for n in &plan.vpls {
+        md.push_str(&format!(" {n} VPLs: ms | relMSE |"));
+    }
+    md.push_str("\n|---|");
+    for _ in &plan.vpls {
+        md.push_str("---:|---:|");
+    }
+    md.push('\n');
+    for &m in &plan.methods {
+        md.push_str(&format!("| {} |", m.name()));
+        for &n in &plan.vpls {
+            let (t, e, _) = cell(m, n);
+            md.push_str(&format!(" {t:.1} | {e:.4} |"));
+        }
+        md.push('\n');
+    }
+    md.push_str("\n## Per-pass GPU time (ms, median), at the largest VPL count\n\n| method |");
+    for p in &pass_names {
+        md.push_str(&format!(" {p} |"));
+    }
+    md.push_str("\n|---|");
+    for _ in &pass_names {
+        md.push_str("---:|");
+    }
+    md.push('\n');
+    let nmax = plan.vpls.iter().copied().max().unwrap_or(0);
+    for &m in &plan.methods {
+        md.push_str(&format!("| {} |", m.name()));
+        for p in &pass_names {
+            let v = median(
+                samples
+                    .iter()
+                    .filter(|s| s.method == m && s.vpls == nmax)
+                    .filter_map(|s| s.passes.get(p).copied())
+                    .collect(),
+            );
+            md.push_str(&if v.is_finite() { format!(" {v:.2} |") } else { " – |".to_string() });
+        }
+        md.push('\n');
+    }
+    output::write_text(&dir.join("bench.md"), &md)?;
+
+    let series: Vec<(String, Vec<(f64, f64)>)> = plan
+        .methods
+        .iter()
+        .map(|&m| (m.name().to_string(), plan.vpls.iter().map(|&n| (cell(m, n).0, cell(m, n).1)).collect()))
+        .collect();
+    crate::plot::time_vs_error(
+        &dir.join("time_vs_error.png"),
+        &series,
+        &format!("{}×{}, {}", b.width, b.height, device),
+    )
+}

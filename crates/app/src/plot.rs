@@ -1,0 +1,77 @@
+//! The time-versus-error plot of `bounce bench`: log–log, one line per method, labelled axes with units
+//! and a legend. Text uses the embedded DejaVu Sans (assets/fonts), so no system font is needed.
+
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // Registering a valid embedded font cannot fail but for a broken file, which is a build bug.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// `series`: (method, [(GPU ms, relMSE)]) in VPL order. Points with a non-positive or non-finite value
+/// cannot go on log axes and are left out.
+pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle: &str) -> Result<()> {
+    register_font();
+    let pts: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|(_, v)| v.iter().copied())
+        .filter(|(t, e)| *t > 0.0 && *e > 0.0 && t.is_finite() && e.is_finite())
+        .collect();
+    if pts.is_empty() {
+        return Err(anyhow!("no finite positive (time, error) point to plot"));
+    }
+    let (tmin, tmax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (t, _)| (a.min(*t), b.max(*t)));
+    let (emin, emax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (_, e)| (a.min(*e), b.max(*e)));
+    // The encoder picks the format from the extension, so the temporary file ends in .png too.
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    {
+        let root = BitMapBackend::new(&tmp, (900, 640)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("Run time against error ({subtitle})"), ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(96)
+            .build_cartesian_2d((tmin / 1.5..tmax * 1.5).log_scale(), (emin / 1.5..emax * 1.5).log_scale())
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("GPU time per frame (ms, log)")
+            .y_desc("relMSE against the reference (log)")
+            .x_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| format!("{v:.2e}"))
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        for (k, (name, v)) in series.iter().enumerate() {
+            let color = Palette99::pick(k).to_rgba();
+            let line: Vec<(f64, f64)> =
+                v.iter().copied().filter(|(t, e)| *t > 0.0 && *e > 0.0 && t.is_finite() && e.is_finite()).collect();
+            chart
+                .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
+                .map_err(|e| anyhow!("plot: {e}"))?
+                .label(name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
+            chart
+                .draw_series(line.iter().map(|p| Circle::new(*p, 4, color.filled())))
+                .map_err(|e| anyhow!("plot: {e}"))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+}
