@@ -55,7 +55,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// The cached reference (`all`) for the plan's settings, rendering it when absent.
-fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<[f32; 3]>> {
+fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<RgbImage> {
     let b = &plan.base;
     let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let parent =
@@ -69,7 +69,7 @@ fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
         let (img, _) = output::read_exr(&path)?;
         if (img.width, img.height) == (b.width, b.height) {
             writeln!(err, "reference: {} (cached)", path.display())?;
-            return Ok(img.pixels);
+            return Ok(img);
         }
     }
     writeln!(err, "reference: rendering every VPL (method all) into {}", path.display())?;
@@ -82,7 +82,7 @@ fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
     bar.finish_and_clear();
     let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
     output::write_exr(&path, &img, &[("component", "indirect".into()), ("method", "all".into())])?;
-    Ok(img.pixels)
+    Ok(img)
 }
 
 pub fn run(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<Sample>> {
@@ -118,7 +118,7 @@ pub fn run(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut d
                     gpu_ms: f.gpu_ms().unwrap_or(f64::NAN),
                     wall_ms,
                     passes,
-                    metrics: Metrics::of(&img.pixels, &reference),
+                    metrics: Metrics::with_flip(&img, &reference),
                 });
                 bar.inc(1);
             }
@@ -136,14 +136,14 @@ pub fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &
         v.dedup();
         v
     };
-    let mut csv = String::from("method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs");
+    let mut csv = String::from("method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs,flip");
     for p in &pass_names {
         csv.push_str(&format!(",pass_{p}_ms"));
     }
     csv.push('\n');
     for s in samples {
         csv.push_str(&format!(
-            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e}",
+            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e},{:.6}",
             s.method.name(),
             s.vpls,
             s.seed,
@@ -152,7 +152,8 @@ pub fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &
             s.metrics.rmse,
             s.metrics.rel_mse,
             s.metrics.mean_ratio,
-            s.metrics.p99_abs
+            s.metrics.p99_abs,
+            s.metrics.flip.unwrap_or(f64::NAN)
         ));
         for p in &pass_names {
             csv.push_str(&format!(",{:.4}", s.passes.get(p).copied().unwrap_or(0.0)));
@@ -166,29 +167,29 @@ pub fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &
         (
             median(sel.iter().map(|s| s.gpu_ms).collect()),
             median(sel.iter().map(|s| s.metrics.rel_mse).collect()),
-            median(sel.iter().map(|s| s.metrics.mean_ratio).collect()),
+            median(sel.iter().map(|s| s.metrics.flip.unwrap_or(f64::NAN)).collect()),
         )
     };
     let b = &plan.base;
     let mut md = format!(
         "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {} repeat(s) \
          (seeds 1..={}); medians over repeats. Reference: the exhaustive VPL sum (`--method all`). GPU time: the sum of \
-         the frame's pass timestamps.\n\n## GPU time (ms) and relMSE against the reference\n\n| method |",
+         the frame's pass timestamps.\n\n## GPU time (ms), relMSE and mean FLIP against the reference\n\n| method |",
         b.width, b.height, b.dprsm_res, b.voxels, b.clamp, plan.repeats, plan.repeats
     );
     for n in &plan.vpls {
-        md.push_str(&format!(" {n} VPLs: ms | relMSE |"));
+        md.push_str(&format!(" {n} VPLs: ms | relMSE | FLIP |"));
     }
     md.push_str("\n|---|");
     for _ in &plan.vpls {
-        md.push_str("---:|---:|");
+        md.push_str("---:|---:|---:|");
     }
     md.push('\n');
     for &m in &plan.methods {
         md.push_str(&format!("| {} |", m.name()));
         for &n in &plan.vpls {
-            let (t, e, _) = cell(m, n);
-            md.push_str(&format!(" {t:.1} | {e:.4} |"));
+            let (t, e, fl) = cell(m, n);
+            md.push_str(&format!(" {t:.1} | {e:.4} | {fl:.4} |"));
         }
         md.push('\n');
     }

@@ -192,6 +192,9 @@ pub struct CompareArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Write the FLIP error map (magma colours) to this PNG.
+    #[arg(long)]
+    pub heatmap: Option<PathBuf>,
 }
 
 /// An error the user can fix by changing the input or the machine (exit code 2).
@@ -326,7 +329,11 @@ fn compare(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             r.height
         )));
     }
-    let m = metrics::Metrics::of(&t.pixels, &r.pixels);
+    let m = metrics::Metrics::with_flip(&t, &r);
+    if let Some(h) = &a.heatmap {
+        let (_, map) = output::flip(&t, &r);
+        output::write_png_bytes(h, t.width, t.height, map)?;
+    }
     if a.json {
         writeln!(out, "{}", m.json())?;
     } else {

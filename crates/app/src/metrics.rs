@@ -10,6 +10,8 @@ pub struct Metrics {
     pub mean_ratio: f64,
     pub p99_abs: f64,
     pub non_finite: usize,
+    /// Mean FLIP of the tone-mapped pair, when computed (`with_flip`).
+    pub flip: Option<f64>,
 }
 
 impl Metrics {
@@ -48,20 +50,38 @@ impl Metrics {
             },
             p99_abs: p99,
             non_finite,
+            flip: None,
         }
+    }
+
+    /// The metrics plus mean FLIP (see `output::flip`).
+    pub fn with_flip(test: &crate::output::RgbImage, reference: &crate::output::RgbImage) -> Metrics {
+        let mut m = Metrics::of(&test.pixels, &reference.pixels);
+        m.flip = Some(crate::output::flip(test, reference).0);
+        m
     }
 
     pub fn table(&self) -> String {
         format!(
-            "RMSE        {:.6e}\nrelMSE      {:.6e}\nmean ratio  {:.6}\np99 |err|   {:.6e}\nnon-finite  {}",
-            self.rmse, self.rel_mse, self.mean_ratio, self.p99_abs, self.non_finite
+            "RMSE        {:.6e}\nrelMSE      {:.6e}\nmean ratio  {:.6}\np99 |err|   {:.6e}\nmean FLIP   {}\nnon-finite  {}",
+            self.rmse,
+            self.rel_mse,
+            self.mean_ratio,
+            self.p99_abs,
+            self.flip.map(|f| format!("{f:.6}")).unwrap_or_else(|| "n/a".into()),
+            self.non_finite
         )
     }
 
     pub fn json(&self) -> String {
         format!(
-            "{{\"rmse\": {}, \"rel_mse\": {}, \"mean_ratio\": {}, \"p99_abs\": {}, \"non_finite\": {}}}",
-            self.rmse, self.rel_mse, self.mean_ratio, self.p99_abs, self.non_finite
+            "{{\"rmse\": {}, \"rel_mse\": {}, \"mean_ratio\": {}, \"p99_abs\": {}, \"flip\": {}, \"non_finite\": {}}}",
+            self.rmse,
+            self.rel_mse,
+            self.mean_ratio,
+            self.p99_abs,
+            self.flip.map(|f| f.to_string()).unwrap_or_else(|| "null".into()),
+            self.non_finite
         )
     }
 }
@@ -81,6 +101,21 @@ mod tests {
         assert!((m.rel_mse - (1.0 / 1.01 + 1.0) / 6.0).abs() < 1e-7);
         assert!((m.mean_ratio - 2.1).abs() < 1e-6);
         assert_eq!(m.non_finite, 0);
+    }
+
+    #[test]
+    fn flip_is_zero_for_identical_images_and_grows_with_a_difference() {
+        use crate::output::RgbImage;
+        let px: Vec<[f32; 3]> =
+            (0..64 * 64).map(|k| [((k % 64) as f32) / 64.0, 0.3, ((k / 64) as f32) / 64.0]).collect();
+        let a = RgbImage { width: 64, height: 64, pixels: px.clone() };
+        let mut b = a.clone();
+        assert_eq!(Metrics::with_flip(&a, &a).flip, Some(0.0));
+        for p in b.pixels.iter_mut().take(64 * 32) {
+            p[1] = 2.0;
+        }
+        let f = Metrics::with_flip(&b, &a).flip.unwrap();
+        assert!(f > 0.05, "FLIP {f}");
     }
 
     #[test]

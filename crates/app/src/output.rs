@@ -91,15 +91,31 @@ pub fn read_exr(path: &Path) -> Result<(RgbImage, Vec<(String, String)>)> {
 /// a = 0.18 over the log-average luminance, then L_d = L (1 + L/L_white²) / (1 + L) with L_white the
 /// largest scaled luminance, applied to the luminance with colour ratios kept. Returns linear [0,1].
 pub fn tonemap_reinhard(img: &RgbImage) -> Vec<[f32; 3]> {
-    let lum = |p: &[f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    match reinhard_params(img) {
+        Some((key, l_white)) => tonemap_reinhard_with(img, key, l_white),
+        None => vec![[0.0; 3]; img.pixels.len()],
+    }
+}
+
+fn lum(p: &[f32; 3]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// The operator's image-dependent parameters: the scale a / L̄_w and L_white (None for a black image).
+pub fn reinhard_params(img: &RgbImage) -> Option<(f64, f64)> {
     let finite: Vec<f32> = img.pixels.iter().map(lum).filter(|l| l.is_finite() && *l >= 0.0).collect();
     if finite.is_empty() {
-        return vec![[0.0; 3]; img.pixels.len()];
+        return None;
     }
     let delta = 1e-6f64;
     let log_avg = (finite.iter().map(|&l| (delta + l as f64).ln()).sum::<f64>() / finite.len() as f64).exp();
     let key = 0.18 / log_avg;
     let l_white = finite.iter().fold(0.0f64, |m, &l| m.max(l as f64 * key)).max(1e-12);
+    Some((key, l_white))
+}
+
+/// Reinhard's operator with given parameters (so two images can be mapped alike for comparison).
+pub fn tonemap_reinhard_with(img: &RgbImage, key: f64, l_white: f64) -> Vec<[f32; 3]> {
     img.pixels
         .iter()
         .map(|p| {
@@ -119,6 +135,36 @@ pub fn linear_to_srgb8(c: f32) -> u8 {
     let c = c.clamp(0.0, 1.0);
     let s = if c <= 0.0031308 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
     (s * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// sRGB 8-bit bytes of a tone-mapped image.
+pub fn srgb8(mapped: &[[f32; 3]]) -> Vec<u8> {
+    mapped.iter().flat_map(|p| p.map(linear_to_srgb8)).collect()
+}
+
+/// Mean FLIP (Andersson et al. 2020) of `test` against `reference`, both tone-mapped with the
+/// reference's Reinhard parameters, and the error map as a magma heat map (sRGB8). A black reference maps
+/// both with neutral parameters.
+pub fn flip(test: &RgbImage, reference: &RgbImage) -> (f64, Vec<u8>) {
+    let (key, l_white) = reinhard_params(reference).unwrap_or((1.0, 1.0));
+    let r = nv_flip::FlipImageRgb8::with_data(
+        reference.width,
+        reference.height,
+        &srgb8(&tonemap_reinhard_with(reference, key, l_white)),
+    );
+    let t =
+        nv_flip::FlipImageRgb8::with_data(test.width, test.height, &srgb8(&tonemap_reinhard_with(test, key, l_white)));
+    let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    let mean = nv_flip::FlipPool::from_image(&err).mean() as f64;
+    (mean, err.apply_color_lut(&nv_flip::magma_lut()).to_vec())
+}
+
+/// Write sRGB8 RGB bytes as a PNG (temporary file, then rename).
+pub fn write_png_bytes(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<()> {
+    let buf = image::RgbImage::from_raw(width, height, bytes).context("PNG buffer size")?;
+    write_atomic(path, |tmp| {
+        buf.save_with_format(tmp, image::ImageFormat::Png).with_context(|| format!("writing {}", path.display()))
+    })
 }
 
 /// Tone-map (Reinhard 2002) and write an sRGB PNG.

@@ -1,20 +1,29 @@
-//! The CPU twin of the two-level CDF: [`reduce`] mirrors `glsl/cdf_reduce.comp` and [`sample`] mirrors
-//! `cdf_sample` of `glsl/shared/cdf.glsl`, for the tests (`tests/tests/cdf.rs`).
+//! The CPU twin of the two-level CDF: [`reduce`] / [`reduce_sections`] mirror `glsl/cdf_reduce.comp`;
+//! [`sample_rows`], [`prob_rows`] and [`sample`] mirror `cdf_sample_rows`, `cdf_prob_rows` and
+//! `cdf_sample` of `glsl/shared/cdf.glsl`. Used by the tests (`tests/tests/cdf.rs`).
 //!
 //! **Why a twin and not an independent formula.** The GPU adds in float32, in a fixed order; the twin
 //! does the same float32 operations in the same order (each row left to right, then the row totals top
 //! to bottom), so its CDF equals the shader's bit for bit wherever the device rounds as IEEE 754 requires
 //! (Vulkan: additions and multiplications correctly rounded). The sampling twin makes the same
-//! comparisons, clamps and binary searches, so for the same `u` it returns the same texel. What the twin
-//! cannot establish is that the method itself is right; the tests check that separately (hand-computed
-//! cases here, a chi-square fit against weight / total in `tests/tests/cdf.rs`).
+//! comparisons, clamps and binary searches, so for the same `u` it returns the same texel. What a twin
+//! cannot establish is that the method itself is right; that is checked separately: hand-computed cases
+//! here, [`u_grid_counts`] (the exact distribution of the draws under the gather's 24-bit `u`) against
+//! [`prob_rows`], and chi-square fits against weight / total on the GPU in `tests/tests/cdf.rs`.
 //!
-//! Layout (see `crates/graph/src/passes/cdf_reduce.rs`): `[total, rows (u32 bits), row_length (u32 bits),
-//! 0]`, then the inclusive prefix over row totals (`rows` floats), then each row's inclusive prefix
-//! (`rows × row_length` floats). Weights are sanitised as in the shader: `x > 0 && x < 1e30 ? x : 0`, so
-//! negative, NaN and infinite weights (and finite ones ≥ 1e30) count as 0.
+//! Layout (see `crates/graph/src/passes/cdf_reduce.rs`): sections one after the other, each
+//! [`section_len`] floats: `[total, rows (u32 bits), row_length (u32 bits), 0]`, then the inclusive
+//! prefix over row totals (`rows` floats), then each row's inclusive prefix (`rows × row_length`
+//! floats). Weights are sanitised as in the shader: `x > 0 && x < 1e30 ? x : 0`, so negative, NaN and
+//! infinite weights (and finite ones ≥ 1e30) count as 0.
 //!
-//! The stream of random numbers the gather feeds to `cdf_sample` is mirrored too ([`pcg_hash`],
+//! **Resolution.** A draw is one `u` with 24 bits mapped through float prefixes, so a texel's actual
+//! probability is resolved only to about one u step (2⁻²⁴) plus one float step of the target
+//! (ulp(end) / range, where `end` is the prefix at the range's last row): [`u_grid_counts`] and
+//! [`prob_rows`] agree to within two such steps per texel (unit test below), not relatively. Texels
+//! lighter than that are drawn with a quantised probability, or never.
+//!
+//! The stream of random numbers the gather feeds to the sampling is mirrored too ([`pcg_hash`],
 //! [`rand01`] of `glsl/shared/common.glsl`): at most 1 − 2⁻²⁴, with 24 bits.
 
 /// Floats in the CDF header (as `cdf_reduce::CDF_HEADER` and `CDF_HEADER` in `cdf.glsl`).
@@ -63,14 +72,52 @@ pub fn reduce(importance: &[f32], rows: u32, row_length: u32) -> Vec<f32> {
     cdf
 }
 
-/// The total weight (`cdf_total`).
+/// Floats per CDF section (`CdfReduce::section_len`).
+pub fn section_len(rows: u32, row_length: u32) -> usize {
+    HEADER + rows as usize + rows as usize * row_length as usize
+}
+
+/// `cdf_reduce` over `sections` importance arrays of `rows × row_length` weights laid one after the
+/// other: section s's CDF starts at float s · [`section_len`].
+pub fn reduce_sections(importance: &[f32], rows: u32, row_length: u32, sections: u32) -> Vec<f32> {
+    let texels = rows as usize * row_length as usize;
+    assert!(texels > 0);
+    assert_eq!(importance.len(), texels * sections as usize, "importance must hold sections × rows × row_length");
+    importance.chunks_exact(texels).flat_map(|w| reduce(w, rows, row_length)).collect()
+}
+
+/// The total weight of the section at `cb` (`cdf_total_at`).
+pub fn total_at(cdf: &[f32], cb: usize) -> f32 {
+    cdf[cb]
+}
+
+/// The total weight of section 0 (`cdf_total`).
 pub fn total(cdf: &[f32]) -> f32 {
     cdf[0]
 }
 
-/// `(rows, row_length)` from the header.
+/// `(rows, row_length)` from the header of the section at `cb`.
+pub fn shape_at(cdf: &[f32], cb: usize) -> (u32, u32) {
+    (cdf[cb + 1].to_bits(), cdf[cb + 2].to_bits())
+}
+
+/// `(rows, row_length)` of section 0.
 pub fn shape(cdf: &[f32]) -> (u32, u32) {
-    (cdf[1].to_bits(), cdf[2].to_bits())
+    shape_at(cdf, 0)
+}
+
+/// `cdf_rows_before`: the inclusive prefix of the row totals up to row r − 1 (0 for r = 0).
+pub fn rows_before(cdf: &[f32], cb: usize, r: u32) -> f32 {
+    if r == 0 {
+        0.0
+    } else {
+        cdf[cb + HEADER + r as usize - 1]
+    }
+}
+
+/// `cdf_rows_total`: the weight of rows [r0, r1), as a difference of prefixes.
+pub fn rows_total(cdf: &[f32], cb: usize, r0: u32, r1: u32) -> f32 {
+    rows_before(cdf, cb, r1) - rows_before(cdf, cb, r0)
 }
 
 /// GLSL `min(x, y)`: `y < x ? y : x`.
@@ -91,20 +138,24 @@ fn glsl_max(x: f32, y: f32) -> f32 {
     }
 }
 
-/// `cdf_sample(u, prob)`: the texel drawn for `u` in [0, 1) and its probability `weight / total` (the
-/// sanitised weight, read from `importance`, divided by the CDF's total). Same operations as the shader:
-/// the target `u · total` clamped just below the total, the first row whose prefix exceeds it, the rest
-/// clamped into [0, below(row total)], the first texel of that row whose in-row prefix exceeds the rest.
+/// `cdf_sample_rows(cb, ib, u, r0, r1)`: the texel (index within the section) drawn for `u` in [0, 1)
+/// among rows [r0, r1) of the section at `cb`. Same operations as the shader: the target
+/// `before0 + u · (end − before0)` clamped into [before0, below(end)], the first row whose prefix
+/// exceeds it, the rest clamped into [0, below(row's last in-row prefix)], the first texel of that row
+/// whose in-row prefix exceeds the rest. (The shader's `ib` is not read by the search.)
 ///
-/// Panics when the total is not positive: the gather only samples when `cdf_total() > 0`.
-pub fn sample(cdf: &[f32], importance: &[f32], u: f32) -> (u32, f32) {
-    let t0 = total(cdf);
-    assert!(t0 > 0.0, "cdf_sample is only called with a positive total (got {t0})");
-    let (rows, len) = shape(cdf);
+/// Panics when rows [r0, r1) have no weight: the gather only samples ranges whose total is > 0.
+pub fn sample_rows(cdf: &[f32], cb: usize, u: f32, r0: u32, r1: u32) -> u32 {
+    let (rows, len) = shape_at(cdf, cb);
+    assert!(r0 < r1 && r1 <= rows, "rows [{r0}, {r1}) of {rows}");
+    let before0 = rows_before(cdf, cb, r0);
+    let end = rows_before(cdf, cb, r1);
+    assert!(end - before0 > 0.0, "cdf_sample_rows is only called on rows with weight");
+    let at = |k: u32| cdf[cb + k as usize];
     let header = HEADER as u32;
-    let at = |k: u32| cdf[k as usize];
-    let target = glsl_min(u * t0, below(t0));
-    let (mut lo, mut hi) = (0u32, rows - 1);
+    let mut target = glsl_min(before0 + u * (end - before0), below(end));
+    target = glsl_max(target, before0);
+    let (mut lo, mut hi) = (r0, r1 - 1);
     while lo < hi {
         let mid = (lo + hi) / 2;
         if at(header + mid) > target {
@@ -114,7 +165,7 @@ pub fn sample(cdf: &[f32], importance: &[f32], u: f32) -> (u32, f32) {
         }
     }
     let r = lo;
-    let before = if r > 0 { at(header + r - 1) } else { 0.0 };
+    let before = rows_before(cdf, cb, r);
     let base = header + rows + r * len;
     let t = glsl_min(glsl_max(target - before, 0.0), below(at(base + len - 1)));
     lo = 0;
@@ -127,8 +178,73 @@ pub fn sample(cdf: &[f32], importance: &[f32], u: f32) -> (u32, f32) {
             lo = mid + 1;
         }
     }
-    let v = r * len + lo;
+    r * len + lo
+}
+
+/// `cdf_prob_rows(cb, v, r0, r1)`: the probability the shader assigns to [`sample_rows`] drawing texel
+/// `v` among rows [r0, r1), from the float prefixes (same operations and order as the shader).
+// `!(x > 0.0)` as in the shader: NaN counts as "no weight".
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn prob_rows(cdf: &[f32], cb: usize, v: u32, r0: u32, r1: u32) -> f32 {
+    let (rows, len) = shape_at(cdf, cb);
+    let (r, i) = (v / len, v % len);
+    if r < r0 || r >= r1 {
+        return 0.0;
+    }
+    let range = rows_before(cdf, cb, r1) - rows_before(cdf, cb, r0);
+    let delta = rows_before(cdf, cb, r + 1) - rows_before(cdf, cb, r);
+    if !(range > 0.0) || !(delta > 0.0) {
+        return 0.0;
+    }
+    let base = cb + HEADER + (rows + r * len) as usize;
+    let hi = cdf[base + i as usize];
+    let lo = if i > 0 { cdf[base + i as usize - 1] } else { 0.0 };
+    let last = cdf[base + len as usize - 1];
+    let mut mass = glsl_min(hi, delta) - glsl_min(lo, delta);
+    if hi == last && lo < last {
+        mass += glsl_max(delta - last, 0.0);
+    }
+    delta / range * glsl_max(mass, 0.0) / delta
+}
+
+/// `cdf_sample(u, prob)`: [`sample_rows`] over every row of section 0, and the texel's probability as
+/// the shader gives it, its sanitised weight (read from `importance`) over the total.
+///
+/// Panics when the total is not positive: the gather only samples when `cdf_total() > 0`.
+pub fn sample(cdf: &[f32], importance: &[f32], u: f32) -> (u32, f32) {
+    let t0 = total(cdf);
+    assert!(t0 > 0.0, "cdf_sample is only called with a positive total (got {t0})");
+    let (rows, _) = shape(cdf);
+    let v = sample_rows(cdf, 0, u, 0, rows);
     (v, sanitise(importance[v as usize]) / t0)
+}
+
+/// The exact distribution of [`sample_rows`] (rows [r0, r1) of the section at `cb`) under the gather's
+/// random numbers, `u = k / 2²⁴` for k in [0, 2²⁴) (what [`rand01`] can return): how many of the 2²⁴
+/// values draw each texel of the section. The draw is monotone in u, so each texel's values form one
+/// run; the runs are found by binary search, about 24 draws per texel drawn.
+pub fn u_grid_counts(cdf: &[f32], cb: usize, r0: u32, r1: u32) -> Vec<u32> {
+    const N: u32 = 1 << 24;
+    let (rows, len) = shape_at(cdf, cb);
+    let mut counts = vec![0u32; rows as usize * len as usize];
+    let draw = |k: u32| sample_rows(cdf, cb, k as f32 / N as f32, r0, r1);
+    let mut k = 0u32;
+    while k < N {
+        let v = draw(k);
+        // The last k' ≥ k that still draws v.
+        let (mut lo, mut hi) = (k, N - 1);
+        while lo < hi {
+            let mid = lo + (hi - lo).div_ceil(2);
+            if draw(mid) == v {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
+        }
+        counts[v as usize] += lo - k + 1;
+        k = lo + 1;
+    }
+    counts
 }
 
 /// `pcg_hash` of `glsl/shared/common.glsl` (the PCG RXS-M-XS output permutation of one LCG step).
@@ -242,6 +358,81 @@ mod tests {
         // u = 0 draws the first texel with mass, u just below 1 the last.
         assert_eq!(sample(&cdf, &w, 0.0).0, 5);
         assert_eq!(sample(&cdf, &w, U_MAX).0, 255);
+    }
+
+    #[test]
+    fn sample_rows_and_prob_rows_on_row_ranges() {
+        let (w, cdf) = small();
+        // Rows [0, 1): texel 0 for u · 4 < 1, texel 2 above; rows [1, 3): only texel 6 has weight.
+        assert_eq!(sample_rows(&cdf, 0, 0.0, 0, 1), 0);
+        assert_eq!(sample_rows(&cdf, 0, 0.2499, 0, 1), 0);
+        assert_eq!(sample_rows(&cdf, 0, 0.2501, 0, 1), 2);
+        assert_eq!(sample_rows(&cdf, 0, U_MAX, 0, 1), 2);
+        for u in [0.0, 0.3, U_MAX, 1.0] {
+            assert_eq!(sample_rows(&cdf, 0, u, 1, 3), 6);
+            assert_eq!(sample_rows(&cdf, 0, u, 2, 3), 6);
+        }
+        assert_eq!(rows_total(&cdf, 0, 1, 2), 0.0);
+        assert_eq!(rows_total(&cdf, 0, 0, 3), 6.0);
+        let p = |v, r0, r1| prob_rows(&cdf, 0, v, r0, r1);
+        assert_eq!([p(0, 0, 1), p(1, 0, 1), p(2, 0, 1), p(6, 0, 1)], [0.25, 0.0, 0.75, 0.0]);
+        assert_eq!([p(0, 0, 3), p(2, 0, 3), p(6, 0, 3), p(3, 0, 3)], [1.0 / 6.0, 0.5, 2.0 / 6.0, 0.0]);
+        assert_eq!([p(6, 1, 3), p(0, 1, 3), p(4, 1, 3), p(4, 1, 2)], [1.0, 0.0, 0.0, 0.0]);
+        // Two sections: the second's CDF starts at section_len.
+        let w2: Vec<f32> = w.iter().chain(&[0.0, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0]).copied().collect();
+        let cdf2 = reduce_sections(&w2, 3, 3, 2);
+        let cb = section_len(3, 3);
+        assert_eq!(&cdf2[..cb], &cdf[..]);
+        assert_eq!(total_at(&cdf2, cb), 5.0);
+        assert_eq!(sample_rows(&cdf2, cb, 0.7, 0, 3), 4);
+        assert_eq!(prob_rows(&cdf2, cb, 4, 0, 3), 1.0);
+    }
+
+    /// Two 64² faces, face 0 `ratio` times heavier, with zero runs; a jitter so that prefixes round.
+    fn two_faces(ratio: f32) -> (Vec<f32>, Vec<f32>) {
+        let res = 64usize;
+        let w: Vec<f32> = (0..2 * res * res)
+            .map(|v| {
+                let (face, y, x) = (v / (res * res), (v / res) % res, v % res);
+                if y % 16 == 3 || (x / 5) % 4 == 1 {
+                    return 0.0;
+                }
+                let jitter = 1.0 + (v.wrapping_mul(2654435761) % 1000) as f32 / 1000.0;
+                jitter * if face == 0 { ratio } else { 1.0 }
+            })
+            .collect();
+        let cdf = reduce(&w, 2 * res as u32, res as u32);
+        (w, cdf)
+    }
+
+    #[test]
+    fn prob_rows_is_the_u_grid_distribution_to_within_two_steps() {
+        // prob_rows must give what sample_rows actually does under the 24-bit u, per texel, to within
+        // the resolution of the draw: step = 2⁻²⁴ (one u) + ulp(end) / range (one target float).
+        for ratio in [1.0, 10.0, 1e3, 1e5] {
+            let (w, cdf) = two_faces(ratio);
+            for (r0, r1) in [(0, 64), (64, 128), (0, 128)] {
+                let counts = u_grid_counts(&cdf, 0, r0, r1);
+                assert_eq!(counts.iter().map(|&c| c as u64).sum::<u64>(), 1 << 24);
+                let end = rows_before(&cdf, 0, r1);
+                let range = (end - rows_before(&cdf, 0, r0)) as f64;
+                let step = 1.0 / 16777216.0 + (f32::from_bits(end.to_bits() + 1) - end) as f64 / range;
+                let mut sum = 0.0f64;
+                for (v, &c) in counts.iter().enumerate() {
+                    let p = prob_rows(&cdf, 0, v as u32, r0, r1) as f64;
+                    let q = c as f64 / 16777216.0;
+                    sum += p;
+                    assert!(
+                        (q - p).abs() <= 2.0 * step,
+                        "ratio {ratio}, rows [{r0}, {r1}), texel {v}: drawn {q:e}, prob_rows {p:e}"
+                    );
+                    if sanitise(w[v]) == 0.0 {
+                        assert!(c == 0 && p == 0.0, "texel {v} has no weight");
+                    }
+                }
+                assert!((sum - 1.0).abs() < 1e-5, "ratio {ratio}, rows [{r0}, {r1}): prob_rows sums to {sum}");
+            }
+        }
     }
 
     #[test]

@@ -255,6 +255,21 @@ impl Bvh {
         self.nodes.len()
     }
 
+    /// The structure of node `i` (`i < node_count()`), for flattening the tree into another layout
+    /// (the GPU BVH, [`crate::bvh`]): `(first, count)`. A leaf (`count > 0`) holds the triangles
+    /// `leaf_order()[first..first + count]`; an interior node (`count == 0`) has the children `first`
+    /// and `first + 1`, which cover consecutive ranges of `leaf_order()` (left before right). Node 0 is
+    /// the root; a tree without triangles is the single node `(0, 0)`, which has no children.
+    pub fn node_links(&self, i: usize) -> (u32, u32) {
+        (self.nodes[i].first, self.nodes[i].count)
+    }
+
+    /// The indices of the triangles that can be hit (zero-area ones excluded), in leaf order (see
+    /// [`Bvh::node_links`]).
+    pub fn leaf_order(&self) -> &[u32] {
+        &self.order
+    }
+
     /// Möller–Trumbore in f64: `(t, u, v)` with `u`, `v` the weights of vertices 1 and 2, or
     /// `None` for a miss, a parallel ray or any NaN. Edges and vertices count as inside, so a ray
     /// through a shared edge hits at least one of the two triangles.

@@ -1,0 +1,322 @@
+// Ray casting against the scene's BVH: closest hit and segment occlusion. Self-contained (no other include);
+// crates/graph/src/bvh.rs builds the buffers (from the CPU reference's SAH tree, crates/graph/src/cpu_ref.rs)
+// and documents the layout; tests/tests/bvh.rs checks every function here against that CPU reference.
+//
+// Buffers (std430, read-only, mirrored by GpuBvhNode / GpuBvhTri in bvh.rs, 32 and 48 bytes):
+//  * bvh_nodes[i] = { lo, first, hi, count }: the box [lo, hi] (f32, exact bounds of the f32 vertices). A leaf
+//    (count > 0) holds the triangles bvh_tris[first .. first + count]; an interior node (count == 0) has the
+//    children first and first + 1 (adjacent, so one visit reads both boxes). Node 0 is the root. The tree is at
+//    most BVH_STACK_SIZE levels deep below the root (bvh.rs guarantees it), so the stack never overflows.
+//  * bvh_tris[j] = { v0, tri, v1, -, v2, - }: the three vertex positions of the scene triangle `tri` (vertices
+//    3·tri .. 3·tri+3 of the scene), stored again in leaf order so a leaf is one contiguous run. Zero-area
+//    triangles are left out (they are never hit, as in the CPU reference).
+//
+// Functions (d need not be unit; t is in units of |d|, the hit is at o + t·d):
+//  * float bvh_closest(o, d, tmax, out tri, out bary): the closest hit with t ∈ (0, tmax], or −1. `tri` is the
+//    scene triangle, `bary` the weights of its vertices 1 and 2 (vertex 0 gets 1 − bary.x − bary.y). Ties at
+//    exactly equal t go to the lower triangle index, as in cpu_ref's Bvh::intersect.
+//  * bool bvh_occluded(a, b): whether a triangle crosses the segment a → b with segment parameter
+//    t ∈ (BVH_SHADOW_EPS, 1 − BVH_SHADOW_EPS), both ends open: cpu_ref's Bvh::occluded rule with the same
+//    relative epsilon SHADOW_EPS = 1e-4. Relative, so it scales with the segment: it keeps the endpoints' own
+//    surfaces from occluding (a point computed on a triangle is within f32 rounding, ~1e-7 of its coordinates,
+//    of the plane) while any occluder farther than 0.01 % of the segment length from both ends counts.
+//  * float bvh_trace(o, d, tmin, tmax, any_hit, out tri, out bary): both of the above. Closest mode accepts
+//    t ∈ (tmin, tmax]; any-hit mode t ∈ (tmin, tmax) and stops at the first such hit.
+// Non-finite input, a direction with no component of magnitude ≥ 1e-30, or tmax ≤ tmin gives "no hit" at once.
+//
+// Triangle test: watertight ray–triangle intersection (Woop, Benthin and Wald 2013) in f32. The ray is sheared
+// so that it runs along +z from the origin; each vertex is mapped to that frame by a function of the vertex and
+// the ray alone, and the three 2D edge functions are `precise` (no fused multiply-add), so two triangles that
+// share an edge compute exactly opposite values for it: a ray can never slip between them, even through a
+// shared vertex. Edges count as inside (an edge function of exactly 0 passes), so a ray through an edge hits
+// one or both of its triangles (the CPU reference is edge-inclusive too). Box test: slabs with the far distance
+// grown by BVH_BOX_GROW (8 ulps), so rounding never culls a box whose triangle the exact test would hit (flat
+// boxes of axis-aligned walls included).
+//
+// Traversal and its iteration bound. One loop; each iteration is exactly one of: test one triangle of the
+// current leaf; visit one node (read its two children, test both boxes, descend into the nearer one and push the
+// other with its entry distance); pop a node whose entry distance is beyond the closest hit so far (culled); or
+// the final iteration that finds the stack empty. A node is visited or popped at most once and a triangle tested
+// at most once per call, so a call takes at most min(BVH_MAX_STEPS, nodes + triangles + 1) iterations: what
+// GpuBvh::max_iterations_per_ray() in bvh.rs returns. There is no other loop. llvmpipe silently stops every
+// loop of an invocation after 65535 iterations in total (Gpu::loop_iteration_limit), so a shader that traces n
+// rays per invocation must keep n · max_iterations_per_ray() plus its other loop iterations under that limit,
+// and split its work over dispatches otherwise. If a call reaches BVH_MAX_STEPS (never on the scenes measured:
+// see bvh.rs), it gives up and answers "no hit" (bvh_closest −1, bvh_occluded false) with bvh_exhausted = true;
+// a stack overflow, impossible with buffers from bvh.rs, gives the same answer.
+//
+// After every call, bvh_steps holds the loop iterations it used and bvh_exhausted whether it gave up.
+#ifndef BOUNCE_BVH_GLSL
+#define BOUNCE_BVH_GLSL
+
+// Binding numbers (mirrored as B_BVH_NODES / B_BVH_TRIS in crates/graph/src/bvh.rs; they move to
+// bindings.glsl later, hence the guards).
+#ifndef B_BVH_NODES
+#define B_BVH_NODES 26
+#endif
+#ifndef B_BVH_TRIS
+#define B_BVH_TRIS 27
+#endif
+
+// Most loop iterations of one call (bvh.rs: MAX_STEPS).
+#define BVH_MAX_STEPS 16384
+// Traversal stack entries = the most levels below the root (bvh.rs: STACK_SIZE).
+#define BVH_STACK_SIZE 64
+// bvh_tri of "no hit" (bvh.rs: NO_TRI).
+#define BVH_NO_TRI 0xFFFFFFFFu
+
+// Relative end epsilon of bvh_occluded (cpu_ref::SHADOW_EPS).
+const float BVH_SHADOW_EPS = 1e-4;
+// 1 + 2^-20: growth of a box's far distance (and of the culling distance) against rounding.
+const float BVH_BOX_GROW = 1.0 + 1.0 / 1048576.0;
+// Direction components smaller than this in magnitude are replaced by ±this in the box test's reciprocal, so
+// 1/d stays finite and 0 · (1/d) never makes a NaN.
+const float BVH_MIN_DIR = 1e-30;
+
+struct BvhNode {
+    vec3 lo;
+    uint first;
+    vec3 hi;
+    uint count;
+};
+
+struct BvhTri {
+    vec3 v0;
+    uint tri;
+    vec3 v1;
+    uint pad1;
+    vec3 v2;
+    uint pad2;
+};
+
+layout(std430, set = 0, binding = B_BVH_NODES) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = B_BVH_TRIS) readonly buffer BvhTris { BvhTri bvh_tris[]; };
+
+// Loop iterations of the last bvh_* call, and whether it gave up (see the header).
+uint bvh_steps = 0u;
+bool bvh_exhausted = false;
+
+// A ray prepared for the box and triangle tests.
+struct BvhRay {
+    vec3 o;
+    vec3 inv_d; // 1 / d, with tiny components replaced by ±BVH_MIN_DIR
+    vec3 mx;    // the shear: a vertex p maps to (dot(p − o, mx), dot(p − o, my), dot(p − o, mz)),
+    vec3 my;    // i.e. x = p[kx] − Sx·p[kz], y = p[ky] − Sy·p[kz], z = Sz·p[kz] (Woop et al.'s frame)
+    vec3 mz;
+};
+
+float bvh_reciprocal_dir(float c) {
+    return 1.0 / (abs(c) < BVH_MIN_DIR ? (c < 0.0 ? -BVH_MIN_DIR : BVH_MIN_DIR) : c);
+}
+
+BvhRay bvh_make_ray(vec3 o, vec3 d) {
+    BvhRay r;
+    r.o = o;
+    r.inv_d = vec3(bvh_reciprocal_dir(d.x), bvh_reciprocal_dir(d.y), bvh_reciprocal_dir(d.z));
+    // kz: the dominant axis; kx, ky the next two, swapped when d[kz] < 0 to keep the winding.
+    vec3 ad = abs(d);
+    int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (d[kz] < 0.0) {
+        int s = kx;
+        kx = ky;
+        ky = s;
+    }
+    float sz = 1.0 / d[kz];
+    float sx = d[kx] * sz;
+    float sy = d[ky] * sz;
+    r.mx = vec3(0.0);
+    r.my = vec3(0.0);
+    r.mz = vec3(0.0);
+    r.mx[kx] = 1.0;
+    r.mx[kz] = -sx;
+    r.my[ky] = 1.0;
+    r.my[kz] = -sy;
+    r.mz[kz] = sz;
+    return r;
+}
+
+// One sheared coordinate of a vertex: (p.x·m.x + p.y·m.y) + p.z·m.z, unfused and in this order. Two of the
+// terms are exact (a factor 1 or 0), so this is p[k] − S·p[kz] rounded as written, and it depends on the vertex
+// and the ray only: what makes shared edges watertight.
+float bvh_shear(vec3 p, vec3 m) {
+    precise float a = p.x * m.x;
+    precise float b = p.y * m.y;
+    precise float c = p.z * m.z;
+    precise float ab = a + b;
+    precise float s = ab + c;
+    return s;
+}
+
+// 2D edge function x1·y2 − y1·x2, unfused: swapping the two points negates it exactly.
+float bvh_edge(float x1, float y1, float x2, float y2) {
+    precise float p = x1 * y2;
+    precise float q = y1 * x2;
+    precise float e = p - q;
+    return e;
+}
+
+// Watertight ray–triangle test (see the header): true with t and the weights of v1, v2 when the ray's line
+// crosses the closed triangle (t is not range-checked here).
+bool bvh_hit_triangle(BvhRay r, BvhTri tr, out float t, out vec2 bary) {
+    t = -1.0;
+    bary = vec2(0.0);
+    precise vec3 a = tr.v0 - r.o;
+    precise vec3 b = tr.v1 - r.o;
+    precise vec3 c = tr.v2 - r.o;
+    float ax = bvh_shear(a, r.mx), ay = bvh_shear(a, r.my);
+    float bx = bvh_shear(b, r.mx), by = bvh_shear(b, r.my);
+    float cx = bvh_shear(c, r.mx), cy = bvh_shear(c, r.my);
+    float u = bvh_edge(cx, cy, bx, by); // weight of v0
+    float v = bvh_edge(ax, ay, cx, cy); // weight of v1
+    float w = bvh_edge(bx, by, ax, ay); // weight of v2
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
+    float det = u + v + w;
+    if (det == 0.0 || isnan(det) || isinf(det)) return false;
+    float az = bvh_shear(a, r.mz), bz = bvh_shear(b, r.mz), cz = bvh_shear(c, r.mz);
+    float tt = (u * az + v * bz + w * cz) / det;
+    if (isnan(tt) || isinf(tt)) return false;
+    t = tt;
+    bary = vec2(v, w) / det;
+    return true;
+}
+
+// Slab test of box [lo, hi] against (tmin, tmax): whether they meet, and the entry distance.
+bool bvh_hit_box(BvhRay r, vec3 lo, vec3 hi, float tmin, float tmax, out float tnear) {
+    vec3 t0 = (lo - r.o) * r.inv_d;
+    vec3 t1 = (hi - r.o) * r.inv_d;
+    vec3 ts = min(t0, t1);
+    vec3 tb = max(t0, t1);
+    float near = max(max(ts.x, ts.y), max(ts.z, tmin));
+    float far = min(min(tb.x, tb.y), tb.z) * BVH_BOX_GROW;
+    far = min(far, tmax * BVH_BOX_GROW);
+    tnear = near;
+    return near <= far;
+}
+
+bool bvh_finite(vec3 v) {
+    return !any(isnan(v)) && !any(isinf(v));
+}
+
+float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint tri, out vec2 bary) {
+    tri = BVH_NO_TRI;
+    bary = vec2(0.0);
+    bvh_steps = 0u;
+    bvh_exhausted = false;
+    float dmax = max(abs(d.x), max(abs(d.y), abs(d.z)));
+    if (!bvh_finite(o) || !bvh_finite(d) || !(dmax >= BVH_MIN_DIR) || isnan(tmin) || isnan(tmax) || !(tmax > tmin))
+        return -1.0;
+    BvhRay r = bvh_make_ray(o, d);
+
+    uint stack_node[BVH_STACK_SIZE];
+    float stack_t[BVH_STACK_SIZE];
+    int sp = 0;
+
+    bool found = false;
+    float best_t = tmax;
+    uint best_tri = BVH_NO_TRI;
+    vec2 best_bary = vec2(0.0);
+
+    // The node to visit next (when `have`), and the triangles of the current leaf still to test.
+    float troot;
+    bool have = bvh_hit_box(r, bvh_nodes[0].lo, bvh_nodes[0].hi, tmin, tmax, troot);
+    uint node = 0u;
+    uint next_tri = 0u;
+    uint end_tri = 0u;
+    bool done = false;
+    uint steps = 0u;
+    for (; steps < uint(BVH_MAX_STEPS); steps++) {
+        if (next_tri < end_tri) {
+            BvhTri tr = bvh_tris[next_tri];
+            next_tri++;
+            float t;
+            vec2 b;
+            if (bvh_hit_triangle(r, tr, t, b) && t > tmin) {
+                bool take;
+                if (any_hit) {
+                    take = t < tmax;
+                } else {
+                    take = t < best_t || (t == best_t && (!found || tr.tri < best_tri));
+                }
+                if (take) {
+                    found = true;
+                    best_t = t;
+                    best_tri = tr.tri;
+                    best_bary = b;
+                    if (any_hit) {
+                        steps++;
+                        done = true;
+                        break;
+                    }
+                }
+            }
+            continue;
+        }
+        if (!have) {
+            if (sp == 0) {
+                steps++;
+                done = true;
+                break;
+            }
+            sp--;
+            // Culled: it starts beyond the closest hit found since it was pushed.
+            if (stack_t[sp] > best_t * BVH_BOX_GROW) continue;
+            node = stack_node[sp];
+        }
+        have = false;
+        BvhNode n = bvh_nodes[node];
+        if (n.count > 0u) {
+            next_tri = n.first;
+            end_tri = n.first + n.count;
+            continue;
+        }
+        uint l = n.first;
+        BvhNode cl = bvh_nodes[l];
+        BvhNode cr = bvh_nodes[l + 1u];
+        float tl, trr;
+        bool hl = bvh_hit_box(r, cl.lo, cl.hi, tmin, best_t, tl);
+        bool hr = bvh_hit_box(r, cr.lo, cr.hi, tmin, best_t, trr);
+        if (hl && hr) {
+            if (sp >= BVH_STACK_SIZE) break; // impossible with bvh.rs's buffers: give up (exhausted)
+            bool left_first = tl <= trr;
+            stack_node[sp] = left_first ? l + 1u : l;
+            stack_t[sp] = left_first ? trr : tl;
+            sp++;
+            hr = !left_first;
+            hl = left_first;
+        }
+        // Descend into the one child left to visit; a leaf's triangles start at once.
+        if (hl || hr) {
+            BvhNode c = hl ? cl : cr;
+            if (c.count > 0u) {
+                next_tri = c.first;
+                end_tri = c.first + c.count;
+            } else {
+                node = hl ? l : l + 1u;
+                have = true;
+            }
+        }
+    }
+    bvh_steps = steps;
+    if (!done) {
+        bvh_exhausted = true;
+        return -1.0;
+    }
+    if (!found) return -1.0;
+    tri = best_tri;
+    bary = best_bary;
+    return best_t;
+}
+
+float bvh_closest(vec3 o, vec3 d, float tmax, out uint tri, out vec2 bary) {
+    return bvh_trace(o, d, 0.0, tmax, false, tri, bary);
+}
+
+bool bvh_occluded(vec3 a, vec3 b) {
+    uint tri;
+    vec2 bary;
+    return bvh_trace(a, b - a, BVH_SHADOW_EPS, 1.0 - BVH_SHADOW_EPS, true, tri, bary) >= 0.0;
+}
+
+#endif
