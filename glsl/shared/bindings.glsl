@@ -47,6 +47,7 @@
 #define IMP_LOCAL 3
 #define IMP_GBG_SCATTER 4
 #define IMP_GBG_RESOLVE 5
+#define B_REF_SQ 28
 #define B_GBG_SUM 24
 #define B_GBG_COUNT 25
 #define FACE_RR 0

@@ -66,6 +66,8 @@ pub enum MethodArg {
     Gbg,
     /// Cosine gathering (--gather-rays) and gbg CDF sampling (--vpls) by the balance heuristic (§7.4).
     Mis,
+    /// The exact one-bounce integral: GPU path tracing against the triangles (BVH), --spp samples.
+    Reference,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,6 +137,9 @@ pub struct RenderArgs {
     /// MIS weights (--method mis).
     #[arg(long, value_enum, default_value = "consistent")]
     pub mis_weights: MisWeightsArg,
+    /// Samples per pixel of --method reference.
+    #[arg(long, default_value_t = 1024)]
+    pub spp: u32,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -271,6 +276,7 @@ fn method_of(m: MethodArg) -> Method {
         MethodArg::Local => Method::Local,
         MethodArg::Gbg => Method::Gbg,
         MethodArg::Mis => Method::Mis,
+        MethodArg::Reference => Method::Reference,
     }
 }
 
@@ -384,7 +390,9 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             MethodArg::Local => Method::Local,
             MethodArg::Gbg => Method::Gbg,
             MethodArg::Mis => Method::Mis,
+            MethodArg::Reference => Method::Reference,
         },
+        spp: a.spp,
         mis_weights: match a.mis_weights {
             MisWeightsArg::Consistent => MisWeights::Consistent,
             MisWeightsArg::Thesis => MisWeights::Thesis,
@@ -423,6 +431,13 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     let wall = t0.elapsed().as_secs_f64();
     for w in &frame.warnings {
         writeln!(err, "warning: {w}")?;
+    }
+    if let Some(se) = frame.stderr {
+        writeln!(
+            err,
+            "reference: {} spp, standard error of the mean {se:.3e} (RMS over pixels and channels)",
+            settings.spp
+        )?;
     }
     if a.validation {
         let msgs = gpu.validation().messages();

@@ -1,1 +1,517 @@
+//! The GPU BVH: the scene's triangles in a bounding volume hierarchy that shaders ray cast against
+//! (`glsl/shared/bvh.glsl`: `bvh_closest`, `bvh_occluded`), for exact visibility where the voxel march
+//! is too coarse.
+//!
+//! Owns: the flattening of the CPU reference's tree ([`FlatBvh`]) into the GPU layout, its upload
+//! ([`GpuBvh`], once per scene, read-only afterwards, so the graph does not track it), the layout mirrors
+//! ([`GpuBvhNode`], [`GpuBvhTri`]) and the constants the shaders share ([`MAX_STEPS`], [`STACK_SIZE`],
+//! the binding numbers). The traversal itself is in `bvh.glsl`, whose header is its contract.
+//!
+//! **Why the CPU tree.** [`crate::cpu_ref::Bvh`] is already a binned-SAH tree, tested against brute
+//! force; reusing its structure means the GPU and the reference it is checked against walk the same
+//! tree. Only its shape is taken: the boxes are recomputed here in f32 from the f32 vertices (min/max
+//! are exact, so a box holds its triangles exactly).
+//!
+//! **Layout** (std430, two storage buffers, bindings [`B_BVH_NODES`] and [`B_BVH_TRIS`]):
+//! * nodes: [`GpuBvhNode`] `{ vec3 lo; uint first; vec3 hi; uint count; }`, 32 bytes. A leaf
+//!   (`count > 0`) holds `tris[first .. first + count]`; an interior node (`count == 0`) has the
+//!   children `first` and `first + 1`, adjacent so that one visit reads both boxes (the traversal tests
+//!   both and descends into the nearer first). Node 0 is the root; children always come after their
+//!   parent.
+//! * tris: [`GpuBvhTri`] `{ vec3 v0; uint tri; vec3 v1; uint -; vec3 v2; uint -; }`, 48 bytes: the
+//!   three positions of scene triangle `tri` (vertices `3·tri .. 3·tri + 3`), copied in leaf order so
+//!   that a leaf is one contiguous run (coherent reads, no index indirection). The scene's vertex
+//!   buffer is not reused: its 96 bytes per triangle interleave normals and uvs the traversal never
+//!   reads. Zero-area triangles are absent (never hit, as in the CPU reference). A scene without
+//!   triangles becomes one leaf holding one degenerate triangle that nothing hits.
+//!
+//! **Depth and stack.** The traversal keeps a stack of [`STACK_SIZE`] = 64 entries, and a tree of
+//! height h (levels below the root) needs at most h. The CPU builder may go deeper on pathological
+//! input (it switches to median splits only at depth 96), so [`FlatBvh::new`] copies the CPU tree
+//! where it can and rebuilds a subtree by median splits (each halves the count, height
+//! ⌈log2(n / 2)⌉) wherever a child would otherwise be unable to fit below the limit: the result never
+//! exceeds 64 levels for any triangle count the buffers can hold. On real scenes nothing is rebuilt.
+//!
+//! **Iteration bound.** One trace runs one loop of at most [`MAX_STEPS`] iterations (one triangle
+//! test, node visit or culled pop each; see `bvh.glsl`), and never more than nodes + triangles + 1:
+//! [`GpuBvh::max_iterations_per_ray`] is the smaller of the two, an honest upper bound. llvmpipe stops
+//! every loop of an invocation after 65535 iterations in total ([`bounce_device::Gpu`]'s
+//! `loop_iteration_limit`), so a shader that traces n rays per invocation needs
+//! n · `max_iterations_per_ray()` + (its other loop iterations) ≤ the limit, and must otherwise split
+//! its rays over dispatches. A trace that reaches the bound answers "no hit" / "not occluded" and sets
+//! `bvh_exhausted`. Measured worst cases (tests/tests/bvh.rs, and once on the archive scenes): 97
+//! iterations on the Cornell box, ~600 on a 301k-triangle terrain between surface points, ~2,900 on
+//! Sibenik and ~3,600 on Conference (331k triangles) for segments between random surface points, so
+//! 16384 leaves a margin of more than 4× while still allowing 3 traces per llvmpipe invocation.
+//!
+//! **Bindings.** [`B_BVH_NODES`] = 26 and [`B_BVH_TRIS`] = 27 are defined at the top of `bvh.glsl`
+//! (guarded by `#ifndef`) until they move to `bindings.glsl`; the constants here mirror them and a
+//! test compares the two files.
 
+use crate::cpu_ref::Bvh;
+use crate::scene::Scene;
+use crate::shader_types::Vertex;
+use anyhow::{Context, Result};
+use bounce_device::{vk, Binding, Buffer, DescriptorWrites, Gpu};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::mem::{offset_of, size_of};
+
+/// Binding of the node buffer (`B_BVH_NODES` in `glsl/shared/bvh.glsl`).
+pub const B_BVH_NODES: u32 = 26;
+/// Binding of the triangle buffer (`B_BVH_TRIS` in `glsl/shared/bvh.glsl`).
+pub const B_BVH_TRIS: u32 = 27;
+/// Most loop iterations of one trace (`BVH_MAX_STEPS`); see the module doc.
+pub const MAX_STEPS: u32 = 16384;
+/// Traversal stack entries, and the most levels below the root a tree may have (`BVH_STACK_SIZE`).
+pub const STACK_SIZE: u32 = 64;
+/// The triangle index of "no hit" (`BVH_NO_TRI`).
+pub const NO_TRI: u32 = u32::MAX;
+/// Relative end epsilon of `bvh_occluded` (`BVH_SHADOW_EPS`), the CPU reference's
+/// [`crate::cpu_ref::SHADOW_EPS`].
+pub const SHADOW_EPS: f32 = crate::cpu_ref::SHADOW_EPS as f32;
+/// Triangles per leaf of a median-rebuilt subtree (the CPU builder's smallest leaf, too).
+const MEDIAN_LEAF: u32 = 2;
+
+/// A node: box `[lo, hi]`; a leaf (`count > 0`) holds `tris[first .. first + count]`, an interior node
+/// (`count == 0`) has the children `first` and `first + 1`. GLSL: `BvhNode`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBvhNode {
+    pub lo: [f32; 3],
+    pub first: u32,
+    pub hi: [f32; 3],
+    pub count: u32,
+}
+const _: () = assert!(size_of::<GpuBvhNode>() == 32);
+const _: () = assert!(offset_of!(GpuBvhNode, first) == 12);
+const _: () = assert!(offset_of!(GpuBvhNode, hi) == 16);
+const _: () = assert!(offset_of!(GpuBvhNode, count) == 28);
+
+/// A triangle's vertex positions and its scene index. GLSL: `BvhTri`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBvhTri {
+    pub v0: [f32; 3],
+    /// Scene triangle index (vertices `3·tri .. 3·tri + 3`).
+    pub tri: u32,
+    pub v1: [f32; 3],
+    pub pad1: u32,
+    pub v2: [f32; 3],
+    pub pad2: u32,
+}
+const _: () = assert!(size_of::<GpuBvhTri>() == 48);
+const _: () = assert!(offset_of!(GpuBvhTri, tri) == 12);
+const _: () = assert!(offset_of!(GpuBvhTri, v1) == 16);
+const _: () = assert!(offset_of!(GpuBvhTri, v2) == 32);
+
+impl GpuBvhTri {
+    pub fn positions(&self) -> [Vec3; 3] {
+        [Vec3::from(self.v0), Vec3::from(self.v1), Vec3::from(self.v2)]
+    }
+}
+
+impl GpuBvhNode {
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+}
+
+/// The GPU layout on the CPU: what [`GpuBvh`] uploads.
+#[derive(Clone, Debug)]
+pub struct FlatBvh {
+    pub nodes: Vec<GpuBvhNode>,
+    /// In leaf order; never empty (see the module doc for a scene without triangles).
+    pub tris: Vec<GpuBvhTri>,
+    /// Scene triangles that can be hit (`tris.len()`, or 0 for a scene without any).
+    pub triangle_count: u32,
+    /// Levels below the root (a lone root leaf: 0); at most [`STACK_SIZE`].
+    pub height: u32,
+    /// Subtrees of the CPU tree rebuilt by median splits to fit the height limit (0 on real scenes).
+    pub rebuilt_subtrees: u32,
+}
+
+/// Height of a median-split tree over `n` triangles: halve until at most [`MEDIAN_LEAF`] remain.
+fn median_height(mut n: u32) -> u32 {
+    let mut h = 0;
+    while n > MEDIAN_LEAF {
+        n = n.div_ceil(2);
+        h += 1;
+    }
+    h
+}
+
+impl FlatBvh {
+    /// The GPU layout of `bvh`, the CPU tree of the flat triangle list `vertices` (the same list it was
+    /// built from), at most [`STACK_SIZE`] levels deep.
+    pub fn new(bvh: &Bvh, vertices: &[Vertex]) -> FlatBvh {
+        FlatBvh::with_max_height(bvh, vertices, STACK_SIZE)
+    }
+
+    /// [`FlatBvh::new`] with at most `max_height` (≤ [`STACK_SIZE`]) levels below the root. Where even a
+    /// median-split tree cannot fit (more than 2^(max_height + 1) triangles, only for tiny limits), the
+    /// deepest leaves hold more triangles instead.
+    pub fn with_max_height(bvh: &Bvh, vertices: &[Vertex], max_height: u32) -> FlatBvh {
+        let max_height = max_height.min(STACK_SIZE);
+        let order = bvh.leaf_order();
+        let pos = |t: u32| {
+            let v = &vertices[3 * t as usize..3 * t as usize + 3];
+            [v[0].position(), v[1].position(), v[2].position()]
+        };
+        let gpu_tri = |t: u32| {
+            let [a, b, c] = pos(t);
+            GpuBvhTri { v0: a.into(), tri: t, v1: b.into(), pad1: 0, v2: c.into(), pad2: 0 }
+        };
+        if order.is_empty() {
+            return FlatBvh {
+                nodes: vec![GpuBvhNode { count: 1, ..Default::default() }],
+                tris: vec![GpuBvhTri { tri: NO_TRI, ..Default::default() }],
+                triangle_count: 0,
+                height: 0,
+                rebuilt_subtrees: 0,
+            };
+        }
+
+        // Triangle count and first position in `order` of every CPU subtree (children come after their
+        // parent, so one reverse sweep; a left child's range directly precedes its sibling's).
+        let n = bvh.node_count();
+        let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
+        for i in (0..n).rev() {
+            let (first, c) = bvh.node_links(i);
+            if c > 0 {
+                (count[i], start[i]) = (c, first);
+            } else {
+                let l = first as usize;
+                (count[i], start[i]) = (count[l] + count[l + 1], start[l]);
+            }
+        }
+        let fits = |depth: u32, tris: u32| depth + median_height(tris) <= max_height;
+
+        // Triangles of a rebuilt range are permuted in `items` (a copy of `order`; CPU leaves read the
+        // same positions, which no rebuild of another subtree touches).
+        let mut items = order.to_vec();
+        let centroid = |t: u32| {
+            let [a, b, c] = pos(t);
+            (a.min(b).min(c) + a.max(b).max(c)) * 0.5
+        };
+        enum Src {
+            Cpu(usize),
+            Range(usize, usize),
+        }
+        let mut nodes = vec![GpuBvhNode::default()];
+        let mut tris: Vec<GpuBvhTri> = Vec::with_capacity(order.len());
+        let (mut height, mut rebuilt) = (0, 0);
+        let mut work = vec![(Src::Cpu(0), 0usize, 0u32)];
+        while let Some((src, slot, depth)) = work.pop() {
+            height = height.max(depth);
+            let (s, e) = match src {
+                Src::Cpu(i) => {
+                    let (first, c) = bvh.node_links(i);
+                    if c > 0 {
+                        (first as usize, (first + c) as usize)
+                    } else {
+                        let l = first as usize;
+                        if fits(depth + 1, count[l]) && fits(depth + 1, count[l + 1]) {
+                            let left = nodes.len();
+                            nodes.push(GpuBvhNode::default());
+                            nodes.push(GpuBvhNode::default());
+                            nodes[slot].first = left as u32;
+                            work.push((Src::Cpu(l + 1), left + 1, depth + 1));
+                            work.push((Src::Cpu(l), left, depth + 1));
+                            continue;
+                        }
+                        rebuilt += 1;
+                        let s = start[i] as usize;
+                        work.push((Src::Range(s, s + count[i] as usize), slot, depth));
+                        continue;
+                    }
+                }
+                Src::Range(s, e) => {
+                    if e - s > MEDIAN_LEAF as usize && depth < max_height {
+                        // Median split along the widest axis of the centroids.
+                        let range = &mut items[s..e];
+                        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                        for &t in range.iter() {
+                            lo = lo.min(centroid(t));
+                            hi = hi.max(centroid(t));
+                        }
+                        let ext = hi - lo;
+                        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                            0
+                        } else if ext.y >= ext.z {
+                            1
+                        } else {
+                            2
+                        };
+                        let m = range.len() / 2;
+                        range.select_nth_unstable_by(m, |&a, &b| {
+                            centroid(a)[axis].total_cmp(&centroid(b)[axis]).then(a.cmp(&b))
+                        });
+                        let left = nodes.len();
+                        nodes.push(GpuBvhNode::default());
+                        nodes.push(GpuBvhNode::default());
+                        nodes[slot].first = left as u32;
+                        work.push((Src::Range(s + m, e), left + 1, depth + 1));
+                        work.push((Src::Range(s, s + m), left, depth + 1));
+                        continue;
+                    }
+                    (s, e)
+                }
+            };
+            // A leaf: its triangles, appended in order.
+            nodes[slot].first = tris.len() as u32;
+            nodes[slot].count = (e - s) as u32;
+            tris.extend(items[s..e].iter().map(|&t| gpu_tri(t)));
+        }
+
+        // Boxes, bottom-up (children come after their parent).
+        for i in (0..nodes.len()).rev() {
+            let nd = nodes[i];
+            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            if nd.is_leaf() {
+                for t in &tris[nd.first as usize..(nd.first + nd.count) as usize] {
+                    for p in t.positions() {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                }
+            } else {
+                for c in &nodes[nd.first as usize..nd.first as usize + 2] {
+                    lo = lo.min(Vec3::from(c.lo));
+                    hi = hi.max(Vec3::from(c.hi));
+                }
+            }
+            nodes[i].lo = lo.into();
+            nodes[i].hi = hi.into();
+        }
+        let triangle_count = tris.len() as u32;
+        FlatBvh { nodes, tris, triangle_count, height, rebuilt_subtrees: rebuilt }
+    }
+
+    /// An upper bound of the loop iterations of one trace (see the module doc).
+    pub fn max_iterations_per_ray(&self) -> u32 {
+        let walk = self.nodes.len() as u64 + self.tris.len() as u64 + 1;
+        walk.min(MAX_STEPS as u64) as u32
+    }
+}
+
+/// The BVH on the GPU: uploaded once, read-only afterwards.
+pub struct GpuBvh {
+    /// [`GpuBvhNode`]s, binding [`B_BVH_NODES`].
+    pub nodes: Buffer,
+    /// [`GpuBvhTri`]s in leaf order, binding [`B_BVH_TRIS`].
+    pub tris: Buffer,
+    pub node_count: u32,
+    /// Scene triangles that can be hit (zero-area ones excluded).
+    pub triangle_count: u32,
+    /// Levels below the root (≤ [`STACK_SIZE`]).
+    pub height: u32,
+    max_iterations: u32,
+}
+
+impl GpuBvh {
+    /// Builds the CPU reference tree of `scene` (binned SAH), flattens and uploads it.
+    pub fn new(gpu: &Gpu, scene: &Scene) -> Result<GpuBvh> {
+        let bvh = Bvh::new(scene);
+        GpuBvh::upload(gpu, &FlatBvh::new(&bvh, &scene.vertices))
+    }
+
+    /// Uploads a flattened tree (for a CPU tree the caller already has, or a custom height limit).
+    pub fn upload(gpu: &Gpu, flat: &FlatBvh) -> Result<GpuBvh> {
+        anyhow::ensure!(flat.height <= STACK_SIZE, "BVH of height {} exceeds the stack ({STACK_SIZE})", flat.height);
+        let max_range = gpu.limits().max_storage_buffer_range as u64;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let up = |name: &str, bytes: &[u8]| {
+            anyhow::ensure!(
+                bytes.len() as u64 <= max_range,
+                "the {name} buffer ({} bytes) exceeds the device limit maxStorageBufferRange ({max_range} bytes)",
+                bytes.len()
+            );
+            Buffer::with_data(gpu, name, storage, bytes).with_context(|| format!("uploading {name}"))
+        };
+        Ok(GpuBvh {
+            nodes: up("bvh nodes", bytemuck::cast_slice(&flat.nodes))?,
+            tris: up("bvh triangles", bytemuck::cast_slice(&flat.tris))?,
+            node_count: flat.nodes.len() as u32,
+            triangle_count: flat.triangle_count,
+            height: flat.height,
+            max_iterations: flat.max_iterations_per_ray(),
+        })
+    }
+
+    /// An honest upper bound of the loop iterations one `bvh_closest` / `bvh_occluded` / `bvh_trace`
+    /// call takes: min([`MAX_STEPS`], nodes + triangles + 1). Budget llvmpipe's per-invocation limit
+    /// with it (module doc).
+    pub fn max_iterations_per_ray(&self) -> u32 {
+        self.max_iterations
+    }
+
+    /// The two descriptor bindings, for pipeline layouts.
+    pub fn bindings() -> [Binding; 2] {
+        [Binding::storage_buffer(B_BVH_NODES), Binding::storage_buffer(B_BVH_TRIS)]
+    }
+
+    /// `w` with the two buffers bound.
+    pub fn writes(&self, w: DescriptorWrites) -> DescriptorWrites {
+        w.storage_buffer(B_BVH_NODES, &self.nodes).storage_buffer(B_BVH_TRIS, &self.tris)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+    use crate::scene::point_light;
+    use std::collections::HashSet;
+
+    fn scene_of(tris: &[[Vec3; 3]]) -> Scene {
+        let camera = Camera { eye: Vec3::new(0.0, 0.0, 10.0), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0 };
+        Scene::from_triangles(tris, &vec![Vec3::splat(0.5); tris.len()], camera, &[point_light(Vec3::ONE, Vec3::ONE)])
+    }
+
+    /// A deterministic soup of small random triangles plus a degenerate one (index `n`).
+    fn soup(n: usize) -> Vec<[Vec3; 3]> {
+        let mut s = 0x1234_5678_9abc_def1u64;
+        let mut r = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut tris: Vec<[Vec3; 3]> = (0..n)
+            .map(|_| {
+                let c = Vec3::new(r(), r(), r()) * 10.0;
+                [0, 1, 2].map(|_| c + Vec3::new(r(), r(), r()) - 0.5)
+            })
+            .collect();
+        tris.push([Vec3::ONE; 3]);
+        tris
+    }
+
+    /// The invariants the traversal relies on, whatever the height limit.
+    fn check(flat: &FlatBvh, scene: &Scene, max_height: u32) {
+        let tris: Vec<[Vec3; 3]> =
+            scene.vertices.chunks_exact(3).map(|v| [v[0].position(), v[1].position(), v[2].position()]).collect();
+        let hittable: HashSet<u32> = (0..tris.len() as u32)
+            .filter(|&t| {
+                let [a, b, c] = tris[t as usize];
+                let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+                (b - a).cross(c - a) != glam::DVec3::ZERO
+            })
+            .collect();
+        // Every hittable triangle exactly once, with its own positions.
+        let seen: Vec<u32> = flat.tris.iter().map(|t| t.tri).collect();
+        assert_eq!(seen.len(), hittable.len());
+        assert_eq!(seen.iter().copied().collect::<HashSet<_>>(), hittable);
+        for t in &flat.tris {
+            assert_eq!(t.positions(), tris[t.tri as usize]);
+        }
+        // Walk: children after their parent and inside its box, leaves cover the triangle array once,
+        // depths within the limit.
+        let mut covered = vec![false; flat.tris.len()];
+        let mut stack = vec![(0usize, 0u32)];
+        let mut max_depth = 0;
+        let mut visited = 0;
+        while let Some((i, depth)) = stack.pop() {
+            visited += 1;
+            max_depth = max_depth.max(depth);
+            let n = flat.nodes[i];
+            let (lo, hi) = (Vec3::from(n.lo), Vec3::from(n.hi));
+            if n.is_leaf() {
+                for k in n.first..n.first + n.count {
+                    assert!(!covered[k as usize], "triangle slot {k} in two leaves");
+                    covered[k as usize] = true;
+                    for p in flat.tris[k as usize].positions() {
+                        assert!(p.cmpge(lo).all() && p.cmple(hi).all(), "node {i} misses a vertex of its leaf");
+                    }
+                }
+            } else {
+                let l = n.first as usize;
+                assert!(l > i && l + 1 < flat.nodes.len(), "node {i}: children {l}, {}", l + 1);
+                for c in [l, l + 1] {
+                    let cn = flat.nodes[c];
+                    assert!(Vec3::from(cn.lo).cmpge(lo).all() && Vec3::from(cn.hi).cmple(hi).all());
+                    stack.push((c, depth + 1));
+                }
+            }
+        }
+        assert_eq!(visited, flat.nodes.len(), "every node reachable once");
+        assert!(covered.iter().all(|&c| c));
+        assert_eq!(max_depth, flat.height);
+        assert!(flat.height <= max_height.min(STACK_SIZE), "height {} > {max_height}", flat.height);
+        assert_eq!(flat.triangle_count as usize, hittable.len());
+        let bound = (flat.nodes.len() + flat.tris.len() + 1).min(MAX_STEPS as usize) as u32;
+        assert_eq!(flat.max_iterations_per_ray(), bound);
+    }
+
+    #[test]
+    fn flattening_keeps_the_cpu_tree_and_every_triangle() {
+        let scene = scene_of(&soup(3000));
+        let bvh = Bvh::new(&scene);
+        let flat = FlatBvh::new(&bvh, &scene.vertices);
+        check(&flat, &scene, STACK_SIZE);
+        // Nothing rebuilt: the GPU tree has the CPU tree's shape.
+        assert_eq!(flat.rebuilt_subtrees, 0);
+        assert_eq!(flat.nodes.len(), bvh.node_count());
+        assert_eq!(flat.triangle_count, 3000);
+    }
+
+    #[test]
+    fn height_limits_rebuild_subtrees_and_never_exceed_the_limit() {
+        let scene = scene_of(&soup(3000));
+        let bvh = Bvh::new(&scene);
+        let full = FlatBvh::new(&bvh, &scene.vertices);
+        assert!(full.height > 12, "the soup's SAH tree is {} deep; the test needs a deeper one", full.height);
+        // 3000 triangles need 11 median levels: limits 11..=full.height − 1 rebuild part of the tree.
+        for limit in [11, 12, full.height - 1] {
+            let flat = FlatBvh::with_max_height(&bvh, &scene.vertices, limit);
+            check(&flat, &scene, limit);
+            assert!(flat.rebuilt_subtrees > 0, "limit {limit}");
+        }
+        // Below what median splits need: fat leaves at the limit, still every triangle once.
+        for limit in [0, 1, 4] {
+            let flat = FlatBvh::with_max_height(&bvh, &scene.vertices, limit);
+            check(&flat, &scene, limit);
+            assert_eq!(flat.height, limit);
+        }
+        assert_eq!(median_height(0), 0);
+        assert_eq!(median_height(2), 0);
+        assert_eq!(median_height(3), 1);
+        assert_eq!(median_height(3000), 11);
+        assert_eq!(median_height(u32::MAX), 31);
+    }
+
+    #[test]
+    fn an_empty_scene_is_one_leaf_that_nothing_hits() {
+        let scene = scene_of(&[[Vec3::ZERO, Vec3::X, Vec3::X * 2.0]]); // collinear: zero area
+        let flat = FlatBvh::new(&Bvh::new(&scene), &scene.vertices);
+        assert_eq!(flat.nodes, vec![GpuBvhNode { count: 1, ..Default::default() }]);
+        assert_eq!(flat.tris.len(), 1);
+        assert_eq!(flat.tris[0].positions(), [Vec3::ZERO; 3]);
+        assert_eq!(flat.tris[0].tri, NO_TRI);
+        assert_eq!(flat.triangle_count, 0);
+        assert_eq!(flat.max_iterations_per_ray(), 3);
+    }
+
+    #[test]
+    fn glsl_constants_match() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../glsl/shared/bvh.glsl");
+        let src = std::fs::read_to_string(&path).expect("glsl/shared/bvh.glsl");
+        let define = |name: &str| -> String {
+            src.lines()
+                .filter_map(|l| {
+                    let mut it = l.split_whitespace();
+                    (it.next() == Some("#define") && it.next() == Some(name)).then(|| it.next().unwrap().to_string())
+                })
+                .next()
+                .unwrap_or_else(|| panic!("#define {name} not in bvh.glsl"))
+        };
+        assert_eq!(define("B_BVH_NODES"), B_BVH_NODES.to_string());
+        assert_eq!(define("B_BVH_TRIS"), B_BVH_TRIS.to_string());
+        assert_eq!(define("BVH_MAX_STEPS"), MAX_STEPS.to_string());
+        assert_eq!(define("BVH_STACK_SIZE"), STACK_SIZE.to_string());
+        assert_eq!(define("BVH_NO_TRI"), format!("0x{NO_TRI:X}u"));
+        assert!(src.contains("const float BVH_SHADOW_EPS = 1e-4;"));
+        assert_eq!(SHADOW_EPS, 1e-4);
+    }
+}

@@ -53,6 +53,8 @@ pub enum Method {
     Gbg,
     /// Thesis §7.4: cosine gathering and gbg CDF sampling combined by the balance heuristic.
     Mis,
+    /// The exact one-bounce integral (BVH path tracing, `spp` samples): the ground truth.
+    Reference,
 }
 
 /// Which MIS weights (`Method::Mis`).
@@ -74,6 +76,7 @@ impl Method {
             Method::Local => "local",
             Method::Gbg => "gbg",
             Method::Mis => "mis",
+            Method::Reference => "reference",
         }
     }
 }
@@ -115,6 +118,8 @@ pub struct FrameSettings {
     pub defensive: f32,
     pub face: FaceMode,
     pub mis_weights: MisWeights,
+    /// Samples per pixel of the reference integrator.
+    pub spp: u32,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
     /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
@@ -144,6 +149,7 @@ impl Default for FrameSettings {
             defensive: 0.1,
             face: FaceMode::RussianRoulette,
             mis_weights: MisWeights::Consistent,
+            spp: 1024,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
@@ -170,6 +176,9 @@ impl FrameSettings {
         }
         if self.vpls == 0 {
             bail!("the VPL count must be at least 1");
+        }
+        if self.spp == 0 {
+            bail!("--spp must be at least 1");
         }
         if !(1..=1024).contains(&self.voxels) {
             bail!("voxels must be between 1 and 1024 (got {})", self.voxels);
@@ -223,6 +232,10 @@ pub struct Renderer {
     cdf_reduce: CdfReduce,
     gather: Gather,
     mis: Gather,
+    reference: crate::passes::reference::Reference,
+    /// The scene's triangles, kept for the BVH (built on first use by the reference).
+    vertices: Vec<crate::shader_types::Vertex>,
+    bvh: std::cell::OnceCell<crate::bvh::GpuBvh>,
     voxel_state: RefCell<Option<VoxelState>>,
 }
 
@@ -238,6 +251,9 @@ pub struct FrameOutput {
     pub skipped: Vec<&'static str>,
     /// Things the user should know about this frame (e.g. an all-zero importance).
     pub warnings: Vec<String>,
+    /// The reference integrator's own Monte Carlo error: the RMS over pixels and channels of the standard
+    /// error of the mean (indirect component only).
+    pub stderr: Option<f64>,
 }
 
 impl FrameOutput {
@@ -359,6 +375,9 @@ impl Renderer {
             cdf_reduce: CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,
             gather: Gather::new(gpu).context("creating the gather pass")?,
             mis: crate::passes::mis::create(gpu).context("creating the mis pass")?,
+            reference: crate::passes::reference::Reference::new(gpu).context("creating the reference pass")?,
+            vertices: scene.vertices.clone(),
+            bvh: std::cell::OnceCell::new(),
             voxel_state: RefCell::new(None),
         })
     }
@@ -392,7 +411,7 @@ impl Renderer {
         let c_ref = i_max * 4.0 * (2.0 / s.dprsm_res as f32).powi(2) / (std::f32::consts::PI.powi(2) * min_d * min_d);
         ImportanceParams {
             kind: match s.method {
-                Method::Uniform | Method::All => ImportanceKind::Uniform,
+                Method::Uniform | Method::All | Method::Reference => ImportanceKind::Uniform,
                 Method::Global => ImportanceKind::Global,
                 Method::Stratified => ImportanceKind::Stratified,
                 Method::Local => ImportanceKind::Local { side: (s.regions as f64).sqrt().round() as u32 },
@@ -534,6 +553,9 @@ impl Renderer {
 
     pub fn render_with_progress(&self, s: &FrameSettings, progress: &mut dyn FnMut(u64, u64)) -> Result<FrameOutput> {
         self.check(s)?;
+        if s.method == Method::Reference && s.component != Component::Direct {
+            return self.render_reference(s, progress);
+        }
         self.ensure_voxels(s)?;
         let uniforms = self.uniform_buffer(s)?;
         let f = self.frame_inputs(s, &uniforms);
@@ -637,6 +659,7 @@ impl Renderer {
             ran,
             skipped,
             warnings,
+            stderr: None,
         })
     }
 
@@ -646,6 +669,98 @@ impl Renderer {
         let Some(v) = st.as_ref().filter(|v| v.built) else { return Ok(None) };
         let bytes = v.buffer.res.read_back(v.buffer.last_access())?;
         Ok(Some((self.voxel_spec(&FrameSettings { voxels: v.voxels, ..FrameSettings::default() }), bytes)))
+    }
+
+    /// The BVH of the scene, built on first use.
+    pub fn bvh(&self) -> Result<&crate::bvh::GpuBvh> {
+        if self.bvh.get().is_none() {
+            let cpu = crate::cpu_ref::Bvh::from_vertices(&self.vertices);
+            let flat = crate::bvh::FlatBvh::new(&cpu, &self.vertices);
+            let _ = self.bvh.set(crate::bvh::GpuBvh::upload(&self.gpu, &flat).context("uploading the BVH")?);
+        }
+        Ok(self.bvh.get().expect("set above"))
+    }
+
+    /// The exact one-bounce integral by GPU path tracing (`--method reference`): `s.spp` cosine bounce
+    /// samples per pixel in chunks (one submission each, `progress` between them), with its own standard
+    /// error in [`FrameOutput::stderr`].
+    fn render_reference(&self, s: &FrameSettings, progress: &mut dyn FnMut(u64, u64)) -> Result<FrameOutput> {
+        use crate::passes::reference::{Reference, ReferenceIo};
+        let bvh = self.bvh()?;
+        let uniforms = self.uniform_buffer(s)?;
+        let f = self.frame_inputs(s, &uniforms);
+        let combined = s.component == Component::Combined;
+        let mut g = Graph::new(&self.gpu);
+        let gb = self.gbuffer.add(&mut g, f);
+        let direct = combined.then(|| {
+            let shadow = self.dprsm.add_depth(&mut g, f);
+            self.direct.add(&mut g, f, &gb, &shadow)
+        });
+        let mut keep = vec![gb.position, gb.normal, gb.albedo];
+        keep.extend(direct);
+        for h in &keep {
+            g.export(h);
+        }
+        let mut done = g.execute()?;
+        let mut timings = done.timings.clone();
+        let mut ran = done.ran.clone();
+        let skipped = done.skipped.clone();
+        let kept: Vec<Persistent<Image>> = keep.iter().map(|h| done.take_image(h)).collect::<Result<_>>()?;
+        drop(done);
+        let sum = Persistent::new(Image::new(&self.gpu, &radiance_desc("reference.sum", s.width, s.height))?);
+        let sq = Persistent::new(Image::new(&self.gpu, &radiance_desc("reference.sq", s.width, s.height))?);
+        let per_dispatch = Reference::per_dispatch(&self.gpu, bvh, self.scene.light_count);
+        // Enough samples per submission to keep the GPU busy, few enough for a live progress bar.
+        let per_submit = per_dispatch.saturating_mul(4).clamp(1, 64);
+        let mut first = 0u32;
+        let (sum_bytes, sq_bytes) = loop {
+            let last = first.saturating_add(per_submit).min(s.spp);
+            let mut g = Graph::new(&self.gpu);
+            let imported: Vec<Handle<Image>> = kept.iter().map(|p| g.import_image(p)).collect();
+            let io = ReferenceIo {
+                g_position: imported[0],
+                g_normal: imported[1],
+                g_albedo: imported[2],
+                direct: imported.get(3).copied(),
+            };
+            let (mut hs, mut hq) = (g.import_image(&sum), g.import_image(&sq));
+            let push = GatherPush {
+                samples: s.spp,
+                seed: seed32(s.seed),
+                first,
+                last,
+                accumulate: (first > 0) as u32,
+                add_direct: (first == 0 && combined) as u32,
+                ..GatherPush::default()
+            };
+            self.reference.add(&mut g, f, bvh, io, &mut hs, &mut hq, push, per_dispatch);
+            g.export(&hs);
+            g.export(&hq);
+            let d = g.execute()?;
+            timings.extend(d.timings.iter().cloned());
+            ran.extend(d.ran.iter().copied());
+            progress(last as u64, s.spp as u64);
+            first = last;
+            if first >= s.spp {
+                break (d.read_image(&hs)?, d.read_image(&hq)?);
+            }
+        };
+        let radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&sum_bytes);
+        let second: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&sq_bytes);
+        // Standard error of the mean per pixel and channel, sqrt((E[L²] − E[L]²) / (N − 1)), for the
+        // indirect component (the combined image's mean also holds the exact direct light).
+        let n = s.spp.max(2) as f64;
+        let (mut se2, mut count) = (0.0f64, 0usize);
+        if !combined {
+            for (m, q) in radiance.iter().zip(&second) {
+                for c in 0..3 {
+                    se2 += ((q[c] as f64 - (m[c] as f64).powi(2)).max(0.0)) / (n - 1.0);
+                    count += 1;
+                }
+            }
+        }
+        let stderr = (count > 0).then(|| (se2 / count as f64).sqrt());
+        Ok(FrameOutput { width: s.width, height: s.height, radiance, timings, ran, skipped, warnings: vec![], stderr })
     }
 
     /// Render one product of the dual paraboloid maps alone (for tests and diagnostics).

@@ -1,0 +1,47 @@
+#version 460
+// Test kernel: the BVH traversal of glsl/shared/bvh.glsl, one invocation per query, exactly as a pass calls it.
+// tests/tests/bvh.rs compares the results with the CPU reference (crates/graph/src/cpu_ref.rs). Bindings: the
+// BVH at B_BVH_NODES / B_BVH_TRIS, the queries at 28 and the results at 29 (test-only numbers, as in
+// voxel_march.comp). Each invocation makes three traces (closest, occluded, and the any-hit trace behind
+// occluded again for its triangle), so it loops at most 3 · BVH_MAX_STEPS + 3 = 49155 < 65535 times.
+#include "../shared/bvh.glsl"
+
+layout(local_size_x = 64) in;
+
+struct Query {
+    vec4 o; // xyz: ray origin, w: tmax
+    vec4 d; // xyz: ray direction
+    vec4 a; // xyz: segment start
+    vec4 b; // xyz: segment end
+};
+
+struct Result {
+    float t;        // bvh_closest
+    uint tri;
+    vec2 bary;
+    uint occluded;  // bvh_occluded
+    uint occ_tri;   // the triangle the any-hit trace of the segment stopped at (BVH_NO_TRI if none)
+    float occ_t;
+    uint steps;     // loop iterations of bvh_closest
+    uint occ_steps; // loop iterations of bvh_occluded
+    uint exhausted; // bit 0: bvh_closest gave up, bit 1: bvh_occluded did
+};
+
+layout(std430, set = 0, binding = 28) readonly buffer Queries { Query queries[]; };
+layout(std430, set = 0, binding = 29) writeonly buffer Results { Result results[]; };
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= uint(queries.length())) return;
+    Query q = queries[i];
+    Result r;
+    r.t = bvh_closest(q.o.xyz, q.d.xyz, q.o.w, r.tri, r.bary);
+    r.steps = bvh_steps;
+    r.exhausted = bvh_exhausted ? 1u : 0u;
+    r.occluded = bvh_occluded(q.a.xyz, q.b.xyz) ? 1u : 0u;
+    r.occ_steps = bvh_steps;
+    r.exhausted |= bvh_exhausted ? 2u : 0u;
+    vec2 unused;
+    r.occ_t = bvh_trace(q.a.xyz, q.b.xyz - q.a.xyz, BVH_SHADOW_EPS, 1.0 - BVH_SHADOW_EPS, true, r.occ_tri, unused);
+    results[i] = r;
+}
