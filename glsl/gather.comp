@@ -6,6 +6,9 @@
 // VPL estimate. See crates/graph/src/passes/gather.rs for the sampling mixture.
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
+#ifdef EXACT_VISIBILITY
+#include "shared/bvh.glsl"
+#endif
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 layout(push_constant) uniform Push { GatherPush pc; };

@@ -18,6 +18,9 @@
 // MIS_CONSISTENT or MIS_THESIS; `rays` n_g). Dispatch ⌈W/8⌉ × ⌈H/8⌉.
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
+#ifdef EXACT_VISIBILITY
+#include "shared/bvh.glsl"
+#endif
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 layout(push_constant) uniform Push { GatherPush pc; };

@@ -1,7 +1,9 @@
 //! Compiles every shader under `glsl/` (`*.vert`, `*.geom`, `*.frag`, `*.comp`, also in `glsl/test/`) to
 //! SPIR-V with shaderc (glslang) into OUT_DIR, and writes `shaders.rs` (one `pub const` of SPIR-V bytes per
 //! file) and `bindings.rs` (every `#define NAME <integer>` of `glsl/shared/bindings.glsl` as a Rust
-//! `pub const NAME: u32`). A GLSL error fails `cargo build` with file:line.
+//! `pub const NAME: u32`). A GLSL error fails `cargo build` with file:line. A file whose first line is
+//! `// variant: <base file> <MACRO>...` is compiled as the base shader with those macros defined (one
+//! source, several SPIR-V variants, e.g. `gather.exact.comp`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -58,9 +60,21 @@ fn main() {
             "frag" => shaderc::ShaderKind::Fragment,
             _ => shaderc::ShaderKind::Compute,
         };
-        let src = std::fs::read_to_string(f).unwrap();
+        let mut src = std::fs::read_to_string(f).unwrap();
         let rel = f.strip_prefix(glsl.parent().unwrap()).unwrap_or(f).display().to_string();
-        match compiler.compile_into_spirv(&src, kind, &f.display().to_string(), "main", Some(&options)) {
+        let mut opts = options.clone();
+        let mut source_path = f.clone();
+        if let Some(rest) = src.lines().next().and_then(|l| l.strip_prefix("// variant:")) {
+            let mut words = rest.split_whitespace();
+            let base = f.with_file_name(words.next().expect("variant: base file"));
+            for m in words {
+                opts.add_macro_definition(m, None);
+            }
+            src = std::fs::read_to_string(&base)
+                .unwrap_or_else(|e| panic!("{}: variant base {}: {e}", f.display(), base.display()));
+            source_path = base;
+        }
+        match compiler.compile_into_spirv(&src, kind, &source_path.display().to_string(), "main", Some(&opts)) {
             Ok(a) => {
                 let stem = f.file_name().unwrap().to_str().unwrap().replace('.', "_").to_uppercase();
                 let spv = out.join(format!("{}.spv", f.file_name().unwrap().to_str().unwrap()));

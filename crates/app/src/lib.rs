@@ -11,7 +11,7 @@ pub mod plot;
 
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions};
-use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, MisWeights, Renderer};
+use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, MisWeights, Renderer, Visibility};
 use bounce_graph::scene::Scene;
 use clap::{Parser, Subcommand, ValueEnum};
 use output::RgbImage;
@@ -68,6 +68,12 @@ pub enum MethodArg {
     Mis,
     /// The exact one-bounce integral: GPU path tracing against the triangles (BVH), --spp samples.
     Reference,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VisibilityArg {
+    Voxel,
+    Exact,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -140,6 +146,9 @@ pub struct RenderArgs {
     /// Samples per pixel of --method reference.
     #[arg(long, default_value_t = 1024)]
     pub spp: u32,
+    /// Visibility of the VPL gather: the voxel march, or exact shadow rays against the triangles.
+    #[arg(long, value_enum, default_value = "voxel")]
+    pub visibility: VisibilityArg,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -393,6 +402,10 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             MethodArg::Reference => Method::Reference,
         },
         spp: a.spp,
+        visibility: match a.visibility {
+            VisibilityArg::Voxel => Visibility::Voxel,
+            VisibilityArg::Exact => Visibility::Exact,
+        },
         mis_weights: match a.mis_weights {
             MisWeightsArg::Consistent => MisWeights::Consistent,
             MisWeightsArg::Thesis => MisWeights::Thesis,
@@ -459,6 +472,8 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         ("vpls", settings.vpls.to_string()),
         ("voxels", settings.voxels.to_string()),
         ("clamp", settings.clamp.to_string()),
+        ("visibility", format!("{:?}", settings.visibility).to_lowercase()),
+        ("spp", settings.spp.to_string()),
         ("seed", a.seed.to_string()),
         ("device", gpu.name.clone()),
         ("gpu_ms", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())),

@@ -57,6 +57,15 @@ pub enum Method {
     Reference,
 }
 
+/// How the VPL gather tests visibility.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Visibility {
+    /// Amanatides–Woo march through the voxel grid (the thesis).
+    Voxel,
+    /// Shadow rays against the triangles (BVH): separates the voxel error from the rest.
+    Exact,
+}
+
 /// Which MIS weights (`Method::Mis`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MisWeights {
@@ -120,6 +129,7 @@ pub struct FrameSettings {
     pub mis_weights: MisWeights,
     /// Samples per pixel of the reference integrator.
     pub spp: u32,
+    pub visibility: Visibility,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
     /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
@@ -150,6 +160,7 @@ impl Default for FrameSettings {
             face: FaceMode::RussianRoulette,
             mis_weights: MisWeights::Consistent,
             spp: 1024,
+            visibility: Visibility::Voxel,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
@@ -392,7 +403,10 @@ impl Renderer {
         // Sampling adds loops over the CDF sections and, with uniform face choice, over the faces.
         let sections = 1 + self.importance_params(s).kind.method_sections();
         let faces = 2 * self.scene.light_count;
-        let march = dims.x + dims.y + dims.z + 3;
+        let march = match (s.visibility, self.bvh.get()) {
+            (Visibility::Exact, Some(b)) => b.max_iterations_per_ray(),
+            _ => dims.x + dims.y + dims.z + 3,
+        };
         let per_vpl = march + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
         // A MIS gathering ray marches once per light to find its VPL and once more for visibility.
         let per_vpl =
@@ -467,6 +481,7 @@ impl Renderer {
     /// The per-frame inputs every pass reads, for settings `s` and their uniform buffer.
     fn frame_inputs<'a>(&'a self, s: &FrameSettings, uniforms: &'a Buffer) -> FrameInputs<'a> {
         FrameInputs {
+            bvh: if s.visibility == Visibility::Exact { self.bvh.get() } else { None },
             scene: &self.scene,
             uniforms,
             width: s.width,
@@ -553,6 +568,9 @@ impl Renderer {
 
     pub fn render_with_progress(&self, s: &FrameSettings, progress: &mut dyn FnMut(u64, u64)) -> Result<FrameOutput> {
         self.check(s)?;
+        if s.visibility == Visibility::Exact {
+            self.bvh()?;
+        }
         if s.method == Method::Reference && s.component != Component::Direct {
             return self.render_reference(s, progress);
         }

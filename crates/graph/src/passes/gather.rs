@@ -29,6 +29,8 @@ use bounce_device::{Binding, Buffer, ComputePipeline, Gpu, Image, Sampler};
 pub struct Gather {
     name: &'static str,
     pipeline: ComputePipeline,
+    /// The `--visibility exact` variant (shadow rays against the BVH).
+    exact: ComputePipeline,
     sampler: Sampler,
 }
 
@@ -85,11 +87,12 @@ impl GatherInputs {
 
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
-        Self::with_shader(gpu, "gather", shaders::GATHER_COMP)
+        Self::with_shaders(gpu, "gather", shaders::GATHER_COMP, shaders::GATHER_EXACT_COMP)
     }
 
-    /// A gather-shaped pass (same bindings and push constants) running another shader: `mis`.
-    pub fn with_shader(gpu: &Gpu, name: &'static str, spirv: &[u8]) -> Result<Self> {
+    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. `exact` is
+    /// the variant with exact visibility, which also binds the BVH.
+    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: &[u8], exact: &[u8]) -> Result<Self> {
         let mut bindings = scene_bindings();
         bindings.extend([
             Binding::sampled_image(B_GATHER_GPOSITION),
@@ -104,15 +107,11 @@ impl Gather {
             Binding::sampled_image(B_GATHER_DIRECT),
             Binding::storage_image(B_GATHER_OUT),
         ]);
-        let pipeline = ComputePipeline::new(
-            gpu,
-            name,
-            &crate::spirv(spirv),
-            &bindings,
-            std::mem::size_of::<GatherPush>() as u32,
-            &[],
-        )?;
-        Ok(Gather { name, pipeline, sampler: Sampler::nearest(gpu)? })
+        let push = std::mem::size_of::<GatherPush>() as u32;
+        let pipeline = ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &[])?;
+        bindings.extend(crate::bvh::GpuBvh::bindings());
+        let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
+        Ok(Gather { name, pipeline, exact, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
@@ -161,6 +160,10 @@ impl Gather {
                 .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
+            let (pipeline, writes) = match f.bvh {
+                Some(bvh) => (&self.exact, bvh.writes(writes)),
+                None => (&self.pipeline, writes),
+            };
             let chunk = f.vpls_per_dispatch.max(1);
             let mut first = push.first;
             loop {
@@ -176,13 +179,7 @@ impl Gather {
                     // The next chunk adds to what the previous one stored.
                     sync::image_barrier(ctx.gpu, ctx.cmd, ctx.image(&o), Access::ComputeWrite, Access::ComputeWrite);
                 }
-                self.pipeline.dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&p),
-                    [f.width, f.height, 1],
-                    [WG_2D, WG_2D, 1],
-                );
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
                 first = last;
                 if first >= push.last {
                     break;

@@ -15,5 +15,5 @@ use bounce_device::Gpu;
 
 /// The `mis` pass: the gather's recording with `glsl/mis.comp`.
 pub fn create(gpu: &Gpu) -> Result<Gather> {
-    Gather::with_shader(gpu, "mis", shaders::MIS_COMP)
+    Gather::with_shaders(gpu, "mis", shaders::MIS_COMP, shaders::MIS_EXACT_COMP)
 }

@@ -25,6 +25,9 @@ pub struct FrameInputs<'a> {
     pub shadow_res: u32,
     /// Resolution per face of the reflective DPRSM (the VPLs).
     pub dprsm_res: u32,
+    /// The scene's BVH when the gather tests visibility with exact shadow rays (`--visibility exact`);
+    /// `None`: the voxel march.
+    pub bvh: Option<&'a crate::bvh::GpuBvh>,
     /// VPLs one gather dispatch may evaluate per pixel, so that no invocation exceeds the driver's loop
     /// iteration limit (`Gpu::loop_iteration_limit`); `u32::MAX` where there is none.
     pub vpls_per_dispatch: u32,
