@@ -372,7 +372,22 @@ fn compare(what: &str, mesh: &Mesh, cpu: &Bvh, queries: &[Query], res: &[Res], b
             why
         };
         match why {
-            Some(why) => s.excuse("segment", why),
+            Some(why) => {
+                if std::env::var("BVH_DEBUG").is_ok() {
+                    let d = b - a;
+                    let cpu_hits: Vec<_> = {
+                        let mut v = vec![];
+                        let mut t_lo = 0.0;
+                        while let Some(h) = cpu.intersect_range(a, d, t_lo, 1.0) {
+                            v.push((h.tri, h.t, h.barycentrics));
+                            t_lo = h.t;
+                        }
+                        v
+                    };
+                    eprintln!("excused {why}: seg {i} {a} -> {b} cpu {want} gpu {got} (tri {} t {}) cpu hits {cpu_hits:?} gpu-tri f64 {:?}", r.occ_tri, r.occ_t, (r.occ_tri != NO_TRI).then(|| line_tri(&mesh.tris[r.occ_tri as usize], a, d)));
+                }
+                s.excuse("segment", why)
+            }
             None => bad.push(format!(
                 "segment {i} ({a} → {b}): CPU occluded {want}, GPU {got} (GPU tri {} at t {})",
                 r.occ_tri, r.occ_t
