@@ -4,7 +4,7 @@
 //!
 //! Compared, on the Cornell box, a closed 50k-triangle bumpy sphere with a soup inside (also flattened
 //! with a height limit that forces median rebuilds) and a 301k-triangle terrain:
-//! * closest hits: the same triangle, |t_gpu − t_cpu| ≤ 1e-4 · t and the same barycentrics to 1e-4;
+//! * closest hits: the same triangle, the same t and barycentrics (to the tolerances below);
 //! * occlusion of segments between surface points (and towards free points): the same flag.
 //!
 //! **The grazing rule.** f32 and f64 may disagree where the answer turns on rounding: where a ray passes
@@ -16,11 +16,13 @@
 //! `SHADOW_EPS` window of a segment's ends. A mismatch is excused only if the triangle it turns on (the
 //! CPU's hit, the GPU's hit re-evaluated in f64, or every CPU hit along a segment the GPU calls free) is
 //! such a case; excused mismatches are counted and bounded, anything else fails. Matching hits must agree
-//! on t to 1e-4 · t plus 1e-6 · (distance to the farthest vertex) / |d|: f32 rounds the vertices relative
-//! to the origin, so t's absolute error scales with that distance, which for a ray starting next to a
-//! triangle is far larger than t (grazing hits are exempt).
+//! on t to 1e-4 · t + 1e-6 · R (1 + s/h) / (|cos| |d|) and on the barycentrics to
+//! 1e-4 + 1e-6 · R / (|cos| h), with R the distance from the origin to the farthest vertex, s the longest
+//! edge, h the smallest height and cos the angle to the normal ([`rounding_scales`]): f32 rounds the
+//! vertices relative to the origin, so for a ray starting next to a triangle, or a thin triangle met
+//! obliquely, the error is far larger than 1e-4 · t (grazing hits are exempt).
 //!
-//! Also: rays from inside the closed sphere aimed exactly at its vertices and shared edges all hit (the
+//! Also: rays from inside a closed sphere aimed exactly at its vertices and shared edges all hit (the
 //! triangle test is watertight), the loop iterations of every trace stay below the bound and within
 //! `max_iterations_per_ray()`, and a trace that cannot finish within the bound gives the documented
 //! answer (no hit / not occluded, `bvh_exhausted`) without disturbing its neighbours.
@@ -217,9 +219,26 @@ fn grazing(tri: &[Vec3; 3], d: DVec3) -> bool {
     n.dot(d).abs() < GRAZE * n.length() * d.length()
 }
 
-/// Distance from `o` to the farthest vertex of the triangle.
-fn reach(tri: &[Vec3; 3], o: DVec3) -> f64 {
-    tri.iter().map(|p| (p.as_dvec3() - o).length()).fold(0.0, f64::max)
+/// The scales of f32 rounding in a hit of `tri` by o + t·d, for t (length) and for the barycentrics. f32
+/// rounds the vertices relative to the origin by ~6e-8 of R, the distance to the farthest vertex; the plane
+/// stretches a lateral error by 1/|cos| (cos: between `d` and the normal); over the triangle's smallest
+/// height h that is a barycentric error, and the edge functions' errors move t by up to the depth spread
+/// of the triangle (~ its longest edge s) times them, hence the s / h of thin triangles.
+fn rounding_scales(tri: &[Vec3; 3], o: DVec3, d: DVec3) -> (f64, f64) {
+    let [a, b, c] = tri.map(|p| p.as_dvec3());
+    let n = (b - a).cross(c - a).normalize();
+    let cos = n.dot(d.normalize()).abs();
+    let reach = [a, b, c].iter().map(|p| (*p - o).length()).fold(0.0, f64::max);
+    let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+    let h = min_height(tri);
+    (reach * (1.0 + longest / h) / cos, reach / (cos * h))
+}
+
+/// The smallest height of the triangle (its size in the barycentric sense).
+fn min_height(tri: &[Vec3; 3]) -> f64 {
+    let [a, b, c] = tri.map(|p| p.as_dvec3());
+    let twice_area = (b - a).cross(c - a).length();
+    twice_area / (b - a).length().max((c - b).length()).max((a - c).length())
 }
 
 fn min3(b: [f64; 3]) -> f64 {
@@ -255,17 +274,18 @@ fn ambiguous(tri: &[Vec3; 3], o: DVec3, d: DVec3, window: bool) -> Option<&'stat
 
 #[derive(Debug, Default)]
 struct Stats {
-    rays: usize,
     hits: usize,
     segments: usize,
     occluded: usize,
-    /// Mismatches the grazing rule excused, by query kind and reason.
+    /// Mismatches the grazing rule excused, by query kind and reason, and the first few of them.
     excused: std::collections::BTreeMap<String, usize>,
+    examples: Vec<String>,
     max_steps: u32,
     mean_steps: f64,
     /// Largest |t_gpu − t_cpu| of a matching, non-grazing hit, as a fraction of its tolerance.
     max_t_err_of_tol: f64,
-    max_bary_err: f64,
+    /// The same for the barycentrics.
+    max_bary_err_of_tol: f64,
 }
 
 impl Stats {
@@ -279,7 +299,7 @@ impl Stats {
 
 /// Compares every query with the CPU reference; panics on any mismatch the grazing rule does not excuse.
 fn compare(what: &str, mesh: &Mesh, cpu: &Bvh, queries: &[Query], res: &[Res], bound: u32) -> Stats {
-    let mut s = Stats { rays: queries.len(), segments: queries.len(), ..Default::default() };
+    let mut s = Stats { segments: queries.len(), ..Default::default() };
     let mut bad = vec![];
     let mut steps_sum = 0u64;
     for (i, (q, r)) in queries.iter().zip(res).enumerate() {
@@ -306,19 +326,20 @@ fn compare(what: &str, mesh: &Mesh, cpu: &Bvh, queries: &[Query], res: &[Res], b
             (None, None) => {}
             (Some(c), Some(g)) if c.tri == g.tri => {
                 let tri = &mesh.tris[c.tri as usize];
-                let tol = T_TOL * c.t + 1e-6 * reach(tri, o) / d.length();
-                let terr = (g.t as f64 - c.t).abs() / tol;
-                let berr = (g.bary[0] as f64 - c.barycentrics.y).abs().max((g.bary[1] as f64 - c.barycentrics.z).abs());
+                let (scale_t, scale_b) = rounding_scales(tri, o, d);
+                let terr = (g.t as f64 - c.t).abs() / (T_TOL * c.t + 1e-6 * scale_t / d.length());
+                let berr = (g.bary[0] as f64 - c.barycentrics.y).abs().max((g.bary[1] as f64 - c.barycentrics.z).abs())
+                    / (EDGE + 1e-6 * scale_b);
                 if grazing(tri, d) {
-                    if terr > 1.0 || berr > EDGE {
+                    if terr > 1.0 || berr > 1.0 {
                         s.excuse("ray", "angle");
                     }
                 } else {
                     s.max_t_err_of_tol = s.max_t_err_of_tol.max(terr);
-                    s.max_bary_err = s.max_bary_err.max(berr);
-                    if terr > 1.0 || berr > EDGE {
+                    s.max_bary_err_of_tol = s.max_bary_err_of_tol.max(berr);
+                    if terr > 1.0 || berr > 1.0 {
                         bad.push(format!(
-                            "ray {i}: tri {} t {} vs {} ({terr:.2} of the tolerance), bary err {berr:.2e}",
+                            "ray {i}: tri {} t {} vs {} ({terr:.2} of the tolerance), barycentrics {berr:.2} of theirs",
                             c.tri, g.t, c.t
                         ));
                     }
@@ -333,6 +354,14 @@ fn compare(what: &str, mesh: &Mesh, cpu: &Bvh, queries: &[Query], res: &[Res], b
                     _ => None,
                 };
                 if let Some(why) = cpu_why.or(gpu_why).or(tie) {
+                    if s.examples.len() < 4 {
+                        s.examples.push(format!(
+                            "ray {i} {o} + t {d}: CPU {:?}, GPU tri {} t {}: {why}",
+                            c.map(|c| (c.tri, c.t)),
+                            r.tri,
+                            r.t
+                        ));
+                    }
                     s.excuse("ray", why);
                 } else {
                     bad.push(format!(
@@ -373,18 +402,12 @@ fn compare(what: &str, mesh: &Mesh, cpu: &Bvh, queries: &[Query], res: &[Res], b
         };
         match why {
             Some(why) => {
-                if std::env::var("BVH_DEBUG").is_ok() {
-                    let d = b - a;
-                    let cpu_hits: Vec<_> = {
-                        let mut v = vec![];
-                        let mut t_lo = 0.0;
-                        while let Some(h) = cpu.intersect_range(a, d, t_lo, 1.0) {
-                            v.push((h.tri, h.t, h.barycentrics));
-                            t_lo = h.t;
-                        }
-                        v
-                    };
-                    eprintln!("excused {why}: seg {i} {a} -> {b} cpu {want} gpu {got} (tri {} t {}) cpu hits {cpu_hits:?} gpu-tri f64 {:?}", r.occ_tri, r.occ_t, (r.occ_tri != NO_TRI).then(|| line_tri(&mesh.tris[r.occ_tri as usize], a, d)));
+                if s.examples.len() < 4 {
+                    let tri = (r.occ_tri != NO_TRI).then(|| line_tri(&mesh.tris[r.occ_tri as usize], a, b - a));
+                    s.examples.push(format!(
+                        "segment {i} {a} → {b}: CPU {want}, GPU {got} (tri {}, t {}, f64 (t, bary) {tri:?}): {why}",
+                        r.occ_tri, r.occ_t
+                    ));
                 }
                 s.excuse("segment", why)
             }
@@ -395,7 +418,21 @@ fn compare(what: &str, mesh: &Mesh, cpu: &Bvh, queries: &[Query], res: &[Res], b
         }
     }
     s.mean_steps = steps_sum as f64 / (2 * queries.len()) as f64;
-    eprintln!("{what}: {s:?}");
+    eprintln!(
+        "{what}: {} queries, {} hits, {} occluded, excused {:?}, steps max {} mean {:.1}, t error ≤ {:.3} of the \
+         tolerance, barycentric error ≤ {:.3} of theirs",
+        queries.len(),
+        s.hits,
+        s.occluded,
+        s.excused,
+        s.max_steps,
+        s.mean_steps,
+        s.max_t_err_of_tol,
+        s.max_bary_err_of_tol
+    );
+    for e in &s.examples {
+        eprintln!("  excused: {e}");
+    }
     assert!(bad.is_empty(), "{what}: {} mismatches, first: {}", bad.len(), bad[..bad.len().min(6)].join("\n"));
     s
 }
@@ -417,13 +454,14 @@ fn random_queries(mesh: &Mesh, n: usize, rng: &mut Rng) -> Vec<Query> {
         .collect()
 }
 
-/// A closed, star-shaped bumpy sphere: `rings` × `segments` UV grid with one vertex per pole, every vertex
-/// shared exactly by its triangles (2·segments·(rings − 1) triangles).
-fn bumpy_sphere(rings: usize, segments: usize) -> Vec<[Vec3; 3]> {
+/// A closed, star-shaped sphere with bumps of relative height `bump` (0: a convex polyhedron, every vertex on
+/// the unit sphere): `rings` × `segments` UV grid with one vertex per pole, every vertex shared exactly by its
+/// triangles (2·segments·(rings − 1) triangles).
+fn bumpy_sphere(rings: usize, segments: usize, bump: f32) -> Vec<[Vec3; 3]> {
     let point = |j: usize, i: usize| {
         let theta = std::f32::consts::PI * j as f32 / rings as f32;
         let phi = 2.0 * std::f32::consts::PI * (i % segments) as f32 / segments as f32;
-        let r = 1.0 + 0.12 * (5.0 * theta).sin() * (7.0 * phi).cos() + 0.03 * (23.0 * theta + 3.0 * phi).sin();
+        let r = 1.0 + bump * ((5.0 * theta).sin() * (7.0 * phi).cos() + 0.25 * (23.0 * theta + 3.0 * phi).sin());
         Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()) * r
     };
     let (north, south) = (point(0, 0), point(rings, 0));
@@ -480,16 +518,17 @@ fn gpu_bvh_matches_the_cpu_reference_on_the_cornell_box() {
     let s = compare("Cornell box", &mesh, &cpu, &queries, &res, bound);
     eprintln!("Cornell box: {} queries in {secs:.3} s, bound {bound}", queries.len());
     assert!(s.hits > 2000 && s.occluded > 500 && s.occluded < s.segments - 500, "{s:?}");
-    assert!(s.excused_total() <= queries.len() / 200, "too many grazing cases: {s:?}");
+    // Most excused cases are segments between two floor points that pass under a box: they run exactly
+    // through the bottom edges of its side faces (barycentric 0, in the floor plane), which the
+    // edge-inclusive watertight test counts as occluding and f64 rounding may not (~0.8 %).
+    assert!(s.excused_total() <= queries.len() * 3 / 200, "too many grazing cases: {s:?}");
 }
 
 #[test]
 fn gpu_bvh_matches_the_cpu_reference_on_a_50k_sphere_even_height_limited() {
     let gpu = TestGpu::new();
     let mut rng = Rng(0xB0A7_0002);
-    let sphere = bumpy_sphere(158, 160);
-    let sphere_tris = sphere.len();
-    let mut tris = sphere.clone();
+    let mut tris = bumpy_sphere(158, 160, 0.12);
     // A soup inside, so that segments between surface points are often blocked.
     for _ in 0..2000 {
         let c = rng.unit() * 0.6 * rng.f32();
@@ -506,35 +545,51 @@ fn gpu_bvh_matches_the_cpu_reference_on_a_50k_sphere_even_height_limited() {
     let limited = FlatBvh::with_max_height(&cpu, &vertices, full.height - 4);
     assert!(limited.rebuilt_subtrees > 0 && limited.height <= full.height - 4);
 
-    let mut queries = random_queries(&mesh, 5000, &mut rng);
-    // Watertightness: rays from inside the closed sphere through its vertices and the midpoints (in f32) of
-    // its shared edges must all hit. Their segments run from the centre to just inside the surface.
-    let watertight_from = queries.len();
-    for k in 0..2000 {
-        let [a, b, c] = mesh.tris[(rng.next() % sphere_tris as u64) as usize];
-        let target = match k % 3 {
-            0 => a,
-            1 => (a + b) * 0.5,
-            _ => b + (c - b) * rng.f32(),
-        };
-        let o = rng.unit() * 0.05;
-        queries.push(Query::ray(o, target - o, f32::INFINITY).with_segment(Vec3::ZERO, target * 0.5));
-    }
+    let queries = random_queries(&mesh, 5000, &mut rng);
     for (name, flat) in [("50k sphere", &full), ("50k sphere, height-limited", &limited)] {
         let bvh = GpuBvh::upload(&gpu, flat).unwrap();
         let (res, secs) = gpu_trace(&gpu, &bvh, &queries);
-        let escaped: Vec<usize> = (watertight_from..queries.len()).filter(|&i| res[i].t < 0.0).collect();
-        assert!(
-            escaped.is_empty(),
-            "{name}: {} rays through vertices / edges escaped the closed sphere: {:?}",
-            escaped.len(),
-            &escaped[..escaped.len().min(8)]
-        );
         let s = compare(name, &mesh, &cpu, &queries, &res, bvh.max_iterations_per_ray());
         eprintln!("{name}: {} queries in {secs:.3} s, height {}", queries.len(), bvh.height);
-        assert!(s.hits > 2000 && s.occluded > 1000 && s.occluded < s.segments - 1000, "{s:?}");
+        assert!(s.hits > 1000 && s.occluded > 1000 && s.occluded < s.segments - 500, "{s:?}");
         assert!(s.excused_total() <= queries.len() / 50, "too many grazing cases: {s:?}");
     }
+}
+
+#[test]
+fn rays_through_shared_edges_and_vertices_never_escape_a_closed_mesh() {
+    let gpu = TestGpu::new();
+    let mut rng = Rng(0xB0A7_0004);
+    // Convex, so that a ray from inside leaves it exactly once: where it was aimed.
+    let mesh = Mesh::new(bumpy_sphere(158, 160, 0.0));
+    let vertices = mesh.vertices();
+    let bvh = GpuBvh::upload(&gpu, &FlatBvh::new(&Bvh::from_vertices(&vertices), &vertices)).unwrap();
+    // From random points inside, exactly through a vertex (every vertex is shared by 6 triangles, a pole
+    // by 160), through the f32 midpoint of an edge, or through a random f32 point of one: the rounded
+    // target is off the exact edge by less than the rounding of a ray–triangle test, so a test that is not
+    // watertight lets some of these rays slip between the two triangles of the edge.
+    let queries: Vec<Query> = (0..20_000)
+        .map(|k| {
+            let [a, b, c] = mesh.tris[(rng.next() % mesh.tris.len() as u64) as usize];
+            let target = match k % 3 {
+                0 => [a, b, c][k % 9 / 3],
+                1 => (a + b) * 0.5,
+                _ => b + (c - b) * rng.f32(),
+            };
+            let o = rng.unit() * 0.5 * rng.f32();
+            Query::ray(o, target - o, f32::INFINITY)
+        })
+        .collect();
+    let (res, _) = gpu_trace(&gpu, &bvh, &queries);
+    // Each must hit at its target, t = 1 up to rounding; a miss is a leak.
+    let leaks: Vec<usize> = (0..queries.len()).filter(|&i| !((res[i].t - 1.0).abs() <= 1e-5)).collect();
+    assert!(
+        leaks.is_empty(),
+        "{} of {} rays through vertices / edges leaked through the closed sphere, e.g. {:?}",
+        leaks.len(),
+        queries.len(),
+        leaks.iter().take(4).map(|&i| (queries[i].o, queries[i].d, res[i].t)).collect::<Vec<_>>()
+    );
 }
 
 #[test]
@@ -550,13 +605,19 @@ fn the_iteration_bound_is_not_hit_on_a_300k_terrain() {
     let build = start.elapsed().as_secs_f64();
     let bvh = GpuBvh::upload(&gpu, &flat).unwrap();
     assert_eq!(bvh.max_iterations_per_ray(), MAX_STEPS);
-    // Segments between surface points skim the terrain (the slowest case: long, close to many boxes);
-    // rays come from above, many at grazing angles.
+    // The slow cases: segments between surface points skim the terrain (long, close to many boxes), and
+    // so do horizontal rays from just above it; the other rays come from above, many at grazing angles.
     let queries: Vec<Query> = (0..4000)
-        .map(|_| {
-            let o = rng.vec(Vec3::new(-1.0, 0.5, -1.0), Vec3::new(11.0, 3.0, 11.0));
-            let mut d = rng.unit();
-            d.y = -d.y.abs() * 0.3;
+        .map(|k| {
+            let (o, d) = if k % 2 == 0 {
+                let mut d = rng.unit();
+                d.y = 0.0;
+                (mesh.surface_point(&mut rng) + Vec3::Y * 0.01, d)
+            } else {
+                let mut d = rng.unit();
+                d.y = -d.y.abs() * 0.3;
+                (rng.vec(Vec3::new(-1.0, 0.5, -1.0), Vec3::new(11.0, 3.0, 11.0)), d)
+            };
             Query::ray(o, d, f32::INFINITY).with_segment(mesh.surface_point(&mut rng), mesh.surface_point(&mut rng))
         })
         .collect();

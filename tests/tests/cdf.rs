@@ -429,11 +429,13 @@ fn sampling_edge_cases_match_the_twin() {
     let w = [1.0, 0.0, 3.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0];
     let us = [0.0, 0.1666, 0.1667, 0.6666, 0.6667, U_MAX, 1.0];
     let d = draws_match_twin(&gpu, &k, "3 x 3", &w, shape(3, 3), &us);
-    assert_eq!(d.iter().map(|x| x.0).collect::<Vec<_>>(), [0, 0, 2, 2, 6, 6, 6]);
-    assert_eq!(
-        d.iter().map(|x| x.1).collect::<Vec<_>>(),
-        [1.0 / 6.0, 1.0 / 6.0, 0.5, 0.5, 2.0 / 6.0, 2.0 / 6.0, 2.0 / 6.0]
-    );
+    // u picks the row (row 0 for u · 6 < 4, row 2 above); within row 0 the second uniform u2 picks
+    // texel 0 for u2 · 4 < 1, else texel 2.
+    let row0 = |u: f32| if cpu_cdf::second_uniform(u) * 4.0 < 1.0 { 0 } else { 2 };
+    let want = [row0(0.0), row0(0.1666), row0(0.1667), row0(0.6666), 6, 6, 6];
+    assert_eq!(d.iter().map(|x| x.0).collect::<Vec<_>>(), want);
+    // cdf_sample's probability is the drawn texel's weight over the total, 6.
+    assert_eq!(d.iter().map(|x| x.1).collect::<Vec<_>>(), want.map(|v| w[v as usize] / 6.0));
 
     // The in-row clamp (see cpu_cdf's unit test): at u = U_MAX the rest equals row 1's total; without the
     // clamp the search ends on texel 5, which has no weight.
@@ -474,9 +476,11 @@ fn sampling_edge_cases_match_the_twin() {
     let d = draws_match_twin(&gpu, &k, "zero runs", &w, shape(rows, len), &u);
     let first = w.iter().position(|x| sanitise(*x) > 0.0).unwrap() as u32;
     let last = w.iter().rposition(|x| sanitise(*x) > 0.0).unwrap() as u32;
-    assert_eq!(d[20_000].0, first, "u = 0 draws the first texel with weight");
-    assert_eq!(d[20_000 + 4].0, last, "u = 1 − 2⁻²⁴ draws the last texel with weight");
-    assert_eq!(d[20_000 + 5].0, last, "u = 1 (out of contract) is clamped to the last texel with weight");
+    // u picks the row (the texel within it comes from the second uniform): u = 0 the first row with
+    // weight, u → 1 the last.
+    assert_eq!(d[20_000].0 / len, first / len, "u = 0 draws in the first row with weight");
+    assert_eq!(d[20_000 + 4].0 / len, last / len, "u = 1 − 2⁻²⁴ draws in the last row with weight");
+    assert_eq!(d[20_000 + 5].0 / len, last / len, "u = 1 (out of contract) is clamped to the last row with weight");
 }
 
 #[test]

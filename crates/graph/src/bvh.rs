@@ -39,10 +39,13 @@
 //! `loop_iteration_limit`), so a shader that traces n rays per invocation needs
 //! n · `max_iterations_per_ray()` + (its other loop iterations) ≤ the limit, and must otherwise split
 //! its rays over dispatches. A trace that reaches the bound answers "no hit" / "not occluded" and sets
-//! `bvh_exhausted`. Measured worst cases (tests/tests/bvh.rs, and once on the archive scenes): 97
-//! iterations on the Cornell box, ~600 on a 301k-triangle terrain between surface points, ~2,900 on
-//! Sibenik and ~3,600 on Conference (331k triangles) for segments between random surface points, so
-//! 16384 leaves a margin of more than 4× while still allowing 3 traces per llvmpipe invocation.
+//! `bvh_exhausted`. Measured worst cases, in iterations per trace (lavapipe; tests/tests/bvh.rs, and
+//! once on the archive scenes with 20,000 gather-like rays from surface points and 20,000 segments
+//! between surface points, a third of them lifted to skim the surfaces): 41 on the Cornell box (where
+//! the bound is 74: nodes + triangles + 1), 416 on the 50k sphere, 324 on the 301k terrain, 169 on
+//! Sibenik (75k triangles), 355 on Conference (278k hittable triangles), and 1,152 for horizontal rays
+//! skimming a 301k-triangle rippled floor, the worst case found. 16384 is 14× that, and still lets an
+//! llvmpipe invocation make 3 full-length traces.
 //!
 //! **Bindings.** [`B_BVH_NODES`] = 26 and [`B_BVH_TRIS`] = 27 are defined at the top of `bvh.glsl`
 //! (guarded by `#ifndef`) until they move to `bindings.glsl`; the constants here mirror them and a

@@ -138,15 +138,21 @@ fn glsl_max(x: f32, y: f32) -> f32 {
     }
 }
 
-/// `cdf_sample_rows(cb, ib, u, r0, r1)`: the texel (index within the section) drawn for `u` in [0, 1)
-/// among rows [r0, r1) of the section at `cb`. Same operations as the shader: the target
-/// `before0 + u · (end − before0)` clamped into [before0, below(end)], the first row whose prefix
-/// exceeds it, the rest clamped into [0, below(row's last in-row prefix)], the first texel of that row
-/// whose in-row prefix exceeds the rest. (The shader's `ib` is not read by the search.)
+/// `cdf_sample_rows2(cb, ib, (u, u2), r0, r1)`: the texel (index within the section) drawn among rows
+/// [r0, r1) of the section at `cb`. Same operations as the shader: the row target
+/// `before0 + u · (end − before0)` clamped into [before0, below(end)] and the first row whose prefix
+/// exceeds it; then the texel target `u2 · P` (P the row's last in-row prefix) clamped below P and the
+/// first texel of that row whose in-row prefix exceeds it. (The shader's `ib` is not read.)
 ///
 /// Panics when rows [r0, r1) have no weight: the gather only samples ranges whose total is > 0.
-pub fn sample_rows(cdf: &[f32], cb: usize, u: f32, r0: u32, r1: u32) -> u32 {
-    let (rows, len) = shape_at(cdf, cb);
+pub fn sample_rows2(cdf: &[f32], cb: usize, u: f32, u2: f32, r0: u32, r1: u32) -> u32 {
+    let r = sample_row(cdf, cb, u, r0, r1);
+    r * shape_at(cdf, cb).1 + sample_in_row(cdf, cb, r, u2)
+}
+
+/// The row [`sample_rows2`] picks for `u`.
+pub fn sample_row(cdf: &[f32], cb: usize, u: f32, r0: u32, r1: u32) -> u32 {
+    let (rows, _) = shape_at(cdf, cb);
     assert!(r0 < r1 && r1 <= rows, "rows [{r0}, {r1}) of {rows}");
     let before0 = rows_before(cdf, cb, r0);
     let end = rows_before(cdf, cb, r1);
@@ -164,12 +170,17 @@ pub fn sample_rows(cdf: &[f32], cb: usize, u: f32, r0: u32, r1: u32) -> u32 {
             lo = mid + 1;
         }
     }
-    let r = lo;
-    let before = rows_before(cdf, cb, r);
-    let base = header + rows + r * len;
-    let t = glsl_min(glsl_max(target - before, 0.0), below(at(base + len - 1)));
-    lo = 0;
-    hi = len - 1;
+    lo
+}
+
+/// The texel within row `r` [`sample_rows2`] picks for `u2`.
+pub fn sample_in_row(cdf: &[f32], cb: usize, r: u32, u2: f32) -> u32 {
+    let (rows, len) = shape_at(cdf, cb);
+    let at = |k: u32| cdf[cb + k as usize];
+    let base = HEADER as u32 + rows + r * len;
+    let last = at(base + len - 1);
+    let t = glsl_min(u2 * last, below(last));
+    let (mut lo, mut hi) = (0, len - 1);
     while lo < hi {
         let mid = (lo + hi) / 2;
         if at(base + mid) > t {
@@ -178,11 +189,23 @@ pub fn sample_rows(cdf: &[f32], cb: usize, u: f32, r0: u32, r1: u32) -> u32 {
             lo = mid + 1;
         }
     }
-    r * len + lo
+    lo
 }
 
-/// `cdf_prob_rows(cb, v, r0, r1)`: the probability the shader assigns to [`sample_rows`] drawing texel
-/// `v` among rows [r0, r1), from the float prefixes (same operations and order as the shader).
+/// `cdf_second_uniform(u)`: the second uniform the single-u entry points derive from the first.
+pub fn second_uniform(u: f32) -> f32 {
+    let h = pcg_hash(u.to_bits() ^ 0x9E37_79B9);
+    (h >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+/// `cdf_sample_rows(cb, ib, u, r0, r1)`: [`sample_rows2`] with the derived second uniform.
+pub fn sample_rows(cdf: &[f32], cb: usize, u: f32, r0: u32, r1: u32) -> u32 {
+    sample_rows2(cdf, cb, u, second_uniform(u), r0, r1)
+}
+
+/// `cdf_prob_rows(cb, v, r0, r1)`: the probability the shader assigns to [`sample_rows2`] drawing texel
+/// `v` among rows [r0, r1): Δ/range · (p_i − p_{i−1})/P, from the float prefixes (same operations and
+/// order as the shader).
 // `!(x > 0.0)` as in the shader: NaN counts as "no weight".
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn prob_rows(cdf: &[f32], cb: usize, v: u32, r0: u32, r1: u32) -> f32 {
@@ -197,14 +220,13 @@ pub fn prob_rows(cdf: &[f32], cb: usize, v: u32, r0: u32, r1: u32) -> f32 {
         return 0.0;
     }
     let base = cb + HEADER + (rows + r * len) as usize;
+    let last = cdf[base + len as usize - 1];
+    if !(last > 0.0) {
+        return 0.0;
+    }
     let hi = cdf[base + i as usize];
     let lo = if i > 0 { cdf[base + i as usize - 1] } else { 0.0 };
-    let last = cdf[base + len as usize - 1];
-    let mut mass = glsl_min(hi, delta) - glsl_min(lo, delta);
-    if hi == last && lo < last {
-        mass += glsl_max(delta - last, 0.0);
-    }
-    delta / range * glsl_max(mass, 0.0) / delta
+    delta / range * (glsl_max(hi - lo, 0.0) / last)
 }
 
 /// `cdf_sample(u, prob)`: [`sample_rows`] over every row of section 0, and the texel's probability as
@@ -219,23 +241,19 @@ pub fn sample(cdf: &[f32], importance: &[f32], u: f32) -> (u32, f32) {
     (v, sanitise(importance[v as usize]) / t0)
 }
 
-/// The exact distribution of [`sample_rows`] (rows [r0, r1) of the section at `cb`) under the gather's
-/// random numbers, `u = k / 2²⁴` for k in [0, 2²⁴) (what [`rand01`] can return): how many of the 2²⁴
-/// values draw each texel of the section. The draw is monotone in u, so each texel's values form one
-/// run; the runs are found by binary search, about 24 draws per texel drawn.
-pub fn u_grid_counts(cdf: &[f32], cb: usize, r0: u32, r1: u32) -> Vec<u32> {
+/// How many of the 2²⁴ values `k / 2²⁴` (what [`rand01`] can return) make `draw` give each index below
+/// `n`. The draw is monotone in u, so each index's values form one run, found by binary search.
+fn grid_counts(n: usize, draw: impl Fn(f32) -> u32) -> Vec<u32> {
     const N: u32 = 1 << 24;
-    let (rows, len) = shape_at(cdf, cb);
-    let mut counts = vec![0u32; rows as usize * len as usize];
-    let draw = |k: u32| sample_rows(cdf, cb, k as f32 / N as f32, r0, r1);
+    let mut counts = vec![0u32; n];
+    let at = |k: u32| draw(k as f32 / N as f32);
     let mut k = 0u32;
     while k < N {
-        let v = draw(k);
-        // The last k' ≥ k that still draws v.
+        let v = at(k);
         let (mut lo, mut hi) = (k, N - 1);
         while lo < hi {
             let mid = lo + (hi - lo).div_ceil(2);
-            if draw(mid) == v {
+            if at(mid) == v {
                 lo = mid;
             } else {
                 hi = mid - 1;
@@ -245,6 +263,25 @@ pub fn u_grid_counts(cdf: &[f32], cb: usize, r0: u32, r1: u32) -> Vec<u32> {
         k = lo + 1;
     }
     counts
+}
+
+/// The exact distribution of [`sample_rows2`] (rows [r0, r1) of the section at `cb`) under the gather's
+/// two independent 24-bit uniforms: per texel of the section, P(row) · P(texel | row), each counted over
+/// the 2²⁴ values the uniform can take.
+pub fn u_grid_probs(cdf: &[f32], cb: usize, r0: u32, r1: u32) -> Vec<f64> {
+    let (rows, len) = shape_at(cdf, cb);
+    let row_counts = grid_counts(rows as usize, |u| sample_row(cdf, cb, u, r0, r1));
+    let mut probs = vec![0.0f64; rows as usize * len as usize];
+    for (r, &rc) in row_counts.iter().enumerate() {
+        if rc == 0 {
+            continue;
+        }
+        let texel_counts = grid_counts(len as usize, |u2| sample_in_row(cdf, cb, r as u32, u2));
+        for (i, &tc) in texel_counts.iter().enumerate() {
+            probs[r * len as usize + i] = (rc as f64 / 16777216.0) * (tc as f64 / 16777216.0);
+        }
+    }
+    probs
 }
 
 /// `pcg_hash` of `glsl/shared/common.glsl` (the PCG RXS-M-XS output permutation of one LCG step).
@@ -289,16 +326,22 @@ mod tests {
     #[test]
     fn sample_picks_the_hand_computed_texels() {
         let (w, cdf) = small();
-        // u · 6 against the cumulative masses: texel 0 covers [0, 1), texel 2 [1, 4), texel 6 [4, 6).
+        // Rows: u · 6 against the row totals: row 0 (texels 0 and 2, weights 1 and 3) covers [0, 4), the
+        // empty row 1 nothing, row 2 (texel 6) [4, 6). Within row 0 the second uniform u2 picks texel 0
+        // for u2 · 4 < 1, else texel 2.
+        let row0 = |u: f32| if second_uniform(u) * 4.0 < 1.0 { 0 } else { 2 };
         let cases = [
-            (0.0, 0),
-            (0.1666, 0), // 0.9996
-            (0.1667, 2), // 1.0002
-            (0.6666, 2), // 3.9996
-            (0.6667, 6), // 4.0002: past the empty row 1
-            (U_MAX, 6),  // just below 6
-            (1.0, 6),    // outside the contract; clamped below the total, still a texel with mass
+            (0.0, row0(0.0)),
+            (0.3, row0(0.3)),
+            (0.6666, row0(0.6666)), // 3.9996
+            (0.6667, 6),            // 4.0002: past the empty row 1
+            (U_MAX, 6),             // just below 6
+            (1.0, 6),               // outside the contract; clamped below the total, still a texel with mass
         ];
+        // Both texels of row 0 occur among the cases' neighbours (the test would not notice a texel
+        // choice that ignored u2 otherwise).
+        let seen: std::collections::BTreeSet<u32> = (0..64).map(|k| row0(k as f32 / 100.0)).collect();
+        assert_eq!(seen.len(), 2);
         for (u, want) in cases {
             let (v, p) = sample(&cdf, &w, u);
             assert_eq!(v, want, "u = {u}");
@@ -363,11 +406,14 @@ mod tests {
     #[test]
     fn sample_rows_and_prob_rows_on_row_ranges() {
         let (w, cdf) = small();
-        // Rows [0, 1): texel 0 for u · 4 < 1, texel 2 above; rows [1, 3): only texel 6 has weight.
-        assert_eq!(sample_rows(&cdf, 0, 0.0, 0, 1), 0);
-        assert_eq!(sample_rows(&cdf, 0, 0.2499, 0, 1), 0);
-        assert_eq!(sample_rows(&cdf, 0, 0.2501, 0, 1), 2);
-        assert_eq!(sample_rows(&cdf, 0, U_MAX, 0, 1), 2);
+        // Rows [0, 1): texel 0 for u2 · 4 < 1, texel 2 above; rows [1, 3): only texel 6 has weight.
+        assert_eq!(sample_rows2(&cdf, 0, 0.5, 0.0, 0, 1), 0);
+        assert_eq!(sample_rows2(&cdf, 0, 0.5, 0.2499, 0, 1), 0);
+        assert_eq!(sample_rows2(&cdf, 0, 0.5, 0.2501, 0, 1), 2);
+        assert_eq!(sample_rows2(&cdf, 0, 0.5, U_MAX, 0, 1), 2);
+        // Over rows [0, 3) (totals 4, 0, 2): u picks row 0 below 4/6, row 2 above.
+        assert_eq!(sample_rows2(&cdf, 0, 0.66, 0.9, 0, 3), 2);
+        assert_eq!(sample_rows2(&cdf, 0, 0.67, 0.0, 0, 3), 6);
         for u in [0.0, 0.3, U_MAX, 1.0] {
             assert_eq!(sample_rows(&cdf, 0, u, 1, 3), 6);
             assert_eq!(sample_rows(&cdf, 0, u, 2, 3), 6);
@@ -384,7 +430,7 @@ mod tests {
         let cb = section_len(3, 3);
         assert_eq!(&cdf2[..cb], &cdf[..]);
         assert_eq!(total_at(&cdf2, cb), 5.0);
-        assert_eq!(sample_rows(&cdf2, cb, 0.7, 0, 3), 4);
+        assert_eq!(sample_rows2(&cdf2, cb, 0.7, 0.7, 0, 3), 4);
         assert_eq!(prob_rows(&cdf2, cb, 4, 0, 3), 1.0);
     }
 
@@ -407,27 +453,28 @@ mod tests {
 
     #[test]
     fn prob_rows_is_the_u_grid_distribution_to_within_two_steps() {
-        // prob_rows must give what sample_rows actually does under the 24-bit u, per texel, to within
-        // the resolution of the draw: step = 2⁻²⁴ (one u) + ulp(end) / range (one target float).
+        // prob_rows must give what sample_rows2 actually does under two 24-bit uniforms, per texel: the
+        // row factor to within 2⁻²⁴ + ulp(end)/range, the texel factor to within 2⁻²⁴ + ulp(P)/P.
         for ratio in [1.0, 10.0, 1e3, 1e5] {
             let (w, cdf) = two_faces(ratio);
             for (r0, r1) in [(0, 64), (64, 128), (0, 128)] {
-                let counts = u_grid_counts(&cdf, 0, r0, r1);
-                assert_eq!(counts.iter().map(|&c| c as u64).sum::<u64>(), 1 << 24);
+                let probs = u_grid_probs(&cdf, 0, r0, r1);
+                assert!((probs.iter().sum::<f64>() - 1.0).abs() < 1e-9);
                 let end = rows_before(&cdf, 0, r1);
                 let range = (end - rows_before(&cdf, 0, r0)) as f64;
-                let step = 1.0 / 16777216.0 + (f32::from_bits(end.to_bits() + 1) - end) as f64 / range;
+                let row_step = 1.0 / 16777216.0 + (f32::from_bits(end.to_bits() + 1) - end) as f64 / range;
                 let mut sum = 0.0f64;
-                for (v, &c) in counts.iter().enumerate() {
+                for (v, &q) in probs.iter().enumerate() {
                     let p = prob_rows(&cdf, 0, v as u32, r0, r1) as f64;
-                    let q = c as f64 / 16777216.0;
                     sum += p;
+                    // The texel factor is at most 1, the row factor at most 1: |q − p| ≤ both steps.
+                    let texel_step = 2.0 / 16777216.0 + 2.0 * f32::EPSILON as f64;
                     assert!(
-                        (q - p).abs() <= 2.0 * step,
+                        (q - p).abs() <= 2.0 * (row_step + texel_step),
                         "ratio {ratio}, rows [{r0}, {r1}), texel {v}: drawn {q:e}, prob_rows {p:e}"
                     );
                     if sanitise(w[v]) == 0.0 {
-                        assert!(c == 0 && p == 0.0, "texel {v} has no weight");
+                        assert!(q == 0.0 && p == 0.0, "texel {v} has no weight");
                     }
                 }
                 assert!((sum - 1.0).abs() < 1e-5, "ratio {ratio}, rows [{r0}, {r1}): prob_rows sums to {sum}");
