@@ -704,5 +704,17 @@ fn an_empty_scene_and_bad_rays_give_no_hit() {
         assert_eq!((r.t, r.tri, r.occluded, r.exhausted), (-1.0, NO_TRI, 0, 0), "query {i}: {r:?}");
     }
     assert_eq!((res[4].t, res[4].occluded), (1.0, 0), "tmax is inclusive, the segment's end is not: {:?}", res[4]);
+
+    // Ties at exactly equal t go to the lowest triangle index, whatever the traversal order (cpu_ref's rule).
+    let mut tris = vec![[Vec3::ZERO, Vec3::X, Vec3::Y]; 9];
+    tris[0] = [Vec3::splat(5.0), Vec3::splat(5.0) + Vec3::X, Vec3::splat(5.0) + Vec3::Y]; // elsewhere
+    let dupes = Mesh::new(tris);
+    let v = dupes.vertices();
+    let cpu = Bvh::from_vertices(&v);
+    let bvh = GpuBvh::upload(&gpu, &FlatBvh::new(&cpu, &v)).unwrap();
+    let q = Query::ray(Vec3::new(0.2, 0.3, 1.0), -Vec3::Z, f32::INFINITY);
+    let (res, _) = gpu_trace(&gpu, &bvh, &[q]);
+    assert_eq!(cpu.intersect(q.origin(), q.dir()).map(|h| h.tri), Some(1));
+    assert_eq!((res[0].t, res[0].tri), (1.0, 1), "{:?}", res[0]);
     assert_eq!(SHADOW_EPS, cpu_ref::SHADOW_EPS as f32);
 }
