@@ -138,8 +138,20 @@ void main() {
             } else {
                 uint rng = pcg_hash(base ^ pcg_hash(k - n_c + 0x7F4A7C15u) ^ 0x68E31DA4u);
                 vec3 d = cosine_direction(nx, rand01(rng), rand01(rng));
+#ifdef EXACT_VISIBILITY
+                // Exact gathering: the ray's first hit on the real triangles, then each light's VPL there.
+                uint hit_tri;
+                vec2 hit_bary;
+                float lift = 1e-5 * frame.scene_min.w;
+                float th = bvh_closest(x + nx * lift, d, 1e30, hit_tri, hit_bary);
+                vec3 hit_p = x + nx * lift + d * th;
+#endif
                 for (uint l = 0u; l < frame.size.z; l++) {
+#ifdef EXACT_VISIBILITY
+                    uint v = th > 0.0 ? vpl_at_point(hit_p, l) : NO_VPL;
+#else
                     uint v = gathering_vpl(x, nx, d, l);
+#endif
                     if (v == NO_VPL) continue;
                     Vpl vpl = vpl_fetch(v);
                     vec3 c = contribution(x, nx, ax, v);

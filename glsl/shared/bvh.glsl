@@ -31,7 +31,9 @@
 // shared vertex. Edges count as inside (an edge function of exactly 0 passes), so a ray through an edge hits
 // one or both of its triangles (the CPU reference is edge-inclusive too). Box test: slabs with the far distance
 // grown by BVH_BOX_GROW (8 ulps), so rounding never culls a box whose triangle the exact test would hit (flat
-// boxes of axis-aligned walls included).
+// boxes of axis-aligned walls included). A direction component below BVH_MIN_DIR counts as ±BVH_MIN_DIR there;
+// a ray lying exactly in the plane of a flat box then sees it only at its origin, which loses nothing: such a
+// box holds only triangles in that plane, which the ray could meet edge-on at most.
 //
 // Traversal and its iteration bound. One loop; each iteration is exactly one of: test one triangle of the
 // current leaf; visit one node (read its two children, test both boxes, descend into the nearer one and push the

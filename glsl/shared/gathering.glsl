@@ -31,8 +31,8 @@ float voxel_first_hit(vec3 o, vec3 d, float tmax) {
 }
 
 // The VPL of light l whose texel sees point p: p projected into the light's DPRSM, accepted when that
-// texel's VPL lies within 3 voxel cells of p (the light sees the surface the ray hit; the hit point of a
-// voxel march is only known to a cell). NO_VPL otherwise.
+// texel's VPL lies within its own surface patch of p, plus 3 voxel cells (the light sees the surface
+// the ray hit; the hit point of a voxel march is only known to a cell). NO_VPL otherwise.
 uint vpl_at_point(vec3 p, uint l) {
     uint res = frame.size.w;
     vec3 local = p - lights[l].position.xyz;
@@ -41,7 +41,14 @@ uint vpl_at_point(vec3 p, uint l) {
     uvec2 texel = uvec2(clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(int(res) - 1)));
     uint v = ((2u * l + face) * res + texel.y) * res + texel.x;
     Vpl vpl = vpl_fetch(v);
-    if (!vpl.valid || distance(vpl.position, p) > 3.0 * frame.voxel_origin.w) return NO_VPL;
+    if (!vpl.valid) return NO_VPL;
+    // The texel's surface patch reaches about √A_v from its VPL (A_v = Δω · d_l² / cos α, as in mis.comp):
+    // accept hits within the patch, or within 3 cells when the hit is only known to a cell.
+    ivec3 t = ivec3(texel, 2u * l + face);
+    float d_l = texelFetch(vpl_normal, t, 0).w;
+    float cos_a = max(dot(vpl.normal, normalize(lights[l].position.xyz - vpl.position)), 1e-3);
+    float patch_size = sqrt(texelFetch(vpl_flux, t, 0).w * d_l * d_l / cos_a);
+    if (distance(vpl.position, p) > 3.0 * frame.voxel_origin.w + 2.0 * patch_size) return NO_VPL;
     return v;
 }
 

@@ -582,7 +582,7 @@ fn rays_through_shared_edges_and_vertices_never_escape_a_closed_mesh() {
         .collect();
     let (res, _) = gpu_trace(&gpu, &bvh, &queries);
     // Each must hit at its target, t = 1 up to rounding; a miss is a leak.
-    let leaks: Vec<usize> = (0..queries.len()).filter(|&i| !((res[i].t - 1.0).abs() <= 1e-5)).collect();
+    let leaks: Vec<usize> = (0..queries.len()).filter(|&i| (res[i].t - 1.0).abs() > 1e-5).collect();
     assert!(
         leaks.is_empty(),
         "{} of {} rays through vertices / edges leaked through the closed sphere, e.g. {:?}",

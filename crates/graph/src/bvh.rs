@@ -42,7 +42,7 @@
 //! `bvh_exhausted`. Measured worst cases, in iterations per trace (lavapipe; tests/tests/bvh.rs, and
 //! once on the archive scenes with 20,000 gather-like rays from surface points and 20,000 segments
 //! between surface points, a third of them lifted to skim the surfaces): 41 on the Cornell box (where
-//! the bound is 74: nodes + triangles + 1), 416 on the 50k sphere, 324 on the 301k terrain, 169 on
+//! the bound is 74: nodes + triangles + 1), 237 on the 52k sphere, 324 on the 301k terrain, 169 on
 //! Sibenik (75k triangles), 355 on Conference (278k hittable triangles), and 1,152 for horizontal rays
 //! skimming a 301k-triangle rippled floor, the worst case found. 16384 is 14× that, and still lets an
 //! llvmpipe invocation make 3 full-length traces.

@@ -9,9 +9,9 @@
 //! **Why two levels (and not one flat float32 prefix).** A flat prefix over 2 × 1024² texels adds
 //! ~2·10⁶ terms into one float32 accumulator: late texels' masses fall below the accumulator's ulp and
 //! the CDF stops resolving them. Here no sum has more than max(rows, row_length) ≤ 2048 terms per light
-//! pair, so each prefix keeps ~1e-4 relative accuracy in the worst case, and the estimator divides by
-//! the texel's own importance / total (read from the importance buffer, not from CDF differences), so
-//! the pdf it uses is exact for the texel drawn. Negative, NaN and infinite weights count as 0. The
+//! pair. The sampler draws the row and the texel within it with two uniforms, and the estimator divides
+//! by the probability computed from the same float prefixes the search reads (`cdf_prob_rows` in
+//! `glsl/shared/cdf.glsl`), exact up to the 24-bit resolution of each uniform against its own total. Negative, NaN and infinite weights count as 0. The
 //! sampling side (binary search, u = 0, u → 1, runs of zero-weight texels) is in `glsl/shared/cdf.glsl`.
 
 use crate::bindings::*;
