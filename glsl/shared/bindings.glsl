@@ -48,6 +48,13 @@
 #define IMP_GBG_SCATTER 4
 #define IMP_GBG_RESOLVE 5
 #define B_REF_SQ 28
+
+// The BVH (crates/graph/src/bvh.rs, glsl/shared/bvh.glsl): node and triangle buffers, and the traversal's
+// bounds (loop iterations per trace, stack depth).
+#define B_BVH_NODES 26
+#define B_BVH_TRIS 27
+#define BVH_MAX_STEPS 16384
+#define BVH_STACK_SIZE 64
 #define B_GBG_SUM 24
 #define B_GBG_COUNT 25
 #define FACE_RR 0

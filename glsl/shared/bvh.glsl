@@ -1,4 +1,4 @@
-// Ray casting against the scene's BVH: closest hit and segment occlusion. Self-contained (no other include);
+// Ray casting against the scene's BVH: closest hit and segment occlusion. Includes only bindings.glsl;
 // crates/graph/src/bvh.rs builds the buffers (from the CPU reference's SAH tree, crates/graph/src/cpu_ref.rs)
 // and documents the layout; tests/tests/bvh.rs checks every function here against that CPU reference.
 //
@@ -51,19 +51,9 @@
 #ifndef BOUNCE_BVH_GLSL
 #define BOUNCE_BVH_GLSL
 
-// Binding numbers (mirrored as B_BVH_NODES / B_BVH_TRIS in crates/graph/src/bvh.rs; they move to
-// bindings.glsl later, hence the guards).
-#ifndef B_BVH_NODES
-#define B_BVH_NODES 26
-#endif
-#ifndef B_BVH_TRIS
-#define B_BVH_TRIS 27
-#endif
+// Binding numbers and bounds: glsl/shared/bindings.glsl (the single source, also for Rust).
+#include "bindings.glsl"
 
-// Most loop iterations of one call (bvh.rs: MAX_STEPS).
-#define BVH_MAX_STEPS 16384
-// Traversal stack entries = the most levels below the root (bvh.rs: STACK_SIZE).
-#define BVH_STACK_SIZE 64
 // bvh_tri of "no hit" (bvh.rs: NO_TRI).
 #define BVH_NO_TRI 0xFFFFFFFFu
 

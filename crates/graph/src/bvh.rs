@@ -47,9 +47,8 @@
 //! skimming a 301k-triangle rippled floor, the worst case found. 16384 is 14× that, and still lets an
 //! llvmpipe invocation make 3 full-length traces.
 //!
-//! **Bindings.** [`B_BVH_NODES`] = 26 and [`B_BVH_TRIS`] = 27 are defined at the top of `bvh.glsl`
-//! (guarded by `#ifndef`) until they move to `bindings.glsl`; the constants here mirror them and a
-//! test compares the two files.
+//! **Bindings.** [`B_BVH_NODES`], [`B_BVH_TRIS`], [`MAX_STEPS`] and [`STACK_SIZE`] come from
+//! `glsl/shared/bindings.glsl` (generated constants); a test checks the rest of `bvh.glsl`'s constants.
 
 use crate::cpu_ref::Bvh;
 use crate::scene::Scene;
@@ -60,14 +59,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::mem::{offset_of, size_of};
 
-/// Binding of the node buffer (`B_BVH_NODES` in `glsl/shared/bvh.glsl`).
-pub const B_BVH_NODES: u32 = 26;
-/// Binding of the triangle buffer (`B_BVH_TRIS` in `glsl/shared/bvh.glsl`).
-pub const B_BVH_TRIS: u32 = 27;
+pub use crate::bindings::{B_BVH_NODES, B_BVH_TRIS};
 /// Most loop iterations of one trace (`BVH_MAX_STEPS`); see the module doc.
-pub const MAX_STEPS: u32 = 16384;
+pub const MAX_STEPS: u32 = crate::bindings::BVH_MAX_STEPS;
 /// Traversal stack entries, and the most levels below the root a tree may have (`BVH_STACK_SIZE`).
-pub const STACK_SIZE: u32 = 64;
+pub const STACK_SIZE: u32 = crate::bindings::BVH_STACK_SIZE;
 /// The triangle index of "no hit" (`BVH_NO_TRI`).
 pub const NO_TRI: u32 = u32::MAX;
 /// Relative end epsilon of `bvh_occluded` (`BVH_SHADOW_EPS`), the CPU reference's
@@ -509,10 +505,6 @@ mod tests {
                 .next()
                 .unwrap_or_else(|| panic!("#define {name} not in bvh.glsl"))
         };
-        assert_eq!(define("B_BVH_NODES"), B_BVH_NODES.to_string());
-        assert_eq!(define("B_BVH_TRIS"), B_BVH_TRIS.to_string());
-        assert_eq!(define("BVH_MAX_STEPS"), MAX_STEPS.to_string());
-        assert_eq!(define("BVH_STACK_SIZE"), STACK_SIZE.to_string());
         assert_eq!(define("BVH_NO_TRI"), format!("0x{NO_TRI:X}u"));
         assert!(src.contains("const float BVH_SHADOW_EPS = 1e-4;"));
         assert_eq!(SHADOW_EPS, 1e-4);
