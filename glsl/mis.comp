@@ -142,7 +142,7 @@ void main() {
                 // Exact gathering: the ray's first hit on the real triangles, then each light's VPL there.
                 uint hit_tri;
                 vec2 hit_bary;
-                float lift = 1e-5 * frame.scene_min.w;
+                float lift = surface_lift(x, frame.scene_min.w);
                 float th = bvh_closest(x + nx * lift, d, 1e30, hit_tri, hit_bary);
                 vec3 hit_p = x + nx * lift + d * th;
 #endif

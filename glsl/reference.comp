@@ -45,8 +45,8 @@ void main() {
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
         vec3 t1 = normalize(abs(n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), n) : cross(vec3(1.0, 0.0, 0.0), n));
         vec3 t2 = cross(n, t1);
-        // Leave x's own triangle: a small offset along the normal, relative to the scene's size.
-        vec3 o = x + n * (1e-5 * frame.scene_min.w);
+        // Leave x's own triangle: a small offset along the normal (see surface_lift).
+        vec3 o = x + n * surface_lift(x, frame.scene_min.w);
         uint base = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x2545F491u;
         for (uint k = pc.first; k < pc.last; k++) {
             uint rng = pcg_hash(base ^ pcg_hash(k + 0x9E3779B9u));

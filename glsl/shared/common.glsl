@@ -27,6 +27,14 @@ vec3 paraboloid_direction(vec2 uv) {
     return vec3(2.0 * uv, 1.0 - r2) / (1.0 + r2);
 }
 
+// How far to lift a ray's origin off the surface at x: 1e-5 of the scene diagonal, but never less than
+// 2⁻¹⁸ of |x| (about 32 float ulps of x's largest coordinate), so that the lift survives rounding far
+// from the origin.
+float surface_lift(vec3 x, float diagonal) {
+    vec3 a = abs(x);
+    return max(1e-5 * diagonal, max(a.x, max(a.y, a.z)) * (1.0 / 262144.0));
+}
+
 // Möller–Trumbore with barycentrics: (t, b1, b2) with the hit at (1−b1−b2)·a + b1·b + b2·c, or
 // t = −1 when missed.
 vec3 ray_triangle_bary(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {

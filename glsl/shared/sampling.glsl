@@ -85,14 +85,14 @@ uint draw_vpl(inout uint rng, out float prob) {
 
 // The shadowed contribution. Visibility: the voxel march (default), or with EXACT_VISIBILITY defined (the
 // `*.exact.comp` variants, `--visibility exact`) a shadow ray against the real triangles (BVH) between
-// points lifted off their surfaces by 1e-5 of the scene diagonal along their normals.
+// points lifted off their surfaces along their normals (surface_lift in common.glsl).
 vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
     Vpl vpl = vpl_fetch(v);
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return c;
 #ifdef EXACT_VISIBILITY
-    float lift = 1e-5 * frame.scene_min.w;
-    return bvh_occluded(x + nx * lift, vpl.position + vpl.normal * lift) ? vec3(0.0) : c;
+    float lx = surface_lift(x, frame.scene_min.w), lv = surface_lift(vpl.position, frame.scene_min.w);
+    return bvh_occluded(x + nx * lx, vpl.position + vpl.normal * lv) ? vec3(0.0) : c;
 #else
     return c * voxel_visibility(x, nx, vpl.position, vpl.normal);
 #endif

@@ -10,6 +10,7 @@ mod graph;
 mod images;
 
 mod layout;
+mod stress;
 mod validation;
 mod voxelize;
 mod vpl;
