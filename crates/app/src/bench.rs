@@ -33,11 +33,21 @@ pub struct Sample {
     pub metrics: Metrics,
 }
 
+/// What the errors are measured against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reference {
+    /// The path-traced one-bounce ground truth (`--method reference`) at `spp` samples per pixel.
+    Path { spp: u32 },
+    /// The exhaustive VPL sum on the same VPL set: isolates the selection error.
+    All,
+}
+
 pub struct BenchPlan {
     pub methods: Vec<Method>,
     pub vpls: Vec<u32>,
     pub repeats: u32,
     pub base: FrameSettings,
+    pub reference: Reference,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -60,8 +70,12 @@ fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
     let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let parent =
         scene.parent().and_then(|p| p.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let (kind, method, spp) = match plan.reference {
+        Reference::Path { spp } => (format!("path{spp}"), Method::Reference, spp),
+        Reference::All => ("all".to_string(), Method::All, b.spp),
+    };
     let name = format!(
-        "reference-all-{parent}-{stem}-{}x{}-dprsm{}-vox{}-clamp{}.exr",
+        "reference-{kind}-{parent}-{stem}-{}x{}-dprsm{}-vox{}-clamp{}.exr",
         b.width, b.height, b.dprsm_res, b.voxels, b.clamp
     );
     let path = dir.join(name);
@@ -72,16 +86,16 @@ fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
             return Ok(img);
         }
     }
-    writeln!(err, "reference: rendering every VPL (method all) into {}", path.display())?;
+    writeln!(err, "reference: rendering {kind} into {}", path.display())?;
     let bar = indicatif::ProgressBar::new(0);
-    let s = FrameSettings { method: Method::All, component: Component::Indirect, ..b.clone() };
+    let s = FrameSettings { method, spp, component: Component::Indirect, ..b.clone() };
     let f = r.render_with_progress(&s, &mut |done, total| {
         bar.set_length(total);
         bar.set_position(done);
     })?;
     bar.finish_and_clear();
     let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
-    output::write_exr(&path, &img, &[("component", "indirect".into()), ("method", "all".into())])?;
+    output::write_exr(&path, &img, &[("component", "indirect".into()), ("method", method.name().into())])?;
     Ok(img)
 }
 
@@ -173,9 +187,18 @@ pub fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &
     let b = &plan.base;
     let mut md = format!(
         "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {} repeat(s) \
-         (seeds 1..={}); medians over repeats. Reference: the exhaustive VPL sum (`--method all`). GPU time: the sum of \
-         the frame's pass timestamps.\n\n## GPU time (ms), relMSE and mean FLIP against the reference\n\n| method |",
-        b.width, b.height, b.dprsm_res, b.voxels, b.clamp, plan.repeats, plan.repeats
+         (seeds 1..={}); medians over repeats. Reference: {}. GPU time: the sum of the frame's pass timestamps.\n\n## GPU time (ms), relMSE and mean FLIP against the reference\n\n| method |",
+        b.width,
+        b.height,
+        b.dprsm_res,
+        b.voxels,
+        b.clamp,
+        plan.repeats,
+        plan.repeats,
+        match plan.reference {
+            Reference::Path { spp } => format!("the path-traced ground truth (`--method reference`, {spp} spp)"),
+            Reference::All => "the exhaustive VPL sum on the same VPL set (`--method all`)".to_string(),
+        }
     );
     for n in &plan.vpls {
         md.push_str(&format!(" {n} VPLs: ms | relMSE | FLIP |"));

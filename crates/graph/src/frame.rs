@@ -159,7 +159,7 @@ impl Default for FrameSettings {
             defensive: 0.1,
             face: FaceMode::RussianRoulette,
             mis_weights: MisWeights::Consistent,
-            spp: 1024,
+            spp: 4096,
             visibility: Visibility::Voxel,
             shadow_res: 2048,
             shadow_bias: 1e-5,
