@@ -100,3 +100,44 @@ fn an_overwrite_kills_earlier_writers_but_a_write_keeps_them() {
     let px: Vec<f32> = bytemuck::pod_collect_to_vec(&done.read_image(&y).unwrap());
     assert!(px.iter().all(|&v| v == 1.0));
 }
+
+/// Skipping what a frame does not need: a second frame whose inputs are unchanged records only the
+/// gather (read from the graph's list of recorded passes, not from timings) and gives the same image;
+/// another seed for `uniform` (whose CDF does not depend on it) still records only the gather; a method
+/// whose importance depends on the seed, or another image size, rebuilds.
+#[test]
+fn an_unchanged_frame_records_only_the_gather() {
+    use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+    use bounce_graph::scene::Scene;
+    let gpu = TestGpu::new();
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let s = FrameSettings {
+        width: 24,
+        height: 24,
+        component: Component::Combined,
+        method: Method::Uniform,
+        vpls: 4,
+        dprsm_res: 32,
+        shadow_res: 128,
+        voxels: 32,
+        ..FrameSettings::default()
+    };
+    let first = r.render(&s).unwrap();
+    for pass in ["gbuffer", "dprsm_depth", "direct", "dprsm", "voxelize", "importance", "cdf_reduce", "gather"] {
+        assert!(first.ran.contains(&pass), "the first frame lacks {pass}: {:?}", first.ran);
+    }
+    let second = r.render(&s).unwrap();
+    assert_eq!(second.ran, vec!["gather"], "an unchanged frame recorded more than the gather");
+    assert_eq!(first.radiance, second.radiance);
+    let reseeded = r.render(&FrameSettings { seed: 99, ..s.clone() }).unwrap();
+    assert_eq!(reseeded.ran, vec!["gather"]);
+    assert_ne!(reseeded.radiance, first.radiance);
+    let gbg = FrameSettings { method: Method::Gbg, ..s.clone() };
+    assert!(r.render(&gbg).unwrap().ran.contains(&"importance"));
+    assert_eq!(r.render(&gbg).unwrap().ran, vec!["gather"]);
+    let gbg2 = r.render(&FrameSettings { seed: 5, ..gbg.clone() }).unwrap();
+    assert!(gbg2.ran.contains(&"importance"), "gbg's importance depends on the seed: {:?}", gbg2.ran);
+    let bigger = r.render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
+    assert!(bigger.ran.contains(&"gbuffer"));
+}

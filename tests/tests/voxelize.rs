@@ -764,4 +764,3 @@ fn gpu_reciprocal_has_the_cpu_bits_and_is_accurate() {
     }
     eprintln!("voxel_rcp: {} inputs, GPU bits = CPU bits, worst |c·rcp(c) − 1| = {worst:.2e}", inputs.len());
 }
-

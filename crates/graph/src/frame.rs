@@ -9,7 +9,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::{Graph, Handle, PassTiming, Persistent};
 use crate::passes::cdf_reduce::CdfReduce;
 use crate::passes::gather::{Gather, GatherInputs};
-use crate::passes::importance::{Importance, ImportanceKind, ImportanceParams};
+use crate::passes::importance::{Importance, ImportanceKind, ImportanceOut, ImportanceParams};
 use crate::passes::voxelize::{self, VoxelGridSpec, Voxelize};
 use crate::passes::{direct::Direct, dprsm::Dprsm, gbuffer::GBuffer, FrameInputs};
 use crate::scene::Scene;
@@ -221,6 +221,35 @@ impl FrameSettings {
     }
 }
 
+/// What a frame's static products (G-buffer, VPL maps, direct light, importance, CDF) depend on. The
+/// camera and the lights are fixed for a `Renderer`; everything else that feeds those passes is here.
+#[derive(Clone, Debug, PartialEq)]
+struct CacheKey {
+    width: u32,
+    height: u32,
+    combined: bool,
+    dprsm_res: u32,
+    shadow_res: u32,
+    voxels: u32,
+    shadow_bias_bits: (u32, u32),
+    importance: ImportanceKind,
+    cdf_samples: u32,
+    min_d2_bits: u32,
+    /// The importance's random seed, for the kinds that draw gather points or rays.
+    importance_seed: Option<u32>,
+}
+
+/// The static products of the last sampled frame, kept so that a frame whose [`CacheKey`] is unchanged
+/// records only the gather ("skip what a scene does not need").
+pub struct FrameCache {
+    key: CacheKey,
+    /// G-buffer position, normal, albedo; VPL position, normal, flux; then the direct image if combined.
+    images: Vec<Persistent<Image>>,
+    importance: Persistent<Buffer>,
+    cdf: Persistent<Buffer>,
+    sections: u32,
+}
+
 /// The voxel grid of the scene: built once per grid size, reused by every frame and method.
 struct VoxelState {
     voxels: u32,
@@ -248,6 +277,7 @@ pub struct Renderer {
     vertices: Vec<crate::shader_types::Vertex>,
     bvh: std::cell::OnceCell<crate::bvh::GpuBvh>,
     voxel_state: RefCell<Option<VoxelState>>,
+    frame_cache: RefCell<Option<FrameCache>>,
 }
 
 /// A rendered frame, read back.
@@ -290,25 +320,49 @@ pub fn build_frame<'a>(
     s: &FrameSettings,
     mut voxels: Handle<Buffer>,
     voxels_built: bool,
+    cached: Option<&'a FrameCache>,
 ) -> FrameHandles {
-    let gbuffer = r.gbuffer.add(g, f);
-    let shadow = r.dprsm.add_depth(g, f);
-    let direct = r.direct.add(g, f, &gbuffer, &shadow);
-    let vpls = r.dprsm.add(g, f);
     if !voxels_built {
         r.voxelize.add(g, f, &mut voxels);
     }
-    let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, r.importance_params(s));
     let rows = 2 * f.scene.light_count * f.dprsm_res;
-    let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
-    let gather_inputs = GatherInputs::new(
-        &gbuffer,
-        &vpls,
-        voxels,
-        imp.importance,
-        cdf,
-        (s.component == Component::Combined).then_some(direct),
-    );
+    let (gather_inputs, direct, imp) = match cached {
+        // Nothing these passes read has changed since the cached frame: import their results instead.
+        Some(c) => {
+            let im: Vec<Handle<Image>> = c.images.iter().map(|p| g.import_image(p)).collect();
+            let inputs = GatherInputs {
+                g_position: im[0],
+                g_normal: im[1],
+                g_albedo: im[2],
+                vpl_position: im[3],
+                vpl_normal: im[4],
+                vpl_flux: im[5],
+                voxels,
+                importance: g.import_buffer(&c.importance),
+                cdf: g.import_buffer(&c.cdf),
+                direct: im.get(6).copied(),
+            };
+            let imp = ImportanceOut { importance: inputs.importance, sections: c.sections };
+            (inputs, im.get(6).copied().unwrap_or(im[2]), imp)
+        }
+        None => {
+            let gbuffer = r.gbuffer.add(g, f);
+            let shadow = r.dprsm.add_depth(g, f);
+            let direct = r.direct.add(g, f, &gbuffer, &shadow);
+            let vpls = r.dprsm.add(g, f);
+            let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, r.importance_params(s));
+            let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
+            let inputs = GatherInputs::new(
+                &gbuffer,
+                &vpls,
+                voxels,
+                imp.importance,
+                cdf,
+                (s.component == Component::Combined).then_some(direct),
+            );
+            (inputs, direct, imp)
+        }
+    };
     let out = match (s.component, s.method) {
         (Component::Direct, _) => Some(direct),
         (_, Method::All) => None,
@@ -390,6 +444,7 @@ impl Renderer {
             vertices: scene.vertices.clone(),
             bvh: std::cell::OnceCell::new(),
             voxel_state: RefCell::new(None),
+            frame_cache: RefCell::new(None),
         })
     }
 
@@ -412,6 +467,23 @@ impl Renderer {
         let per_vpl =
             if s.method == Method::Mis { per_vpl + 2 * self.scene.light_count * (march + 64) } else { per_vpl };
         ((limit.saturating_sub(64)) / per_vpl).max(1)
+    }
+
+    fn cache_key(&self, s: &FrameSettings) -> CacheKey {
+        let p = self.importance_params(s);
+        CacheKey {
+            width: s.width,
+            height: s.height,
+            combined: s.component == Component::Combined,
+            dprsm_res: s.dprsm_res,
+            shadow_res: s.shadow_res,
+            voxels: s.voxels,
+            shadow_bias_bits: (s.shadow_bias.to_bits(), s.shadow_slope_bias.to_bits()),
+            importance: p.kind,
+            cdf_samples: s.cdf_samples,
+            min_d2_bits: p.min_d2.to_bits(),
+            importance_seed: (p.kind != ImportanceKind::Uniform).then_some(p.seed),
+        }
     }
 
     /// The importance pass's parameters for `s`.
@@ -579,9 +651,22 @@ impl Renderer {
         let f = self.frame_inputs(s, &uniforms);
         let vox_guard = self.voxel_state.borrow();
         let vox = vox_guard.as_ref().expect("ensure_voxels made the grid");
+        // Sampled indirect/combined frames keep their static products for the next frame.
+        let cacheable = s.component != Component::Direct && s.method != Method::All;
+        let key = self.cache_key(s);
+        let cache_guard = self.frame_cache.borrow();
+        let hit = cache_guard.as_ref().filter(|c| cacheable && c.key == key);
         let mut g = Graph::new(&self.gpu);
         let voxels = g.import_buffer(&vox.buffer);
-        let h = build_frame(self, &mut g, f, s, voxels, vox.built);
+        let h = build_frame(self, &mut g, f, s, voxels, vox.built, hit);
+        let keep_products = cacheable && hit.is_none();
+        if keep_products {
+            for img in h.gather_inputs.images() {
+                g.export(&img);
+            }
+            g.export(&h.gather_inputs.importance);
+            g.export(&h.gather_inputs.cdf);
+        }
         if let Some(out) = &h.out {
             g.export(out);
         } else {
@@ -599,6 +684,7 @@ impl Renderer {
         let mut ran = done.ran.clone();
         let skipped = done.skipped.clone();
         let mut warnings = vec![];
+        let mut new_cache = None;
         let method_sections = self.importance_params(s).kind.method_sections();
         let radiance_bytes = if let Some(out) = &h.out {
             if s.component != Component::Direct && method_sections > 0 {
@@ -614,7 +700,20 @@ impl Renderer {
                     ));
                 }
             }
-            done.read_image(out)?
+            let bytes = done.read_image(out)?;
+            if keep_products {
+                let i = h.gather_inputs;
+                let images: Vec<Persistent<Image>> =
+                    i.images().iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
+                new_cache = Some(FrameCache {
+                    key: key.clone(),
+                    images,
+                    importance: done.take_buffer(&i.importance)?,
+                    cdf: done.take_buffer(&i.cdf)?,
+                    sections: method_sections + 1,
+                });
+            }
+            bytes
         } else {
             // Keep what the tiles read: each tile is its own graph (and submission) importing these.
             let i = h.gather_inputs;
@@ -666,8 +765,12 @@ impl Renderer {
             }
         };
         drop(vox_guard);
+        drop(cache_guard);
         if voxelized {
             self.voxel_state.borrow_mut().as_mut().expect("grid exists").built = true;
+        }
+        if new_cache.is_some() {
+            *self.frame_cache.borrow_mut() = new_cache;
         }
         Ok(FrameOutput {
             width: s.width,

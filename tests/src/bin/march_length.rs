@@ -14,13 +14,14 @@ fn main() -> anyhow::Result<()> {
     let scene = Scene::load(&bounce_tests::default_scene())?;
     let spec = voxelize::fit(scene.bounds_min, scene.bounds_max, voxels);
     let grid = cpu_voxel::voxelize_scene(&scene, spec);
-    let tris: Vec<[Vec3; 3]> = scene.vertices.chunks(3).map(|v| [v[0].position(), v[1].position(), v[2].position()]).collect();
+    let tris: Vec<[Vec3; 3]> =
+        scene.vertices.chunks(3).map(|v| [v[0].position(), v[1].position(), v[2].position()]).collect();
     let mut state = 7u64;
     let mut rnd = move || {
         state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((state >> 40) as f32) / (1u64 << 24) as f32
     };
-    let mut point = |rnd: &mut dyn FnMut() -> f32| {
+    let point = |rnd: &mut dyn FnMut() -> f32| {
         let t = tris[(rnd() * tris.len() as f32) as usize % tris.len()];
         let (a, b) = (rnd(), rnd());
         let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
