@@ -94,13 +94,9 @@ impl Gather {
     /// the variant with exact visibility, which also binds the BVH.
     pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: &[u8], exact: &[u8]) -> Result<Self> {
         let mut bindings = scene_bindings();
+        bindings.extend(super::gbuffer_bindings());
+        bindings.extend(super::vpl_bindings());
         bindings.extend([
-            Binding::sampled_image(B_GATHER_GPOSITION),
-            Binding::sampled_image(B_GATHER_GNORMAL),
-            Binding::sampled_image(B_GATHER_GALBEDO),
-            Binding::sampled_image(B_VPL_POSITION),
-            Binding::sampled_image(B_VPL_NORMAL),
-            Binding::sampled_image(B_VPL_FLUX),
             Binding::storage_buffer(B_VOXELS),
             Binding::storage_buffer(B_IMPORTANCE),
             Binding::storage_buffer(B_CDF),
@@ -146,15 +142,9 @@ impl Gather {
                 (Some(d), 1) => ctx.image(d),
                 _ => ctx.image(&i.g_albedo),
             };
-            let writes = f
-                .scene
-                .writes(f.uniforms)
-                .sampled_image(B_GATHER_GPOSITION, ctx.image(&i.g_position), s)
-                .sampled_image(B_GATHER_GNORMAL, ctx.image(&i.g_normal), s)
-                .sampled_image(B_GATHER_GALBEDO, ctx.image(&i.g_albedo), s)
-                .sampled_image(B_VPL_POSITION, ctx.image(&i.vpl_position), s)
-                .sampled_image(B_VPL_NORMAL, ctx.image(&i.vpl_normal), s)
-                .sampled_image(B_VPL_FLUX, ctx.image(&i.vpl_flux), s)
+            let writes =
+                super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&i.g_position, &i.g_normal, &i.g_albedo], s);
+            let writes = super::vpl_writes(writes, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s)
                 .storage_buffer(B_VOXELS, ctx.buffer(&i.voxels))
                 .storage_buffer(B_IMPORTANCE, ctx.buffer(&i.importance))
                 .storage_buffer(B_CDF, ctx.buffer(&i.cdf))

@@ -87,15 +87,9 @@ pub struct ImportanceOut {
 impl Importance {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         let mut bindings = scene_bindings();
-        bindings.extend([
-            Binding::sampled_image(B_GATHER_GPOSITION),
-            Binding::sampled_image(B_GATHER_GNORMAL),
-            Binding::sampled_image(B_GATHER_GALBEDO),
-            Binding::sampled_image(B_VPL_POSITION),
-            Binding::sampled_image(B_VPL_NORMAL),
-            Binding::sampled_image(B_VPL_FLUX),
-            Binding::storage_buffer(B_IMPORTANCE),
-        ]);
+        bindings.extend(super::gbuffer_bindings());
+        bindings.extend(super::vpl_bindings());
+        bindings.push(Binding::storage_buffer(B_IMPORTANCE));
         let push = std::mem::size_of::<ImportancePush>() as u32;
         let pipeline =
             ComputePipeline::new(gpu, "importance", &crate::spirv(shaders::IMPORTANCE_COMP), &bindings, push, &[])?;
@@ -157,15 +151,9 @@ impl Importance {
         let scratch = scratch;
         b.overwrite(&mut importance, Access::ComputeWrite).record(move |ctx| {
             let s = self.sampler.raw;
-            let mut writes = f
-                .scene
-                .writes(f.uniforms)
-                .sampled_image(B_GATHER_GPOSITION, ctx.image(&gb.position), s)
-                .sampled_image(B_GATHER_GNORMAL, ctx.image(&gb.normal), s)
-                .sampled_image(B_GATHER_GALBEDO, ctx.image(&gb.albedo), s)
-                .sampled_image(B_VPL_POSITION, ctx.image(&vpls.position), s)
-                .sampled_image(B_VPL_NORMAL, ctx.image(&vpls.normal), s)
-                .sampled_image(B_VPL_FLUX, ctx.image(&vpls.flux), s)
+            let writes =
+                super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&gb.position, &gb.normal, &gb.albedo], s);
+            let mut writes = super::vpl_writes(writes, ctx, [&vpls.position, &vpls.normal, &vpls.flux], s)
                 .storage_buffer(B_IMPORTANCE, ctx.buffer(&out));
             let layers = 2 * f.scene.light_count;
             let res = f.dprsm_res;

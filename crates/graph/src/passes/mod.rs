@@ -32,3 +32,42 @@ pub struct FrameInputs<'a> {
     /// iteration limit (`Gpu::loop_iteration_limit`); `u32::MAX` where there is none.
     pub vpls_per_dispatch: u32,
 }
+
+use crate::bindings::*;
+use crate::graph::{Handle, PassContext};
+use bounce_device::{vk, Binding, DescriptorWrites, Image};
+
+/// The G-buffer as the compute passes read it (sampled, at the `B_GATHER_G*` bindings).
+pub fn gbuffer_bindings() -> [Binding; 3] {
+    [
+        Binding::sampled_image(B_GATHER_GPOSITION),
+        Binding::sampled_image(B_GATHER_GNORMAL),
+        Binding::sampled_image(B_GATHER_GALBEDO),
+    ]
+}
+
+/// The reflective DPRSM's VPL images as the compute passes read them (sampled, `B_VPL_*`).
+pub fn vpl_bindings() -> [Binding; 3] {
+    [Binding::sampled_image(B_VPL_POSITION), Binding::sampled_image(B_VPL_NORMAL), Binding::sampled_image(B_VPL_FLUX)]
+}
+
+/// Writes for [`gbuffer_bindings`]: position, normal, albedo.
+pub fn gbuffer_writes(
+    w: DescriptorWrites,
+    ctx: &PassContext,
+    g: [&Handle<Image>; 3],
+    s: vk::Sampler,
+) -> DescriptorWrites {
+    w.sampled_image(B_GATHER_GPOSITION, ctx.image(g[0]), s)
+        .sampled_image(B_GATHER_GNORMAL, ctx.image(g[1]), s)
+        .sampled_image(B_GATHER_GALBEDO, ctx.image(g[2]), s)
+}
+
+/// Writes for [`vpl_bindings`]: position, normal, flux.
+pub fn vpl_writes(w: DescriptorWrites, ctx: &PassContext, v: [&Handle<Image>; 3], s: vk::Sampler) -> DescriptorWrites {
+    w.sampled_image(B_VPL_POSITION, ctx.image(v[0]), s).sampled_image(B_VPL_NORMAL, ctx.image(v[1]), s).sampled_image(
+        B_VPL_FLUX,
+        ctx.image(v[2]),
+        s,
+    )
+}

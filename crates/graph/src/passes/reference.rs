@@ -33,10 +33,8 @@ pub struct ReferenceIo {
 impl Reference {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         let mut bindings = scene_bindings();
+        bindings.extend(super::gbuffer_bindings());
         bindings.extend([
-            Binding::sampled_image(B_GATHER_GPOSITION),
-            Binding::sampled_image(B_GATHER_GNORMAL),
-            Binding::sampled_image(B_GATHER_GALBEDO),
             Binding::sampled_image(B_GATHER_DIRECT),
             Binding::storage_image(B_GATHER_OUT),
             Binding::storage_image(B_REF_SQ),
@@ -91,11 +89,7 @@ impl Reference {
                 _ => ctx.image(&io.g_albedo),
             };
             let writes = bvh.writes(
-                f.scene
-                    .writes(f.uniforms)
-                    .sampled_image(B_GATHER_GPOSITION, ctx.image(&io.g_position), s)
-                    .sampled_image(B_GATHER_GNORMAL, ctx.image(&io.g_normal), s)
-                    .sampled_image(B_GATHER_GALBEDO, ctx.image(&io.g_albedo), s)
+                super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&io.g_position, &io.g_normal, &io.g_albedo], s)
                     .sampled_image(B_GATHER_DIRECT, direct, s)
                     .storage_image(B_GATHER_OUT, ctx.image(&hs))
                     .storage_image(B_REF_SQ, ctx.image(&hq)),
