@@ -1,7 +1,7 @@
 //! `bounce bench`: run time against error for every method and VPL count.
 //!
-//! For each method × VPL count it renders `--repeats` frames (seeds 1..=K) of the indirect component
-//! and records, per frame, the GPU time (sum of pass timestamps) and each pass's time, the wall time of
+//! For each method × VPL count it renders `--repeats` full frames (seeds 1..=K; the renderer's frame
+//! cache is cleared before each) of the indirect component and records, per frame, the GPU time (sum of pass timestamps) and each pass's time, the wall time of
 //! `Renderer::render`, and the error against a reference image. The reference is the exhaustive VPL sum
 //! (`--method all`) on the same VPL set, rendered once and cached in the output folder under a name
 //! keyed by the scene and the settings that change it. It writes:
@@ -117,6 +117,8 @@ pub fn run(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut d
             for seed in 1..=plan.repeats as u64 {
                 bar.set_message(format!("{} {vpls}", method.name()));
                 let s = FrameSettings { method, vpls, seed, component: Component::Indirect, ..plan.base.clone() };
+                // Full frames for every method (a seed-independent CDF would otherwise be reused).
+                r.clear_frame_cache();
                 let t0 = Instant::now();
                 let f = r.render(&s)?;
                 let wall_ms = t0.elapsed().as_secs_f64() * 1e3;

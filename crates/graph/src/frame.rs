@@ -469,6 +469,12 @@ impl Renderer {
         ((limit.saturating_sub(64)) / per_vpl).max(1)
     }
 
+    /// Forget the cached static products: the next frame records every pass it needs. `bounce bench`
+    /// does this before each timed frame, so that every method pays for its full frame.
+    pub fn clear_frame_cache(&self) {
+        *self.frame_cache.borrow_mut() = None;
+    }
+
     fn cache_key(&self, s: &FrameSettings) -> CacheKey {
         let p = self.importance_params(s);
         CacheKey {
