@@ -129,6 +129,8 @@ fn a_missing_scene_file_and_impossible_sizes_are_exit_2() {
     );
     let r = bounce(&["render", scene.to_str().unwrap(), "--component", "sideways"]);
     assert_eq!(r.code, 2);
+    assert_eq!(r.stderr.lines().count(), 1, "an argument error is one line: {}", r.stderr);
+    assert!(r.stderr.starts_with("error:") && r.stderr.contains("sideways"), "{}", r.stderr);
     for (flag, value, named) in [
         ("--regions", "3", "regions"),
         ("--vpls", "0", "VPL count"),
@@ -195,4 +197,125 @@ fn bench_writes_csv_markdown_and_a_plot() {
     assert!(r2.stderr.contains("(cached)"), "{}", r2.stderr);
     let bad = bounce(&["bench", scene.to_str().unwrap(), "--out", d.to_str().unwrap(), "--methods", "all"]);
     assert_eq!(bad.code, 2);
+}
+
+/// Broken inputs: each gives exit code 2, exactly one `error:` line naming what is wrong, no output file,
+/// and no panic (a panic would not return through `bounce::run` as a code at all).
+#[test]
+fn bad_inputs_give_one_line_and_exit_2() {
+    let d = scratch("bad-inputs");
+    let good_obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let toml = |mesh: &str, extra: &str| {
+        format!("mesh = \"{mesh}\"\n[camera]\neye=[0,0.5,3]\ntarget=[0,0.5,0]\nup=[0,1,0]\nfov_y=40\n[[light]]\nposition=[0,0.5,1]\nintensity=[1,1,1]\n{extra}")
+    };
+    // (name, files to write, args after the scene, text the error must contain)
+    let cases: Vec<(&str, Vec<(&str, String)>, Vec<&str>, &str)> = vec![
+        (
+            "nan vertex",
+            vec![("m.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".into()), ("s.toml", toml("m.obj", ""))],
+            vec![],
+            "m.obj:2",
+        ),
+        (
+            "inf vertex",
+            vec![("m.obj", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n".into()), ("s.toml", toml("m.obj", ""))],
+            vec![],
+            "m.obj:2",
+        ),
+        (
+            "index out of range",
+            vec![("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n".into()), ("s.toml", toml("m.obj", ""))],
+            vec![],
+            "m.obj",
+        ),
+        (
+            "missing mtl",
+            vec![("m.obj", format!("mtllib nope.mtl\n{good_obj}")), ("s.toml", toml("m.obj", ""))],
+            vec![],
+            "nope.mtl",
+        ),
+        (
+            "missing texture",
+            vec![
+                ("m.obj", format!("mtllib m.mtl\nusemtl a\n{good_obj}")),
+                ("m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd gone.png\n".into()),
+                ("s.toml", toml("m.obj", "")),
+            ],
+            vec![],
+            "gone.png",
+        ),
+        (
+            "negative intensity",
+            vec![
+                ("m.obj", good_obj.into()),
+                ("s.toml", toml("m.obj", "").replace("intensity=[1,1,1]", "intensity=[1,-1,1]")),
+            ],
+            vec![],
+            "intensity",
+        ),
+        (
+            "fov 180",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", "").replace("fov_y=40", "fov_y=180"))],
+            vec![],
+            "fov",
+        ),
+        (
+            "unknown key",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", "[render]\nwidht = 3\n"))],
+            vec![],
+            "widht",
+        ),
+        (
+            "no light",
+            vec![
+                ("m.obj", good_obj.into()),
+                (
+                    "s.toml",
+                    "mesh = \"m.obj\"\n[camera]\neye=[0,0.5,3]\ntarget=[0,0.5,0]\nup=[0,1,0]\nfov_y=40\n".into(),
+                ),
+            ],
+            vec![],
+            "light",
+        ),
+        (
+            "huge width",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--width", "1000000"],
+            "width",
+        ),
+        ("zero vpls", vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))], vec!["--vpls", "0"], "VPL"),
+        (
+            "huge dprsm",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--dprsm-res", "16384"],
+            "DPRSM",
+        ),
+        (
+            "binary garbage",
+            vec![("m.obj", "\u{0}\u{1}\u{2}garbage\n\u{7f}".into()), ("s.toml", toml("m.obj", ""))],
+            vec![],
+            "m.obj",
+        ),
+        ("garbage toml", vec![("s.toml", "\u{0}\u{1}[[[ = =".into())], vec![], "s.toml"),
+    ];
+    for (name, files, args, must) in cases {
+        let dir = d.join(name.replace(' ', "-"));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (f, text) in &files {
+            std::fs::write(dir.join(f), text).unwrap();
+        }
+        let out = dir.join("out.exr");
+        let scene = dir.join("s.toml");
+        let mut argv = vec!["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--height", "8"];
+        if !args.contains(&"--width") {
+            argv.extend(["--width", "8"]);
+        }
+        argv.extend(args.iter().copied());
+        let r = bounce(&argv);
+        assert_eq!(r.code, 2, "{name}: exit {} stderr {}", r.code, r.stderr);
+        let errs = error_lines(&r);
+        assert_eq!(errs.len(), 1, "{name}: want one error line, got: {}", r.stderr);
+        assert!(errs[0].contains(must), "{name}: the error does not name `{must}`: {}", errs[0]);
+        assert!(!out.exists(), "{name}: an output file was written");
+    }
 }

@@ -261,10 +261,9 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
             if code == 0 {
                 let _ = write!(out, "{text}");
             } else {
-                // clap's message is several lines; the first names the problem.
+                // clap's message is several lines; the first names the problem. One line, like every error.
                 let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
-                let _ = writeln!(err, "{}", first.trim_start_matches("error: ").trim());
-                let _ = writeln!(err, "  (see `bounce --help`)");
+                let _ = writeln!(err, "error: {} (see `bounce --help`)", first.trim_start_matches("error: ").trim());
             }
             return code;
         }

@@ -14,12 +14,22 @@ fn main() -> anyhow::Result<()> {
     let vpls: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(64);
     let scene = Scene::load(&bounce_tests::default_scene())?;
     let gpu = Gpu::new(&GpuOptions::default())?;
-    println!("{} — default scene, {size}², combined, {vpls} VPLs, DPRSM 512², shadow map 2048², 128 voxels\n", gpu.name);
+    println!(
+        "{} — default scene, {size}², combined, {vpls} VPLs, DPRSM 512², shadow map 2048², 128 voxels\n",
+        gpu.name
+    );
     println!("| method | first frame GPU ms | unchanged next frame GPU ms | next / first | passes of the next frame |");
     println!("|---|---:|---:|---:|---|");
     for method in [Method::Uniform, Method::Global, Method::Stratified, Method::Local, Method::Gbg, Method::Mis] {
         let r = Renderer::new(&gpu, &scene)?;
-        let s = FrameSettings { width: size, height: size, component: Component::Combined, method, vpls, ..FrameSettings::default() };
+        let s = FrameSettings {
+            width: size,
+            height: size,
+            component: Component::Combined,
+            method,
+            vpls,
+            ..FrameSettings::default()
+        };
         // A throw-away frame builds the voxel grid (once per scene), which is not part of a frame's cost.
         r.render(&FrameSettings { width: 8, height: 8, vpls: 1, ..s.clone() })?;
         r.clear_frame_cache();
