@@ -30,12 +30,20 @@ void main() {
         cdf[out_base + CDF_HEADER + r] = acc; // the row total, turned into a prefix by CDF_TOTALS
     } else {
         if (gl_GlobalInvocationID.x != 0u) return;
-        float acc = 0.0;
+        // The prefix over row totals restarts at each face (every `len` rows): a face's rows are then
+        // resolved against the face's own total, not against everything before it. The total is the sum
+        // of the face totals, in face order.
+        float acc = 0.0, total = 0.0;
         for (uint r = 0u; r < rows; r++) {
+            if (r % len == 0u) {
+                total += acc;
+                acc = 0.0;
+            }
             acc += cdf[out_base + CDF_HEADER + r];
             cdf[out_base + CDF_HEADER + r] = acc;
         }
-        cdf[out_base] = acc;
+        total += acc;
+        cdf[out_base] = total;
         cdf[out_base + 1u] = uintBitsToFloat(rows);
         cdf[out_base + 2u] = uintBitsToFloat(len);
         cdf[out_base + 3u] = 0.0;

@@ -26,34 +26,66 @@ float cdf_below(float x) {
     return uintBitsToFloat(floatBitsToUint(x) - 1u);
 }
 
-// Inclusive prefix of the row totals up to row r − 1 (0 for r = 0).
-float cdf_rows_before(uint cb, uint r) {
-    return r == 0u ? 0.0 : cdf[cb + CDF_HEADER + r - 1u];
+// The prefix over row totals restarts at each face, a run of `len` rows (cdf_reduce.comp).
+uint cdf_len(uint cb) { return floatBitsToUint(cdf[cb + 2u]); }
+uint cdf_rows(uint cb) { return floatBitsToUint(cdf[cb + 1u]); }
+
+// Total of face f (its last row's prefix).
+float cdf_face_total(uint cb, uint f) {
+    return cdf[cb + CDF_HEADER + min((f + 1u) * cdf_len(cb), cdf_rows(cb)) - 1u];
 }
 
-// Total weight of rows [r0, r1) (e.g. one paraboloid face).
+// The in-face prefix before row r (0 at a face's first row).
+float cdf_row_start(uint cb, uint r) {
+    return r % cdf_len(cb) == 0u ? 0.0 : cdf[cb + CDF_HEADER + r - 1u];
+}
+
+// Total weight of rows [r0, r1): either inside one face, or whole faces (summed in face order).
 float cdf_rows_total(uint cb, uint r0, uint r1) {
-    return cdf_rows_before(cb, r1) - cdf_rows_before(cb, r0);
+    uint len = cdf_len(cb);
+    uint f0 = r0 / len, f1 = (r1 - 1u) / len;
+    if (f0 == f1) return cdf[cb + CDF_HEADER + r1 - 1u] - cdf_row_start(cb, r0);
+    float t = 0.0;
+    for (uint f = f0; f <= f1; f++) t += cdf_face_total(cb, f);
+    return t;
 }
 
-// Draw a texel among rows [r0, r1) of section (cb, ib) with probability mass(v) / total(rows), by
-// inverse transform with two uniforms in [0, 1): u.x picks the row (the first whose prefix exceeds the
-// target before0 + u.x·range), u.y the texel within it (the first whose in-row prefix exceeds u.y times
-// the row's own total P). Two draws, not one split: a single 24-bit u cannot tell apart texels whose
-// share of the whole range is below 2⁻²⁴ (at 2 × 1024² texels, most of them), while u.y resolves each
-// texel against its row alone.
+// Draw a texel among rows [r0, r1) of section (cb, ib) (inside one face, or whole faces) with
+// probability mass(v) / total(rows), by inverse transform with one uniform per level: the face (when the
+// range spans several) by the face totals, the row inside the face (the first whose in-face prefix
+// exceeds the target), the texel inside the row (the first whose in-row prefix exceeds the uniform times
+// the row's total). Inside one face u.x and u.y serve row and texel; over several faces u.x, u.y, u.z
+// serve face, row and texel. One uniform per level: a single 24-bit u cannot resolve a texel whose
+// share of the range is below 2⁻²⁴, and a face's rows, resolved against everything before them, lose
+// the precision of the heavier faces (the prefix restarts per face for the same reason).
 // Why this never returns a texel without mass: a zero weight leaves a float prefix unchanged
 // (acc + 0 = acc), so "first prefix > t" can only stop where the prefix grew, i.e. at a texel with
 // mass; and clamping each target just below its total (u → 1 and rounding could otherwise reach it)
 // guarantees such a prefix exists. Call only when the rows' total is > 0. Returns the texel.
-uint cdf_sample_rows2(uint cb, uint ib, vec2 u, uint r0, uint r1) {
-    uint rows = floatBitsToUint(cdf[cb + 1u]);
-    uint len = floatBitsToUint(cdf[cb + 2u]);
-    float before0 = cdf_rows_before(cb, r0);
-    float end = cdf_rows_before(cb, r1);
-    float target = min(before0 + u.x * (end - before0), cdf_below(end));
+uint cdf_sample_rows3(uint cb, uint ib, vec3 u, uint r0, uint r1) {
+    uint rows = cdf_rows(cb), len = cdf_len(cb);
+    uint f0 = r0 / len, f1 = (r1 - 1u) / len;
+    uint a = r0, b = r1;
+    // One face: u.x picks the row and u.y the texel. Several: u.x the face, u.y the row, u.z the texel.
+    vec2 ur = u.xy;
+    if (f0 != f1) {
+        ur = u.yz;
+        float t = cdf_rows_total(cb, r0, r1);
+        float target = min(u.x * t, cdf_below(t));
+        float cum = 0.0;
+        uint f = f1;
+        for (uint k = f0; k <= f1; k++) {
+            cum += cdf_face_total(cb, k);
+            if (cum > target) { f = k; break; }
+        }
+        a = f * len;
+        b = min((f + 1u) * len, rows);
+    }
+    float before0 = cdf_row_start(cb, a);
+    float end = cdf[cb + CDF_HEADER + b - 1u];
+    float target = min(before0 + ur.x * (end - before0), cdf_below(end));
     target = max(target, before0);
-    uint lo = r0, hi = r1 - 1u;
+    uint lo = a, hi = b - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
         if (cdf[cb + CDF_HEADER + mid] > target) hi = mid; else lo = mid + 1u;
@@ -61,47 +93,61 @@ uint cdf_sample_rows2(uint cb, uint ib, vec2 u, uint r0, uint r1) {
     uint r = lo;
     uint base = cb + CDF_HEADER + rows + r * len;
     float last = cdf[base + len - 1u];
-    float t = min(u.y * last, cdf_below(last));
+    float tt = min(ur.y * last, cdf_below(last));
     lo = 0u;
     hi = len - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (cdf[base + mid] > t) hi = mid; else lo = mid + 1u;
+        if (cdf[base + mid] > tt) hi = mid; else lo = mid + 1u;
     }
     return r * len + lo;
 }
 
-// A second uniform derived from the first, for the single-u entry points used by tests.
-float cdf_second_uniform(float u) {
-    uint h = pcg_hash(floatBitsToUint(u) ^ 0x9E3779B9u);
-    return float(h >> 8) * (1.0 / 16777216.0);
+// Two more uniforms derived from the first, for the single-u entry points used by tests.
+vec3 cdf_uniforms(float u) {
+    uint h1 = pcg_hash(floatBitsToUint(u) ^ 0x9E3779B9u);
+    uint h2 = pcg_hash(h1 ^ 0x85EBCA6Bu);
+    return vec3(u, float(h1 >> 8) * (1.0 / 16777216.0), float(h2 >> 8) * (1.0 / 16777216.0));
 }
 
 uint cdf_sample_rows(uint cb, uint ib, float u, uint r0, uint r1) {
-    return cdf_sample_rows2(cb, ib, vec2(u, cdf_second_uniform(u)), r0, r1);
+    return cdf_sample_rows3(cb, ib, cdf_uniforms(u), r0, r1);
 }
 
-// The probability that cdf_sample_rows2 returns v, computed from the same float prefixes the searches
-// read (not from v's weight): row r is chosen when the target falls in [R_{r−1}, R_r), i.e. with
-// probability Δ/range (Δ = R_r − R_{r−1}, range = R_{r1−1} − R_{r0−1}), and texel i within it when
-// u.y·P falls in [p_{i−1}, p_i), i.e. with probability (p_i − p_{i−1})/P. A weight too small to change
-// its float prefix is never drawn and gets probability 0 here too. Exact for continuous uniforms; with
-// 24-bit ones each factor is off by at most 2⁻²⁴ plus one ulp of its total (the row level: ulp(end)/range,
-// which is coarse for the faces of a light under a much heavier one; README, Known issues).
+// The probability that cdf_sample_rows3 returns v, computed from the same floats the searches read
+// (not from v's weight): the face f with probability (C_f − C_{f−1}) / C (C the running sum of face
+// totals over the range, in the same order), the row r inside it with Δ_r / (face range), the texel with
+// (p_i − p_{i−1}) / P (P the row's total). A weight too small to change its float prefix is never drawn
+// and gets probability 0 here too. Exact for continuous uniforms; with 24-bit ones each factor is off by
+// at most 2⁻²⁴ plus one ulp of its own total.
 float cdf_prob_rows(uint cb, uint v, uint r0, uint r1) {
-    uint rows = floatBitsToUint(cdf[cb + 1u]);
-    uint len = floatBitsToUint(cdf[cb + 2u]);
+    uint rows = cdf_rows(cb), len = cdf_len(cb);
     uint r = v / len, i = v % len;
     if (r < r0 || r >= r1) return 0.0;
-    float range = cdf_rows_before(cb, r1) - cdf_rows_before(cb, r0);
-    float delta = cdf_rows_before(cb, r + 1u) - cdf_rows_before(cb, r);
+    uint f0 = r0 / len, f1 = (r1 - 1u) / len, f = r / len;
+    float p_face = 1.0;
+    uint a = r0, b = r1;
+    if (f0 != f1) {
+        float t = cdf_rows_total(cb, r0, r1);
+        if (!(t > 0.0)) return 0.0;
+        float cum = 0.0, before = 0.0;
+        for (uint k = f0; k <= f; k++) {
+            before = cum;
+            cum += cdf_face_total(cb, k);
+        }
+        p_face = (cum - before) / t;
+        a = f * len;
+        b = min((f + 1u) * len, rows);
+    }
+    float range = cdf[cb + CDF_HEADER + b - 1u] - cdf_row_start(cb, a);
+    float delta = cdf[cb + CDF_HEADER + r] - cdf_row_start(cb, r);
     if (!(range > 0.0) || !(delta > 0.0)) return 0.0;
     uint base = cb + CDF_HEADER + rows + r * len;
     float last = cdf[base + len - 1u];
     if (!(last > 0.0)) return 0.0;
     float hi = cdf[base + i];
     float lo = i > 0u ? cdf[base + i - 1u] : 0.0;
-    return delta / range * (max(hi - lo, 0.0) / last);
+    return p_face * (delta / range) * (max(hi - lo, 0.0) / last);
 }
 
 // The whole of section 0, with the texel's probability (its weight over the total).

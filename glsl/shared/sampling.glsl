@@ -42,7 +42,7 @@ uint draw_vpl(inout uint rng, out float prob) {
     float u0 = rand01(rng), u1 = rand01(rng), u2 = rand01(rng);
     uint v;
     if (u0 < eps) {
-        v = cdf_sample_rows2(0u, 0u, vec2(u1, rand01(rng)), 0u, faces() * face_rows());
+        v = cdf_sample_rows3(0u, 0u, vec3(u1, rand01(rng), rand01(rng)), 0u, faces() * face_rows());
     } else {
         // A section uniformly among those with weight (a local region whose gather points all missed
         // has none).
@@ -56,7 +56,7 @@ uint draw_vpl(inout uint rng, out float prob) {
         }
         uint cb = s * len;
         if (pc.face_mode == FACE_RR) {
-            v = cdf_sample_rows2(cb, s * n, vec2(u2, rand01(rng)), 0u, faces() * face_rows());
+            v = cdf_sample_rows3(cb, s * n, vec3(u2, rand01(rng), rand01(rng)), 0u, faces() * face_rows());
         } else {
             uint nlive = live_faces(cb);
             pick = min(uint(u2 * float(nlive)), nlive - 1u);
@@ -68,7 +68,7 @@ uint draw_vpl(inout uint rng, out float prob) {
                     pick--;
                 }
             }
-            v = cdf_sample_rows2(cb, s * n, vec2(u3, rand01(rng)), f * face_rows(), (f + 1u) * face_rows());
+            v = cdf_sample_rows3(cb, s * n, vec3(u3, rand01(rng), rand01(rng)), f * face_rows(), (f + 1u) * face_rows());
         }
     }
     // The mixture probability of v.

@@ -232,18 +232,24 @@ fn assert_bits_equal(what: &str, gpu: &[f32], cpu: &[f32]) {
 /// every partial sum stays below 2²⁴, which the callers keep).
 fn assert_exact_integer_sums(what: &str, w: &[f32], rows: u32, len: u32, cdf: &[f32]) {
     let (rows, len) = (rows as usize, len as usize);
-    let mut grand = 0u64;
+    // The prefix over row totals restarts at each face (every `len` rows); the total sums the faces.
+    let (mut in_face, mut total) = (0u64, 0u64);
     for r in 0..rows {
+        if r % len == 0 {
+            total += in_face;
+            in_face = 0;
+        }
         let mut acc = 0u64;
         for i in 0..len {
             acc += sanitise(w[r * len + i]) as u64;
             assert_eq!(cdf[4 + rows + r * len + i] as u64, acc, "{what}: row {r} prefix at {i}");
         }
-        grand += acc;
-        assert_eq!(cdf[4 + r] as u64, grand, "{what}: prefix over rows at {r}");
+        in_face += acc;
+        assert_eq!(cdf[4 + r] as u64, in_face, "{what}: in-face prefix over rows at {r}");
     }
-    assert!(grand < 1 << 24);
-    assert_eq!(cdf[0] as u64, grand, "{what}: total");
+    total += in_face;
+    assert!(total < 1 << 24);
+    assert_eq!(cdf[0] as u64, total, "{what}: total");
 }
 
 #[test]
@@ -476,11 +482,12 @@ fn sampling_edge_cases_match_the_twin() {
     let d = draws_match_twin(&gpu, &k, "zero runs", &w, shape(rows, len), &u);
     let first = w.iter().position(|x| sanitise(*x) > 0.0).unwrap() as u32;
     let last = w.iter().rposition(|x| sanitise(*x) > 0.0).unwrap() as u32;
-    // u picks the row (the texel within it comes from the second uniform): u = 0 the first row with
-    // weight, u → 1 the last.
-    assert_eq!(d[20_000].0 / len, first / len, "u = 0 draws in the first row with weight");
-    assert_eq!(d[20_000 + 4].0 / len, last / len, "u = 1 − 2⁻²⁴ draws in the last row with weight");
-    assert_eq!(d[20_000 + 5].0 / len, last / len, "u = 1 (out of contract) is clamped to the last row with weight");
+    // 128 rows of 96 are two faces (96 rows, then 32): u picks the face (the row and the texel inside come
+    // from the derived uniforms): u = 0 the first face with weight, u → 1 the last.
+    let face = |v: u32| v / len / len;
+    assert_eq!(face(d[20_000].0), face(first), "u = 0 draws in the first face with weight");
+    assert_eq!(face(d[20_000 + 4].0), face(last), "u = 1 − 2⁻²⁴ draws in the last face with weight");
+    assert_eq!(face(d[20_000 + 5].0), face(last), "u = 1 (out of contract) is clamped to the last face with weight");
 }
 
 #[test]

@@ -9,7 +9,8 @@
 //! **Why two levels (and not one flat float32 prefix).** A flat prefix over 2 × 1024² texels adds
 //! ~2·10⁶ terms into one float32 accumulator: late texels' masses fall below the accumulator's ulp and
 //! the CDF stops resolving them. Here no sum has more than max(rows, row_length) ≤ 2048 terms per light
-//! pair. The sampler draws the row and the texel within it with two uniforms, and the estimator divides
+//! pair; the prefix over row totals restarts at each face (`row_length` rows), so a face is resolved
+//! against its own total. The sampler draws face, row and texel with one uniform each, and the estimator divides
 //! by the probability computed from the same float prefixes the search reads (`cdf_prob_rows` in
 //! `glsl/shared/cdf.glsl`), exact up to the 24-bit resolution of each uniform against its own total. Negative, NaN and infinite weights count as 0. The
 //! sampling side (binary search, u = 0, u → 1, runs of zero-weight texels) is in `glsl/shared/cdf.glsl`.
