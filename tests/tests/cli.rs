@@ -209,7 +209,8 @@ fn bad_inputs_give_one_line_and_exit_2() {
         format!("mesh = \"{mesh}\"\n[camera]\neye=[0,0.5,3]\ntarget=[0,0.5,0]\nup=[0,1,0]\nfov_y=40\n[[light]]\nposition=[0,0.5,1]\nintensity=[1,1,1]\n{extra}")
     };
     // (name, files to write, args after the scene, text the error must contain)
-    let cases: Vec<(&str, Vec<(&str, String)>, Vec<&str>, &str)> = vec![
+    type Case<'a> = (&'a str, Vec<(&'a str, String)>, Vec<&'a str>, &'a str);
+    let cases: Vec<Case> = vec![
         (
             "nan vertex",
             vec![("m.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".into()), ("s.toml", toml("m.obj", ""))],
