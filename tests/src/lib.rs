@@ -98,3 +98,48 @@ pub fn write_evidence(name: &str, actual: &RgbImage, reference: &RgbImage) -> St
     }
     paths.join(", ")
 }
+
+/// xorshift64*: the tests' deterministic random numbers (no dependency).
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [0, 1), 24 bits.
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    pub fn range(&mut self, a: f32, b: f32) -> f32 {
+        a + (b - a) * self.f32()
+    }
+    /// Uniform in [0, n).
+    pub fn below(&mut self, n: u32) -> u32 {
+        (self.next_u64() % n as u64) as u32
+    }
+    /// Uniform in the box [lo, hi].
+    pub fn vec(&mut self, lo: glam::Vec3, hi: glam::Vec3) -> glam::Vec3 {
+        glam::Vec3::new(self.range(lo.x, hi.x), self.range(lo.y, hi.y), self.range(lo.z, hi.z))
+    }
+    /// A uniformly distributed unit vector (rejection from the cube).
+    pub fn unit(&mut self) -> glam::Vec3 {
+        loop {
+            let v = self.vec(glam::Vec3::splat(-1.0), glam::Vec3::ONE);
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+    /// A random point of a triangle (uniform by area).
+    pub fn on_triangle(&mut self, t: &[glam::Vec3; 3]) -> glam::Vec3 {
+        let (mut u, mut v) = (self.f32(), self.f32());
+        if u + v > 1.0 {
+            (u, v) = (1.0 - u, 1.0 - v);
+        }
+        t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v
+    }
+}

@@ -33,6 +33,7 @@ use bounce_graph::bvh::{FlatBvh, GpuBvh, MAX_STEPS, NO_TRI, SHADOW_EPS};
 use bounce_graph::cpu_ref::{self, Bvh};
 use bounce_graph::scene::Scene;
 use bounce_graph::shader_types::Vertex;
+use bounce_tests::Rng;
 use bounce_tests::TestGpu;
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
@@ -93,33 +94,6 @@ impl Query {
     }
     fn seg(&self) -> (DVec3, DVec3) {
         (Vec3::from_slice(&self.a[..3]).as_dvec3(), Vec3::from_slice(&self.b[..3]).as_dvec3())
-    }
-}
-
-/// xorshift64*: deterministic, no dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn f32(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn vec(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        lo + (hi - lo) * Vec3::new(self.f32(), self.f32(), self.f32())
-    }
-    fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = self.vec(Vec3::splat(-1.0), Vec3::ONE);
-            let l = v.length_squared();
-            if l > 1e-4 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
     }
 }
 
@@ -570,7 +544,7 @@ fn rays_through_shared_edges_and_vertices_never_escape_a_closed_mesh() {
     // watertight lets some of these rays slip between the two triangles of the edge.
     let queries: Vec<Query> = (0..20_000)
         .map(|k| {
-            let [a, b, c] = mesh.tris[(rng.next() % mesh.tris.len() as u64) as usize];
+            let [a, b, c] = mesh.tris[(rng.next_u64() % mesh.tris.len() as u64) as usize];
             let target = match k % 3 {
                 0 => [a, b, c][k % 9 / 3],
                 1 => (a + b) * 0.5,

@@ -32,6 +32,7 @@ use bounce_graph::bindings::{B_CDF, B_IMPORTANCE, WG_1D};
 use bounce_graph::cpu_cdf::{self, pcg_hash, rand01, sanitise};
 use bounce_graph::graph::{Graph, Persistent};
 use bounce_graph::passes::cdf_reduce::CdfReduce;
+use bounce_tests::Rng;
 use bounce_tests::TestGpu;
 use std::time::Instant;
 
@@ -55,25 +56,6 @@ const FLOAT_ULPS: u32 = 4;
 /// (2 · 2.5 + 0.5 ulp, rounded up).
 const PROB_ULPS: u32 = 3;
 const PROB_ROWS_ULPS: u32 = 6;
-
-/// xorshift64*: deterministic, no dependency (as in voxelize.rs).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in [0, 1).
-    fn f32(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn below(&mut self, n: u32) -> u32 {
-        (self.next() % n as u64) as u32
-    }
-}
 
 /// The gather's random numbers: draw `k` of stream `seed`, as `gather.comp` makes them.
 fn us(seed: u32, n: u32) -> Vec<f32> {

@@ -45,6 +45,16 @@ fn paraboloid_dir((u, v): (f64, f64), face: usize) -> DVec3 {
     }
 }
 
+/// Whether texel (i, j) of face `face` straddles a triangle edge: a hundredth of a texel away from its centre
+/// the ray from `lp` leaves the unit disk or hits a different triangle (or nothing) than `tri`. Such texels
+/// are rasterised by whichever triangle wins the tie, so they are not compared exactly.
+fn near_triangle_edge(bvh: &Bvh, lp: DVec3, (i, j, n, face): (usize, usize, usize, usize), tri: Option<u32>) -> bool {
+    [(0.01, 0.0), (-0.01, 0.0), (0.0, 0.01), (0.0, -0.01)].iter().any(|&(di, dj)| {
+        let (pu, pv) = texel_uv(i, j, n, di, dj);
+        pu * pu + pv * pv > 1.0 || bvh.intersect(lp, paraboloid_dir((pu, pv), face)).map(|h| h.tri) != tri
+    })
+}
+
 fn check_against_ray_cast(scene: &Scene, res: u32) {
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, scene).unwrap();
@@ -61,21 +71,13 @@ fn check_against_ray_cast(scene: &Scene, res: u32) {
             for j in 0..n {
                 for i in 0..n {
                     let gpu_d = depth[((li * 2 + face) * n + j) * n + i] as f64;
-                    let uv = |di: f64, dj: f64| texel_uv(i, j, n, di, dj);
-                    let dir = |uv: (f64, f64)| paraboloid_dir(uv, face);
-                    let (u, v) = uv(0.0, 0.0);
+                    let (u, v) = texel_uv(i, j, n, 0.0, 0.0);
                     if u * u + v * v > 1.0 {
                         assert_eq!(gpu_d, 1.0, "texel ({i},{j}) outside the unit disk was written");
                         continue;
                     }
-                    let hit = bvh.intersect(lp, dir((u, v)));
-                    // Edge texels: a hundredth of a texel away the ray hits another triangle (or nothing).
-                    let tri = hit.as_ref().map(|h| h.tri);
-                    let near_edge = [(0.01, 0.0), (-0.01, 0.0), (0.0, 0.01), (0.0, -0.01)].iter().any(|&(di, dj)| {
-                        let (pu, pv) = uv(di, dj);
-                        pu * pu + pv * pv > 1.0 || bvh.intersect(lp, dir((pu, pv))).map(|h| h.tri) != tri
-                    });
-                    if near_edge {
+                    let hit = bvh.intersect(lp, paraboloid_dir((u, v), face));
+                    if near_triangle_edge(&bvh, lp, (i, j, n, face), hit.as_ref().map(|h| h.tri)) {
                         edge += 1;
                         continue;
                     }
@@ -132,9 +134,7 @@ fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
             for j in 0..n {
                 for i in 0..n {
                     let k = ((li * 2 + face) * n + j) * n + i;
-                    let uv = |di: f64, dj: f64| texel_uv(i, j, n, di, dj);
-                    let dir = |uv: (f64, f64)| paraboloid_dir(uv, face);
-                    let (u, v) = uv(0.0, 0.0);
+                    let (u, v) = texel_uv(i, j, n, 0.0, 0.0);
                     let r2 = u * u + v * v;
                     if r2 > 1.0 {
                         assert_eq!(pos[k][3], 0.0, "texel outside the disk holds a VPL");
@@ -144,13 +144,8 @@ fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
                     if li == 0 {
                         omega_sum[face] += d_omega;
                     }
-                    let hit = bvh.intersect(lp, dir((u, v)));
-                    let tri = hit.as_ref().map(|h| h.tri);
-                    let near_edge = [(0.01, 0.0), (-0.01, 0.0), (0.0, 0.01), (0.0, -0.01)].iter().any(|&(di, dj)| {
-                        let (pu, pv) = uv(di, dj);
-                        pu * pu + pv * pv > 1.0 || bvh.intersect(lp, dir((pu, pv))).map(|h| h.tri) != tri
-                    });
-                    if near_edge {
+                    let hit = bvh.intersect(lp, paraboloid_dir((u, v), face));
+                    if near_triangle_edge(&bvh, lp, (i, j, n, face), hit.as_ref().map(|h| h.tri)) {
                         edge += 1;
                         continue;
                     }
@@ -161,7 +156,7 @@ fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
                         }
                         continue;
                     };
-                    let p = lp + dir((u, v)) * h.t;
+                    let p = lp + paraboloid_dir((u, v), face) * h.t;
                     let g = DVec3::new(pos[k][0] as f64, pos[k][1] as f64, pos[k][2] as f64);
                     if pos[k][3] != 1.0 || (g - p).length() > 1e-4 * h.t.max(1.0) {
                         bad.push(format!("texel {k}: position {g:?} vs {p:?}"));

@@ -23,6 +23,7 @@ use bounce_graph::graph::{Graph, Persistent};
 use bounce_graph::passes::voxelize::{self, VoxelGridSpec, Voxelize, VOXEL_EPS};
 use bounce_graph::scene::{point_light, Scene};
 use bounce_graph::shader_types::FrameUniforms;
+use bounce_tests::Rng;
 use bounce_tests::TestGpu;
 use glam::{DVec3, IVec3, UVec3, Vec3};
 use std::collections::HashSet;
@@ -30,45 +31,6 @@ use std::collections::HashSet;
 /// Test-only bindings of `glsl/test/voxel_march.comp` and `voxel_rcp.comp`.
 const T_IN: u32 = 28;
 const T_OUT: u32 = 29;
-
-/// xorshift64*: deterministic, no dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in [0, 1).
-    fn f32(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, a: f32, b: f32) -> f32 {
-        a + (b - a) * self.f32()
-    }
-    fn vec(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(self.range(lo.x, hi.x), self.range(lo.y, hi.y), self.range(lo.z, hi.z))
-    }
-    fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = self.vec(Vec3::splat(-1.0), Vec3::ONE);
-            let l = v.length_squared();
-            if l > 1e-4 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-    /// A random point of a triangle (uniform by area).
-    fn on_triangle(&mut self, t: &[Vec3; 3]) -> Vec3 {
-        let (mut u, mut v) = (self.f32(), self.f32());
-        if u + v > 1.0 {
-            (u, v) = (1.0 - u, 1.0 - v);
-        }
-        t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v
-    }
-}
 
 fn scene_of(tris: &[[Vec3; 3]]) -> Scene {
     let camera = Camera { eye: Vec3::new(0.0, 0.0, 10.0), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0 };
@@ -728,9 +690,9 @@ fn gpu_reciprocal_has_the_cpu_bits_and_is_accurate() {
     let mut inputs: Vec<f32> = (-30..=30).map(|e| 2f32.powi(e)).collect();
     inputs.extend([3.0, 0.1, 0.3, 1.0 / 3.0, 0.0123, 7.77, 1e-9, 1e9, -0.25, -5.5]);
     inputs.extend((0..4000).map(|_| {
-        let m = f32::from_bits(0x3F80_0000 | (rng.next() as u32 & 0x007F_FFFF)); // [1, 2)
-        let e = (rng.next() % 61) as i32 - 30;
-        let s = if rng.next() & 1 == 0 { 1.0 } else { -1.0 };
+        let m = f32::from_bits(0x3F80_0000 | (rng.next_u64() as u32 & 0x007F_FFFF)); // [1, 2)
+        let e = (rng.next_u64() % 61) as i32 - 30;
+        let s = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
         s * m * 2f32.powi(e)
     }));
     let p = ComputePipeline::new(

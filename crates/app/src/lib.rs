@@ -407,16 +407,7 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             ComponentArg::Indirect => Component::Indirect,
             ComponentArg::Combined => Component::Combined,
         },
-        method: match a.method {
-            MethodArg::Uniform => Method::Uniform,
-            MethodArg::All => Method::All,
-            MethodArg::Global => Method::Global,
-            MethodArg::Stratified => Method::Stratified,
-            MethodArg::Local => Method::Local,
-            MethodArg::Gbg => Method::Gbg,
-            MethodArg::Mis => Method::Mis,
-            MethodArg::Reference => Method::Reference,
-        },
+        method: method_of(a.method),
         spp: a.spp,
         visibility: match a.visibility {
             VisibilityArg::Voxel => Visibility::Voxel,

@@ -16,21 +16,15 @@ fn main() -> anyhow::Result<()> {
     let grid = cpu_voxel::voxelize_scene(&scene, spec);
     let tris: Vec<[Vec3; 3]> =
         scene.vertices.chunks(3).map(|v| [v[0].position(), v[1].position(), v[2].position()]).collect();
-    let mut state = 7u64;
-    let mut rnd = move || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((state >> 40) as f32) / (1u64 << 24) as f32
-    };
-    let point = |rnd: &mut dyn FnMut() -> f32| {
-        let t = tris[(rnd() * tris.len() as f32) as usize % tris.len()];
-        let (a, b) = (rnd(), rnd());
-        let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+    let mut rng = bounce_tests::Rng(7);
+    let mut point = || {
+        let t = tris[rng.below(tris.len() as u32) as usize];
         let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
-        (t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b, n)
+        (rng.on_triangle(&t), n)
     };
     let (mut cells, mut pairs, mut blocked) = (0u64, 0u64, 0u64);
     for _ in 0..20_000 {
-        let ((x, nx), (y, ny)) = (point(&mut rnd), point(&mut rnd));
+        let ((x, nx), (y, ny)) = (point(), point());
         let nx = if nx.dot(y - x) < 0.0 { -nx } else { nx };
         let ny = if ny.dot(x - y) < 0.0 { -ny } else { ny };
         let mut k = 0u64;
