@@ -3,6 +3,7 @@
 // triangle; the stored depth is that distance over `far`, so the map holds exactly what a ray cast from
 // the light through the texel centre would hit.
 #include "shared/scene.glsl"
+#include "shared/watertight.glsl"
 
 // The map resolution per face: the shadow map and the reflective map share these shaders.
 layout(push_constant) uniform Push { uint map_res; };
@@ -16,7 +17,11 @@ layout(location = 4) flat in uint i_instance; // unused here; declared so the in
 void main() {
     vec2 uv = gl_FragCoord.xy / float(map_res) * 2.0 - 1.0;
     if (dot(uv, uv) > 1.0) discard; // outside this face's hemisphere: the other face covers it
-    float t = ray_triangle(vec3(0.0), paraboloid_direction(uv), i_a, i_b, i_c);
-    if (t < 0.0) discard;
+    // Watertight (shared/watertight.glsl), so a texel ray through an edge two triangles share hits one
+    // of them: with Möller–Trumbore a few texel rays slipped out of a closed box around the light.
+    vec3 dir = paraboloid_direction(uv);
+    float t;
+    vec2 bary;
+    if (!wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, i_a, i_b, i_c, t, bary) || !(t > 0.0)) discard;
     gl_FragDepth = min(t / frame.scene_max.w, 1.0);
 }

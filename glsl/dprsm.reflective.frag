@@ -5,6 +5,7 @@
 // (the texel's solid angle seen from the light; the thesis's eqs. 7.1–7.3 leave it out, and without it
 // the VPL sum does not converge to the one-bounce integral). See crates/graph/src/passes/dprsm.rs.
 #include "shared/scene.glsl"
+#include "shared/watertight.glsl"
 
 // The map resolution per face: the shadow map and the reflective map share these shaders.
 layout(push_constant) uniform Push { uint map_res; };
@@ -25,9 +26,11 @@ void main() {
     float r2 = dot(uv, uv);
     if (r2 > 1.0) discard;
     vec3 dir = paraboloid_direction(uv);
-    vec3 hit = ray_triangle_bary(vec3(0.0), dir, i_a, i_b, i_c);
-    if (hit.x < 0.0) discard;
-    float t = hit.x;
+    // Watertight, as in dprsm.frag: no texel ray slips between two triangles sharing an edge.
+    float t;
+    vec2 bary;
+    if (!wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, i_a, i_b, i_c, t, bary) || !(t > 0.0)) discard;
+    vec3 hit = vec3(t, bary);
     gl_FragDepth = min(t / frame.scene_max.w, 1.0);
 
     uint face = i_instance % 2u;

@@ -36,16 +36,13 @@ void scatter(ivec2 px) {
     vec3 x = gp.xyz;
     vec3 n = texelFetch(g_normal, px, 0).xyz;
     vec3 a = texelFetch(g_albedo, px, 0).rgb;
-    float cell = frame.voxel_origin.w;
     uint rng = pcg_hash(pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x5bd1e995u);
     for (uint r = 0u; r < pc.samples; r++) {
         float u1 = rand01(rng), u2 = rand01(rng);
         vec3 d = cosine_direction(n, u1, u2);
         // One march per ray (2 cells off the surface, the march's rule), then each light's VPL there.
-        vec3 o = (x - frame.voxel_origin.xyz) / cell + n * 2.0;
-        float t = voxel_first_hit(o, d, 4.0 * float(frame.voxel_dims.x + frame.voxel_dims.y + frame.voxel_dims.z));
-        if (t < 0.0) continue;
-        vec3 p = frame.voxel_origin.xyz + (o + d * t) * cell;
+        vec3 p;
+        if (!gathering_hit(x, n, d, p)) continue;
         for (uint l = 0u; l < frame.size.z; l++) {
             uint v = vpl_at_point(p, l);
             if (v == NO_VPL) continue;

@@ -1,19 +1,30 @@
 #version 460
-// mis: multiple importance sampling of two strategies for the VPL sum (thesis §7.4), balance heuristic:
-//   gathering: n_g cosine-distributed rays from x (density q_g(ω) = cos θ_x / π per steradian); a ray's
-//     first voxel hit, projected into each light's DPRSM, names a VPL v (see shared/gathering.glsl);
-//   CDF: n_c VPLs drawn from the gbg CDF mixture (discrete probability P_v, see shared/sampling.glsl).
-// One measure: a VPL drawn with probability P_v is, seen from x, a solid-angle density
-//   q_c(v) = P_v · d² / (A_v · cos θ_v),   A_v = Δω_v · d_l² / cos α_v
-// (A_v the area of its texel's surface patch, d_l the light–VPL distance, α_v the angle at the VPL
-// between its normal and the light), i.e. P_v / Ω_v with Ω_v = A_v cos θ_v / d² the patch's solid angle
-// from x; and gathering picks v with probability q_g · Ω_v. Balance heuristic weights
-//   w_c = n_c q_c / (n_c q_c + n_g q_g),   w_g = n_g q_g / (n_c q_c + n_g q_g)   (w_c + w_g = 1 per v)
-// and the estimate
-//   L(x) = 1/n_c Σ_j w_c c(v_j) / P_{v_j} + 1/n_g Σ_k w_g c(v_k) / (q_g Ω_{v_k}),
-// c(v) the shadowed VPL contribution (as in gather.comp). MIS_THESIS replaces the weights by the
-// thesis's literal ones, p_g = cos θ sin θ / π (eq. 7.10) against p_c = P_v (eq. 7.11): densities of
-// different measures, so they no longer add to 1 per v; kept to measure the difference.
+// mis: multiple importance sampling of two strategies for the VPL sum Σ_v c(v) (thesis §7.4), balance
+// heuristic, both strategies' densities in one measure, and unbiased with respect to `all`.
+//
+// The one measure. A VPL v stands for a patch of surface: give it the square Q_v in its tangent plane,
+// centred on it, of area A_v = Δω_v · d_l² / cos α_v (the area its texel sees; d_l the light–VPL
+// distance, α_v the angle at the VPL). Then, exactly,
+//   Σ_v c(v) = Σ_v ∫_{Q_v} F(v, y) dA(y),   F(v, y) = c(v) / A_v,
+// an integral over pairs (VPL, point of its patch) in area measure, which both strategies sample:
+//   CDF: v from the gbg CDF mixture (probability P_v, shared/sampling.glsl), y uniform in Q_v:
+//        p_c(v, y) = P_v / A_v   (at x, in solid angle: P_v · |y−x|² / (A_v · cos θ_y), the issue's form);
+//   gathering: a cosine-distributed direction ω from x (cos θ_x / π per steradian); the ray's first hit
+//        (voxel march, or the BVH with EXACT_VISIBILITY), projected into light l's DPRSM and refined
+//        (gathering_texel), names a texel v = T_l(ω); y is where the ray from x meets v's tangent
+//        plane, and the pair counts if y ∈ Q_v:
+//        p_g(v, y) = [T_l(ω_y) = v] · cos θ_x / π · |cos θ_y| / |y−x|²,   ω_y the direction x → y.
+// p_g is exact, not a model: for a CDF sample the indicator is evaluated by running the same T_l on ω_y
+// (one more march or BVH ray). So VPLs the gathering rays cannot reach (too close to x, behind the
+// ray's 2-cell start, hidden behind a nearer surface) get p_g = 0 and are carried by the CDF alone.
+// Balance heuristic, n_c CDF samples and n_g rays, every sample of either strategy adds
+//   F / (n_c p_c + n_g p_g) = c(v) / (n_c P_v + n_g A_v p_g(v, y)),
+// an unbiased estimate of Σ_v c(v) (P_v > 0 for every VPL through the defensive share; F = 0 outside Q_v).
+// c(v) is the shadowed VPL contribution of gather.comp (visibility from x to the VPL itself).
+//
+// MIS_THESIS replaces the weights by the thesis's literal ones, p_g = cos θ sin θ / π (eq. 7.10) against
+// p_c = P_v (eq. 7.11): densities of different measures, so they no longer add to 1 per sample;
+// kept to measure the difference (each strategy then adds w_s · F / (n_s p_s)).
 // Push: GatherPush (first/last: items of this dispatch, the n_c CDF samples then the n_g rays; `mode`
 // MIS_CONSISTENT or MIS_THESIS; `rays` n_g). Dispatch ⌈W/8⌉ × ⌈H/8⌉.
 #include "shared/scene.glsl"
@@ -41,58 +52,85 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 #include "shared/sampling.glsl"
 #include "shared/gathering.glsl"
 
-// Solid angle of VPL v's surface patch seen from x (0 when it faces away).
-float patch_solid_angle(vec3 x, uint v, Vpl vpl) {
+// Q_v: centre, unit normal, two unit tangents and the side √A_v.
+struct Patch {
+    vec3 c, n, t1, t2;
+    float side;
+};
+
+Patch patch_of(uint v, Vpl vpl) {
     uint res = frame.size.w;
     ivec3 t = ivec3(v % res, (v / res) % res, v / (res * res));
-    vec4 nt = texelFetch(vpl_normal, t, 0);        // w: distance light–VPL
-    float d_omega = texelFetch(vpl_flux, t, 0).w;   // Δω of the texel
+    float d_l = texelFetch(vpl_normal, t, 0).w;
+    float d_omega = texelFetch(vpl_flux, t, 0).w;
     vec3 light = lights[uint(t.z) / 2u].position.xyz;
-    float cos_a = dot(vpl.normal, normalize(light - vpl.position));
-    vec3 w = vpl.position - x;
+    // Any positive area keeps the estimator exact; the texel's own footprint makes the two strategies
+    // overlap where they should. The clamp only stops a grazing VPL's patch from growing without bound.
+    float cos_a = max(abs(dot(vpl.normal, normalize(light - vpl.position))), 0.05);
+    Patch q;
+    q.c = vpl.position;
+    q.n = vpl.normal;
+    q.t1 = normalize(abs(q.n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), q.n) : cross(vec3(1.0, 0.0, 0.0), q.n));
+    q.t2 = cross(q.n, q.t1);
+    q.side = sqrt(max(d_omega * d_l * d_l / cos_a, 1e-30));
+    return q;
+}
+
+// The first hit of the gathering ray from x along unit d: voxel march, or the BVH.
+bool gathering_first_hit(vec3 x, vec3 nx, vec3 d, out vec3 hit) {
+#ifdef EXACT_VISIBILITY
+    uint tri;
+    vec2 bary;
+    float lift = surface_lift(x, frame.scene_min.w);
+    float th = bvh_closest(x + nx * lift, d, 1e30, tri, bary);
+    hit = x + nx * lift + d * max(th, 0.0);
+    return th > 0.0;
+#else
+    return gathering_hit(x, nx, d, hit);
+#endif
+}
+
+// Where the ray from x along d meets Q_v's plane (parameter t > 0), or false.
+bool plane_point(vec3 x, vec3 d, Patch q, out vec3 y) {
+    float t = dot(q.c - x, q.n) / dot(d, q.n);
+    y = x + d * t;
+    return t > 0.0 && !isinf(t) && !isnan(t);
+}
+
+// T_l(ω): the texel of light l that the gathering ray from x along unit d names, or NO_VPL; the one
+// map both strategies evaluate, so p_g is the density the rays really have. The first hit's texel,
+// then twice the texel of the point where the ray meets the current texel's plane: a voxel hit is a
+// cell's entry point, up to a cell before the surface, and seen from the light that is often the
+// neighbouring texel, whose patch the ray then misses. Any fixed map keeps the estimate exact; this
+// one makes y ∈ Q_v likely, so gathering samples are not wasted.
+uint gathering_texel(vec3 x, vec3 nx, vec3 d, uint l, vec3 hit) {
+    uint v = texel_at_point(hit, l);
+    for (int i = 0; i < 2 && v != NO_VPL; i++) {
+        Vpl vpl = vpl_fetch(v);
+        vec3 y;
+        if (!plane_point(x, d, patch_of(v, vpl), y)) break;
+        uint next = texel_at_point(y, l);
+        if (next == NO_VPL) break;
+        v = next;
+    }
+    return v;
+}
+
+// A · p_g(v, y) for y on Q_v (already known to lie in it), given T_l(ω_y) = v holds or not.
+float area_times_gathering_density(vec3 x, vec3 nx, Patch q, vec3 y) {
+    vec3 w = y - x;
     float d2 = dot(w, w);
-    float cos_v = -dot(vpl.normal, w * inversesqrt(max(d2, 1e-30)));
-    if (cos_a <= 0.0 || cos_v <= 0.0 || d2 <= 0.0) return 0.0;
-    float area = d_omega * nt.w * nt.w / cos_a;
-    return area * cos_v / d2;
+    if (!(d2 > 0.0)) return 0.0;
+    w *= inversesqrt(d2);
+    float cos_x = dot(nx, w);
+    if (cos_x <= 0.0) return 0.0;
+    return q.side * q.side * cos_x / PI * abs(dot(q.n, w)) / d2;
 }
 
-// Gathering cannot find VPLs closer than this: its rays start 2 cells off the surface and the first hit
-// is known to a cell. Its density there is 0, so the CDF strategy must carry those VPLs alone (weight 1);
-// giving gathering a share it can never sample would bias the sum low (by 11% in the Cornell box).
-bool gathering_reaches(vec3 x, Vpl vpl) {
-    return distance(x, vpl.position) > 4.0 * frame.voxel_origin.w;
-}
-
-// Balance-heuristic weight of the CDF strategy for v (the gathering weight is 1 − this in the consistent
-// mode), and the gathering density at v's direction.
-float weight_cdf(vec3 x, vec3 nx, uint v, Vpl vpl, float p_v, out float q_g, out float omega) {
-    vec3 w = normalize(vpl.position - x);
-    float cos_x = max(dot(nx, w), 0.0);
-    q_g = gathering_reaches(x, vpl) ? cos_x / PI : 0.0;
-    omega = patch_solid_angle(x, v, vpl);
-    float n_c = float(pc.samples), n_g = float(max(pc.rays, 1u));
-    if (pc.mode == MIS_THESIS) {
-        float sin_x = sqrt(max(1.0 - cos_x * cos_x, 0.0));
-        float p_g = gathering_reaches(x, vpl) ? cos_x * sin_x / PI : 0.0;
-        return p_v / (p_v + p_g);
-    }
-    float q_c = omega > 0.0 ? p_v / omega : 1e30;
-    return n_c * q_c / (n_c * q_c + n_g * q_g);
-}
-
-float weight_gathering(vec3 x, vec3 nx, uint v, Vpl vpl, float p_v, float q_g) {
-    if (!gathering_reaches(x, vpl)) return 0.0;
-    if (pc.mode == MIS_THESIS) {
-        vec3 w = normalize(vpl.position - x);
-        float cos_x = max(dot(nx, w), 0.0);
-        float p_g = cos_x * sqrt(max(1.0 - cos_x * cos_x, 0.0)) / PI;
-        return p_g / (p_v + p_g);
-    }
-    float omega = patch_solid_angle(x, v, vpl);
-    float q_c = omega > 0.0 ? p_v / omega : 1e30;
-    float n_c = float(pc.samples), n_g = float(max(pc.rays, 1u));
-    return n_g * q_g / (n_c * q_c + n_g * q_g);
+// The thesis's gathering "density" (eq. 7.10) in the direction of VPL v.
+float thesis_p_g(vec3 x, vec3 nx, Vpl vpl) {
+    float cos_x = max(dot(nx, normalize(vpl.position - x)), 0.0);
+    return cos_x * sqrt(max(1.0 - cos_x * cos_x, 0.0)) / PI;
 }
 
 // The exact mixture probability of v under the CDF strategy (the same as draw_vpl's).
@@ -121,46 +159,60 @@ void main() {
         vec3 nx = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
         uint base = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
-        uint n_c = pc.samples, n_g = max(pc.rays, 1u);
+        float n_c = float(pc.samples), n_g = float(max(pc.rays, 1u));
+        bool thesis = pc.mode == MIS_THESIS;
         // Items [first, last) of n_c CDF samples followed by n_g gathering rays (so dispatches split
         // both under the loop iteration limit).
         for (uint k = pc.first; k < pc.last; k++) {
-            if (k < n_c) {
+            if (k < pc.samples) {
                 uint rng = pcg_hash(base ^ pcg_hash(k + 0x9E3779B9u));
                 float p_v;
                 uint v = draw_vpl(rng, p_v);
                 if (!(p_v > 0.0)) continue;
                 vec3 c = contribution(x, nx, ax, v);
                 if (c == vec3(0.0)) continue;
-                float q_g, omega;
-                float w = weight_cdf(x, nx, v, vpl_fetch(v), p_v, q_g, omega);
-                sum += w * c / p_v / float(n_c);
+                Vpl vpl = vpl_fetch(v);
+                if (thesis) {
+                    float p_g = thesis_p_g(x, nx, vpl);
+                    sum += p_v / (p_v + p_g) * c / (n_c * p_v);
+                    continue;
+                }
+                Patch q = patch_of(v, vpl);
+                vec3 y = q.c + (rand01(rng) - 0.5) * q.side * q.t1 + (rand01(rng) - 0.5) * q.side * q.t2;
+                float ap_g = area_times_gathering_density(x, nx, q, y);
+                if (ap_g > 0.0) {
+                    vec3 hit, d = normalize(y - x);
+                    uint light = v / (2u * frame.size.w * frame.size.w);
+                    bool reached = gathering_first_hit(x, nx, d, hit) && gathering_texel(x, nx, d, light, hit) == v;
+                    if (!reached) ap_g = 0.0;
+                }
+                sum += c / (n_c * p_v + n_g * ap_g);
             } else {
-                uint rng = pcg_hash(base ^ pcg_hash(k - n_c + 0x7F4A7C15u) ^ 0x68E31DA4u);
+                uint rng = pcg_hash(base ^ pcg_hash(k - pc.samples + 0x7F4A7C15u) ^ 0x68E31DA4u);
                 vec3 d = cosine_direction(nx, rand01(rng), rand01(rng));
-#ifdef EXACT_VISIBILITY
-                // Exact gathering: the ray's first hit on the real triangles, then each light's VPL there.
-                uint hit_tri;
-                vec2 hit_bary;
-                float lift = surface_lift(x, frame.scene_min.w);
-                float th = bvh_closest(x + nx * lift, d, 1e30, hit_tri, hit_bary);
-                vec3 hit_p = x + nx * lift + d * th;
-#endif
+                vec3 hit;
+                if (!gathering_first_hit(x, nx, d, hit)) continue;
+                // One ray, one pair (v, y) per light.
                 for (uint l = 0u; l < frame.size.z; l++) {
-#ifdef EXACT_VISIBILITY
-                    uint v = th > 0.0 ? vpl_at_point(hit_p, l) : NO_VPL;
-#else
-                    uint v = gathering_vpl(x, nx, d, l);
-#endif
+                    uint v = gathering_texel(x, nx, d, l, hit);
                     if (v == NO_VPL) continue;
                     Vpl vpl = vpl_fetch(v);
+                    Patch q = patch_of(v, vpl);
+                    vec3 y;
+                    if (!plane_point(x, d, q, y)) continue;
+                    vec2 ab = vec2(dot(y - q.c, q.t1), dot(y - q.c, q.t2)) / q.side;
+                    if (any(greaterThan(abs(ab), vec2(0.5)))) continue;
                     vec3 c = contribution(x, nx, ax, v);
                     if (c == vec3(0.0)) continue;
-                    float q_g = max(dot(nx, normalize(vpl.position - x)), 0.0) / PI;
-                    float omega = patch_solid_angle(x, v, vpl);
-                    if (!(q_g > 0.0) || !(omega > 0.0)) continue;
-                    float w = weight_gathering(x, nx, v, vpl, cdf_strategy_prob(v), q_g);
-                    sum += w * c / (q_g * omega) / float(n_g);
+                    float ap_g = area_times_gathering_density(x, nx, q, y);
+                    if (!(ap_g > 0.0)) continue;
+                    float p_v = cdf_strategy_prob(v);
+                    if (thesis) {
+                        float p_g = thesis_p_g(x, nx, vpl);
+                        sum += p_g / (p_v + p_g) * c / (n_g * ap_g);
+                    } else {
+                        sum += c / (n_c * p_v + n_g * ap_g);
+                    }
                 }
             }
         }

@@ -9,7 +9,10 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 fn main() {
-    let glsl = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../glsl").canonicalize().expect("glsl/ exists");
+    // The manifest dir at run time, not env!() at the script's compile time: a build cache shared by
+    // two checkouts may reuse a build script compiled for the other one.
+    let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let glsl = Path::new(&manifest).join("../../glsl").canonicalize().expect("glsl/ exists");
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     println!("cargo:rerun-if-changed={}", glsl.display());
 

@@ -20,6 +20,8 @@
 //    relative epsilon SHADOW_EPS = 1e-4. Relative, so it scales with the segment: it keeps the endpoints' own
 //    surfaces from occluding (a point computed on a triangle is within f32 rounding, ~1e-7 of its coordinates,
 //    of the plane) while any occluder farther than 0.01 % of the segment length from both ends counts.
+//  * bool bvh_occluded_lifted(a, b): the same with a window of BVH_LIFTED_EPS = 1e-6 at both ends, for ends
+//    already lifted off their surfaces (the exact gather's shadow rays; see the function).
 //  * float bvh_trace(o, d, tmin, tmax, any_hit, out tri, out bary): both of the above. Closest mode accepts
 //    t ∈ (tmin, tmax]; any-hit mode t ∈ (tmin, tmax) and stops at the first such hit.
 // Non-finite input, a direction with no component of magnitude ≥ 1e-30, or tmax ≤ tmin gives "no hit" at once.
@@ -53,6 +55,7 @@
 
 // Binding numbers and bounds: glsl/shared/bindings.glsl (the single source, also for Rust).
 #include "bindings.glsl"
+#include "watertight.glsl"
 
 // bvh_tri of "no hit" (bvh.rs: NO_TRI).
 #define BVH_NO_TRI 0xFFFFFFFFu
@@ -88,13 +91,10 @@ layout(std430, set = 0, binding = B_BVH_TRIS) readonly buffer BvhTris { BvhTri b
 uint bvh_steps = 0u;
 bool bvh_exhausted = false;
 
-// A ray prepared for the box and triangle tests.
+// A ray prepared for the box and triangle tests: the watertight frame (shared/watertight.glsl) and 1/d.
 struct BvhRay {
-    vec3 o;
+    WtRay w;
     vec3 inv_d; // 1 / d, with tiny components replaced by ±BVH_MIN_DIR
-    vec3 mx;    // the shear: a vertex p maps to (dot(p − o, mx), dot(p − o, my), dot(p − o, mz)),
-    vec3 my;    // i.e. x = p[kx] − Sx·p[kz], y = p[ky] − Sy·p[kz], z = Sz·p[kz] (Woop et al.'s frame)
-    vec3 mz;
 };
 
 float bvh_reciprocal_dir(float c) {
@@ -103,81 +103,19 @@ float bvh_reciprocal_dir(float c) {
 
 BvhRay bvh_make_ray(vec3 o, vec3 d) {
     BvhRay r;
-    r.o = o;
+    r.w = wt_make_ray(o, d);
     r.inv_d = vec3(bvh_reciprocal_dir(d.x), bvh_reciprocal_dir(d.y), bvh_reciprocal_dir(d.z));
-    // kz: the dominant axis; kx, ky the next two, swapped when d[kz] < 0 to keep the winding.
-    vec3 ad = abs(d);
-    int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-    int kx = kz == 2 ? 0 : kz + 1;
-    int ky = kx == 2 ? 0 : kx + 1;
-    if (d[kz] < 0.0) {
-        int s = kx;
-        kx = ky;
-        ky = s;
-    }
-    float sz = 1.0 / d[kz];
-    float sx = d[kx] * sz;
-    float sy = d[ky] * sz;
-    r.mx = vec3(0.0);
-    r.my = vec3(0.0);
-    r.mz = vec3(0.0);
-    r.mx[kx] = 1.0;
-    r.mx[kz] = -sx;
-    r.my[ky] = 1.0;
-    r.my[kz] = -sy;
-    r.mz[kz] = sz;
     return r;
 }
 
-// One sheared coordinate of a vertex: (p.x·m.x + p.y·m.y) + p.z·m.z, unfused and in this order. Two of the
-// terms are exact (a factor 1 or 0), so this is p[k] − S·p[kz] rounded as written, and it depends on the vertex
-// and the ray only: what makes shared edges watertight.
-float bvh_shear(vec3 p, vec3 m) {
-    precise float a = p.x * m.x;
-    precise float b = p.y * m.y;
-    precise float c = p.z * m.z;
-    precise float ab = a + b;
-    precise float s = ab + c;
-    return s;
-}
-
-// 2D edge function x1·y2 − y1·x2, unfused: swapping the two points negates it exactly.
-float bvh_edge(float x1, float y1, float x2, float y2) {
-    precise float p = x1 * y2;
-    precise float q = y1 * x2;
-    precise float e = p - q;
-    return e;
-}
-
-// Watertight ray–triangle test (see the header): true with t and the weights of v1, v2 when the ray's line
-// crosses the closed triangle (t is not range-checked here).
 bool bvh_hit_triangle(BvhRay r, BvhTri tr, out float t, out vec2 bary) {
-    t = -1.0;
-    bary = vec2(0.0);
-    precise vec3 a = tr.v0 - r.o;
-    precise vec3 b = tr.v1 - r.o;
-    precise vec3 c = tr.v2 - r.o;
-    float ax = bvh_shear(a, r.mx), ay = bvh_shear(a, r.my);
-    float bx = bvh_shear(b, r.mx), by = bvh_shear(b, r.my);
-    float cx = bvh_shear(c, r.mx), cy = bvh_shear(c, r.my);
-    float u = bvh_edge(cx, cy, bx, by); // weight of v0
-    float v = bvh_edge(ax, ay, cx, cy); // weight of v1
-    float w = bvh_edge(bx, by, ax, ay); // weight of v2
-    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
-    float det = u + v + w;
-    if (det == 0.0 || isnan(det) || isinf(det)) return false;
-    float az = bvh_shear(a, r.mz), bz = bvh_shear(b, r.mz), cz = bvh_shear(c, r.mz);
-    float tt = (u * az + v * bz + w * cz) / det;
-    if (isnan(tt) || isinf(tt)) return false;
-    t = tt;
-    bary = vec2(v, w) / det;
-    return true;
+    return wt_hit_triangle(r.w, tr.v0, tr.v1, tr.v2, t, bary);
 }
 
 // Slab test of box [lo, hi] against (tmin, tmax): whether they meet, and the entry distance.
 bool bvh_hit_box(BvhRay r, vec3 lo, vec3 hi, float tmin, float tmax, out float tnear) {
-    vec3 t0 = (lo - r.o) * r.inv_d;
-    vec3 t1 = (hi - r.o) * r.inv_d;
+    vec3 t0 = (lo - r.w.o) * r.inv_d;
+    vec3 t1 = (hi - r.w.o) * r.inv_d;
     vec3 ts = min(t0, t1);
     vec3 tb = max(t0, t1);
     float near = max(max(ts.x, ts.y), max(ts.z, tmin));
@@ -309,6 +247,18 @@ bool bvh_occluded(vec3 a, vec3 b) {
     uint tri;
     vec2 bary;
     return bvh_trace(a, b - a, BVH_SHADOW_EPS, 1.0 - BVH_SHADOW_EPS, true, tri, bary) >= 0.0;
+}
+
+// Occlusion between two points already lifted off their surfaces (surface_lift, ~32 ulps of their
+// coordinates): the segment's ends need no window of their own, only one against rounding, so it is
+// BVH_LIFTED_EPS = 1e-6 of the segment instead of BVH_SHADOW_EPS. With the 1e-4 window, a wall within
+// 0.01 % of the segment length of a lifted end did not count: a VPL in the corner of a closed box, lifted
+// by 2e-5, saw out through the wall next to it from 0.9 away.
+const float BVH_LIFTED_EPS = 1e-6;
+bool bvh_occluded_lifted(vec3 a, vec3 b) {
+    uint tri;
+    vec2 bary;
+    return bvh_trace(a, b - a, BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS, true, tri, bary) >= 0.0;
 }
 
 #endif

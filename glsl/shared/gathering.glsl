@@ -30,21 +30,30 @@ float voxel_first_hit(vec3 o, vec3 d, float tmax) {
     return -1.0;
 }
 
-// The VPL of light l whose texel sees point p: p projected into the light's DPRSM, accepted when that
-// texel's VPL lies within its own surface patch of p, plus 3 voxel cells (the light sees the surface
-// the ray hit; the hit point of a voxel march is only known to a cell). NO_VPL otherwise.
-uint vpl_at_point(vec3 p, uint l) {
+// The texel of light l's DPRSM that point p projects into, as a VPL index (NO_VPL when that texel holds
+// no VPL). No test that the texel's VPL is near p: the MIS gathering strategy needs only a fixed,
+// deterministic map from rays to texels (see mis.comp).
+uint texel_at_point(vec3 p, uint l) {
     uint res = frame.size.w;
     vec3 local = p - lights[l].position.xyz;
     uint face = local.z >= 0.0 ? 0u : 1u;
     vec2 uv = paraboloid_project(to_face(local, face));
     uvec2 texel = uvec2(clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(int(res) - 1)));
     uint v = ((2u * l + face) * res + texel.y) * res + texel.x;
+    return vpl_fetch(v).valid ? v : NO_VPL;
+}
+
+// The VPL of light l whose texel sees point p: p projected into the light's DPRSM, accepted when that
+// texel's VPL lies within its own surface patch of p, plus 3 voxel cells (the light sees the surface
+// the ray hit; the hit point of a voxel march is only known to a cell). NO_VPL otherwise. (gbg.)
+uint vpl_at_point(vec3 p, uint l) {
+    uint v = texel_at_point(p, l);
+    if (v == NO_VPL) return NO_VPL;
     Vpl vpl = vpl_fetch(v);
-    if (!vpl.valid) return NO_VPL;
     // The texel's surface patch reaches about √A_v from its VPL (A_v = Δω · d_l² / cos α, as in mis.comp):
     // accept hits within the patch, or within 3 cells when the hit is only known to a cell.
-    ivec3 t = ivec3(texel, 2u * l + face);
+    uint res = frame.size.w;
+    ivec3 t = ivec3(v % res, (v / res) % res, v / (res * res));
     float d_l = texelFetch(vpl_normal, t, 0).w;
     float cos_a = max(dot(vpl.normal, normalize(lights[l].position.xyz - vpl.position)), 1e-3);
     float patch_size = sqrt(texelFetch(vpl_flux, t, 0).w * d_l * d_l / cos_a);
@@ -60,14 +69,14 @@ vec3 cosine_direction(vec3 n, float u1, float u2) {
     return t1 * (rad * cos(phi)) + t2 * (rad * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0));
 }
 
-// The first VPL a ray from x (unit normal n) in direction d reaches through the voxel grid, for light l,
-// or NO_VPL. The ray starts 2 cells off the surface, as the visibility march does.
-uint gathering_vpl(vec3 x, vec3 n, vec3 d, uint l) {
+// The first occupied voxel cell a ray from x (unit normal n) in direction d reaches: its entry point
+// (world space), or false. The ray starts 2 cells off the surface, as the visibility march does.
+bool gathering_hit(vec3 x, vec3 n, vec3 d, out vec3 hit) {
     float cell = frame.voxel_origin.w;
     vec3 o = (x - frame.voxel_origin.xyz) / cell + n * 2.0;
     float t = voxel_first_hit(o, d, 4.0 * float(frame.voxel_dims.x + frame.voxel_dims.y + frame.voxel_dims.z));
-    if (t < 0.0) return NO_VPL;
-    return vpl_at_point(frame.voxel_origin.xyz + (o + d * t) * cell, l);
+    hit = frame.voxel_origin.xyz + (o + d * max(t, 0.0)) * cell;
+    return t >= 0.0;
 }
 
 #endif

@@ -85,14 +85,20 @@ uint draw_vpl(inout uint rng, out float prob) {
 
 // The shadowed contribution. Visibility: the voxel march (default), or with EXACT_VISIBILITY defined (the
 // `*.exact.comp` variants, `--visibility exact`) a shadow ray against the real triangles (BVH) between
-// points lifted off their surfaces along their normals (surface_lift in common.glsl).
+// points lifted off their surfaces (surface_lift in common.glsl): x along its normal, the VPL towards
+// its light. Not the VPL along its normal: a VPL exactly on an edge of a closed box (a light at the
+// box's centre puts texel rays exactly through its edges) lifted along one face's normal stays in the
+// other face's plane, and its shadow rays left the box through that face (a sealed light leaked).
+// Towards the light is always into the free space the light saw it from.
 vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
     Vpl vpl = vpl_fetch(v);
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return c;
 #ifdef EXACT_VISIBILITY
     float lx = surface_lift(x, frame.scene_min.w), lv = surface_lift(vpl.position, frame.scene_min.w);
-    return bvh_occluded(x + nx * lx, vpl.position + vpl.normal * lv) ? vec3(0.0) : c;
+    vec3 light = lights[v / (2u * frame.size.w * frame.size.w)].position.xyz;
+    vec3 lifted = vpl.position + normalize(light - vpl.position) * lv;
+    return bvh_occluded_lifted(x + nx * lx, lifted) ? vec3(0.0) : c;
 #else
     return c * voxel_visibility(x, nx, vpl.position, vpl.normal);
 #endif

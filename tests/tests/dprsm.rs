@@ -115,10 +115,36 @@ fn dprsm_depth_matches_a_cpu_ray_cast_in_the_cornell_box() {
 /// angles of all texels inside the unit disk add up to 4π (minus the ring the disk's texels miss).
 #[test]
 fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
-    let scene = big_floor_scene();
+    check_reflective_against_ray_cast(&big_floor_scene(), 64);
+}
+
+/// Every VPL of a light sealed in a box lies on the box's walls, edge texels included (a texel whose
+/// ray slipped between two wall triangles would put a VPL on the floor outside and light the scene),
+/// and the texels match the CPU ray cast.
+#[test]
+fn a_light_sealed_in_a_box_has_every_vpl_on_the_box() {
+    let scene = sealed_light_scene();
+    let c = Vec3::new(0.0, 1.5, 0.5);
+    for res in [16u32, 64, 256] {
+        let gpu = TestGpu::new();
+        let r = Renderer::new(&gpu, &scene).unwrap();
+        let [pos, _, _] = r.render_vpls(&FrameSettings { dprsm_res: res, ..FrameSettings::default() }).unwrap();
+        let outside: Vec<String> = pos
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p[3] != 0.0 && (Vec3::new(p[0], p[1], p[2]) - c).abs().max_element() > 0.1001)
+            .take(6)
+            .map(|(k, p)| format!("texel {k} at {:?}", &p[..3]))
+            .collect();
+        assert!(outside.is_empty(), "{res}²: VPLs outside the box: {}", outside.join("; "));
+    }
+    check_reflective_against_ray_cast(&scene, 256);
+}
+
+fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
+    let scene = scene.clone();
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, &scene).unwrap();
-    let res = 64u32;
     let s = FrameSettings { dprsm_res: res, ..FrameSettings::default() };
     let [pos, nrm, flux] = r.render_vpls(&s).unwrap();
     let bvh = Bvh::new(&scene);
@@ -197,4 +223,59 @@ fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
         let miss = 2.0 * std::f64::consts::PI - sum;
         assert!((0.0..0.25).contains(&miss.abs()), "face {f}: Σ Δω = {sum}, 2π − Σ = {miss}");
     }
+}
+
+/// A light sealed in a small closed box (0.2 wide, the light at its centre) in a closed room, as a user's
+/// OBJ would give it: written with decimal coordinates, loaded (f64 parse, rebased to its centre), then
+/// rebased back to world coordinates. Every texel sees a box wall at 0.1–0.17; the light is exactly
+/// central, so the diagonal texels' rays run exactly through the box's edges, and a texel ray that slips
+/// between two wall triangles puts a VPL on the room outside (Möller–Trumbore let some through).
+pub fn sealed_light_scene() -> Scene {
+    use std::fmt::Write as _;
+    let dir = std::env::temp_dir().join(format!("bounce-sealed-light-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let c = [0.0f64, 1.5, 0.5];
+    let v = |x: f64, y: f64, z: f64| [c[0] + x * 0.1, c[1] + y * 0.1, c[2] + z * 0.1];
+    let mut quads = vec![];
+    for (a, b, cc, d) in [
+        (v(-1., -1., -1.), v(1., -1., -1.), v(1., -1., 1.), v(-1., -1., 1.)),
+        (v(-1., 1., -1.), v(-1., 1., 1.), v(1., 1., 1.), v(1., 1., -1.)),
+        (v(-1., -1., -1.), v(-1., 1., -1.), v(1., 1., -1.), v(1., -1., -1.)),
+        (v(-1., -1., 1.), v(1., -1., 1.), v(1., 1., 1.), v(-1., 1., 1.)),
+        (v(-1., -1., -1.), v(-1., -1., 1.), v(-1., 1., 1.), v(-1., 1., -1.)),
+        (v(1., -1., -1.), v(1., 1., -1.), v(1., 1., 1.), v(1., -1., 1.)),
+    ] {
+        quads.push([a, b, cc, d]);
+    }
+    // A closed room around it, so that a texel ray escaping the box always lands on something.
+    let room = |x: f64, y: f64, z: f64| [x * 2.0, 1.0 + y * 2.0, z * 2.0];
+    for (a, b, cc, d) in [
+        (room(-1., -1., -1.), room(1., -1., -1.), room(1., -1., 1.), room(-1., -1., 1.)),
+        (room(-1., 1., -1.), room(-1., 1., 1.), room(1., 1., 1.), room(1., 1., -1.)),
+        (room(-1., -1., -1.), room(-1., 1., -1.), room(1., 1., -1.), room(1., -1., -1.)),
+        (room(-1., -1., 1.), room(1., -1., 1.), room(1., 1., 1.), room(-1., 1., 1.)),
+        (room(-1., -1., -1.), room(-1., -1., 1.), room(-1., 1., 1.), room(-1., 1., -1.)),
+        (room(1., -1., -1.), room(1., 1., -1.), room(1., 1., 1.), room(1., -1., 1.)),
+    ] {
+        quads.push([a, b, cc, d]);
+    }
+    let mut obj = String::new();
+    for (k, q) in quads.iter().enumerate() {
+        for p in q {
+            writeln!(obj, "v {} {} {}", p[0], p[1], p[2]).unwrap();
+        }
+        writeln!(obj, "f {} {} {} {}", 4 * k + 1, 4 * k + 2, 4 * k + 3, 4 * k + 4).unwrap();
+    }
+    std::fs::write(dir.join("sealed.obj"), obj).unwrap();
+    let toml = "mesh = \"sealed.obj\"\n[camera]\neye = [0.0, 1.5, 1.8]\ntarget = [0.0, 1.5, 0.5]\nup = [0.0, 1.0, 0.0]\nfov_y = 60.0\n[[light]]\nposition = [0.0, 1.5, 0.5]\nintensity = [1.0, 1.0, 1.0]\n";
+    std::fs::write(dir.join("sealed.toml"), toml).unwrap();
+    let mut scene = Scene::load(&dir.join("sealed.toml")).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    scene.rebase(DVec3::ZERO);
+    scene
+}
+
+#[test]
+fn dprsm_depth_matches_a_cpu_ray_cast_for_a_light_sealed_in_a_box() {
+    check_against_ray_cast(&sealed_light_scene(), 256);
 }

@@ -6,6 +6,7 @@ mod cdf;
 mod cli;
 mod direct;
 mod dprsm;
+mod fuzz_corpus;
 mod graph;
 mod images;
 

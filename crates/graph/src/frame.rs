@@ -463,9 +463,13 @@ impl Renderer {
             _ => dims.x + dims.y + dims.z + 3,
         };
         let per_vpl = march + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
-        // A MIS gathering ray marches once per light to find its VPL and once more for visibility.
-        let per_vpl =
-            if s.method == Method::Mis { per_vpl + 2 * self.scene.light_count * (march + 64) } else { per_vpl };
+        // MIS: a CDF sample adds one march (its gathering indicator); a gathering ray marches once to
+        // its hit and then, per light, does a CDF sample's work (visibility march, probability look-up).
+        let per_vpl = if s.method == Method::Mis {
+            (per_vpl + march + 64).max(march + 64 + self.scene.light_count * per_vpl)
+        } else {
+            per_vpl
+        };
         ((limit.saturating_sub(64)) / per_vpl).max(1)
     }
 

@@ -132,6 +132,12 @@ pub struct Scene {
     pub render_width: Option<u32>,
     /// `[render] height`, when given.
     pub render_height: Option<u32>,
+    /// Where the local origin lies in the file's world coordinates: every position above (vertices,
+    /// camera, lights, bounds) is `world − origin`, in f32. Loading puts it at the centre of the
+    /// mesh's bounds (computed in f64), so a scene far from its world origin keeps full f32 precision
+    /// between its surface points, which is what one-bounce transport differences (see README,
+    /// "Far from the origin"). Zero for in-memory scenes until [`Scene::rebase`].
+    pub origin: DVec3,
     /// Axis-aligned bounds of all vertices (both zero for an empty scene).
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
@@ -149,6 +155,17 @@ pub struct SceneDesc {
     pub lights: Vec<Light>,
     pub render_width: Option<u32>,
     pub render_height: Option<u32>,
+    /// The camera's eye and target and the lights' positions as the file gives them, in f64: the
+    /// f32 copies above lose precision far from the origin; these are rebased with the mesh.
+    pub world: WorldPoints,
+}
+
+/// Positions of a scene description in world coordinates, at full precision.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldPoints {
+    pub eye: DVec3,
+    pub target: DVec3,
+    pub lights: Vec<DVec3>,
 }
 
 // ---- TOML schema ------------------------------------------------------------------------------
@@ -166,8 +183,8 @@ struct SceneToml {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraToml {
-    eye: [f32; 3],
-    target: [f32; 3],
+    eye: [f64; 3],
+    target: [f64; 3],
     up: [f32; 3],
     fov_y: f32,
 }
@@ -175,7 +192,7 @@ struct CameraToml {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightToml {
-    position: [f32; 3],
+    position: [f64; 3],
     intensity: [f32; 3],
 }
 
@@ -204,8 +221,8 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     })?;
 
     let camera = Camera {
-        eye: Vec3::from_array(raw.camera.eye),
-        target: Vec3::from_array(raw.camera.target),
+        eye: DVec3::from_array(raw.camera.eye).as_vec3(),
+        target: DVec3::from_array(raw.camera.target).as_vec3(),
         up: Vec3::from_array(raw.camera.up),
         fov_y_deg: raw.camera.fov_y,
     };
@@ -225,7 +242,7 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         if !l.intensity.iter().all(|x| x.is_finite() && *x >= 0.0) {
             return Err(invalid(path, format!("light[{k}].intensity {:?} must be finite and >= 0", l.intensity)));
         }
-        lights.push(point_light(Vec3::from_array(l.position), Vec3::from_array(l.intensity)));
+        lights.push(point_light(DVec3::from_array(l.position).as_vec3(), Vec3::from_array(l.intensity)));
     }
 
     let (render_width, render_height) = match &raw.render {
@@ -247,7 +264,12 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     let mesh_path =
         if mesh.is_absolute() { mesh.to_path_buf() } else { path.parent().unwrap_or(Path::new("")).join(mesh) };
 
-    Ok(SceneDesc { path: path.to_path_buf(), mesh_path, camera, lights, render_width, render_height })
+    let world = WorldPoints {
+        eye: DVec3::from_array(raw.camera.eye),
+        target: DVec3::from_array(raw.camera.target),
+        lights: raw.light.iter().map(|l| DVec3::from_array(l.position)).collect(),
+    };
+    Ok(SceneDesc { path: path.to_path_buf(), mesh_path, camera, lights, render_width, render_height, world })
 }
 
 /// Loads the scene TOML at `path` and everything it references.
@@ -300,6 +322,16 @@ impl Scene {
             desc.camera,
             desc.lights,
         );
+        // The mesh is already local to its centre (f64 parse); bring the camera and lights over from
+        // their f64 world positions, not from the rounded f32 copies.
+        scene.origin = mesh.origin;
+        let local = |p: DVec3| (p - mesh.origin).as_vec3();
+        scene.camera.eye = local(desc.world.eye);
+        scene.camera.target = local(desc.world.target);
+        for (light, &p) in scene.lights.iter_mut().zip(&desc.world.lights) {
+            light.position = local(p).extend(1.0).to_array();
+        }
+        scene.camera.validate().map_err(|m| invalid(&desc.path, format!("[camera]: {m}")))?;
         scene.path = desc.path;
         scene.mesh_path = desc.mesh_path;
         scene.render_width = desc.render_width;
@@ -360,10 +392,39 @@ impl Scene {
             lights,
             render_width: None,
             render_height: None,
+            origin: DVec3::ZERO,
             bounds_min,
             bounds_max,
             stats,
         }
+    }
+
+    /// Moves the local origin to `origin` (world coordinates): every position is recomputed as
+    /// `world − origin` through f64, so no precision is lost beyond the final f32 rounding.
+    pub fn rebase(&mut self, origin: DVec3) {
+        let shift = self.origin - origin;
+        let move_point = |p: Vec3| (p.as_dvec3() + shift).as_vec3();
+        for v in &mut self.vertices {
+            let p = move_point(v.position());
+            v.position_u[..3].copy_from_slice(&p.to_array());
+        }
+        self.camera.eye = move_point(self.camera.eye);
+        self.camera.target = move_point(self.camera.target);
+        for l in &mut self.lights {
+            let p = move_point(Vec3::new(l.position[0], l.position[1], l.position[2]));
+            l.position[..3].copy_from_slice(&p.to_array());
+        }
+        if !self.vertices.is_empty() {
+            self.bounds_min = move_point(self.bounds_min);
+            self.bounds_max = move_point(self.bounds_max);
+        }
+        self.origin = origin;
+    }
+
+    /// [`Scene::rebase`] to the centre of the bounds, as loading does. For in-memory scenes.
+    pub fn rebase_to_center(&mut self) {
+        let centre = self.origin + (self.bounds_min.as_dvec3() + self.bounds_max.as_dvec3()) * 0.5;
+        self.rebase(centre);
     }
 
     /// Builds an in-memory untextured scene: one material (linear albedo) per triangle, face
@@ -431,6 +492,10 @@ impl Scene {
         if self.stats.degenerate_triangles > 0 {
             let _ = write!(s, " ({} degenerate)", self.stats.degenerate_triangles);
         }
+        if self.origin != DVec3::ZERO {
+            let o = self.origin;
+            let _ = write!(s, ", local origin at [{}, {}, {}]", o.x, o.y, o.z);
+        }
         let _ = write!(
             s,
             ", {} materials, {} textures ({:.1} MiB), bounds [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}], {} light{}, loaded in {:.1} ms",
@@ -455,6 +520,9 @@ impl Scene {
 
 /// The flattened mesh, before camera and lights join it.
 struct MeshData {
+    /// World position of the local origin (the centre of the positions' bounds).
+    origin: DVec3,
+    /// Positions relative to `origin`.
     vertices: Vec<Vertex>,
     tri_material: Vec<u32>,
     materials: Vec<Material>,
@@ -826,7 +894,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
             tex = idx as f32;
         }
         let kd = match m.diffuse {
-            Some(kd) => kd.map(|x| f64::from(x) as f32),
+            Some(kd) => kd.map(|x| x as f32),
             None if tex >= 0.0 => [1.0; 3],
             None => [DEFAULT_ALBEDO; 3],
         };
@@ -841,6 +909,16 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
     let mut degenerate = 0usize;
     let mut repaired_normals = 0usize;
 
+    // The local origin: the centre of all positions' bounds, in f64 (non-finite positions are
+    // rejected below, where a face uses them).
+    let (lo, hi) = models
+        .iter()
+        .flat_map(|m| m.mesh.positions.chunks_exact(3))
+        .map(|c| DVec3::new(c[0], c[1], c[2]))
+        .filter(|p| p.is_finite())
+        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    let origin = if lo.x <= hi.x { (lo + hi) * 0.5 } else { DVec3::ZERO };
+
     for model in &models {
         let mesh = &model.mesh;
         let nverts = mesh.positions.len() / 3;
@@ -854,13 +932,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
                 (materials.len() - 1) as u32
             }),
         };
-        let pos = |i: usize| {
-            DVec3::new(
-                f64::from(mesh.positions[3 * i]),
-                f64::from(mesh.positions[3 * i + 1]),
-                f64::from(mesh.positions[3 * i + 2]),
-            )
-        };
+        let pos = |i: usize| DVec3::new(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]);
         for tri in mesh.indices.chunks_exact(3) {
             let idx = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
             if idx.iter().any(|&i| i >= nverts) {
@@ -877,11 +949,7 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
             let mut normals = [face; 3];
             if has_normals {
                 let vn = idx.map(|i| {
-                    unit_normal(DVec3::new(
-                        f64::from(mesh.normals[3 * i]),
-                        f64::from(mesh.normals[3 * i + 1]),
-                        f64::from(mesh.normals[3 * i + 2]),
-                    ))
+                    unit_normal(DVec3::new(mesh.normals[3 * i], mesh.normals[3 * i + 1], mesh.normals[3 * i + 2]))
                 });
                 if let [Some(a), Some(b), Some(c)] = vn {
                     normals = [a, b, c];
@@ -891,22 +959,19 @@ fn load_mesh(obj_path: &Path) -> Result<MeshData, SceneError> {
             }
             for c in 0..3 {
                 let uv = if has_uv {
-                    let (u, v) = (
-                        f64::from(mesh.texcoords[2 * idx[c]]) as f32,
-                        f64::from(mesh.texcoords[2 * idx[c] + 1]) as f32,
-                    );
+                    let (u, v) = (mesh.texcoords[2 * idx[c]] as f32, mesh.texcoords[2 * idx[c] + 1] as f32);
                     // Non-finite UVs would make the texel index undefined on the GPU.
                     [if u.is_finite() { u } else { 0.0 }, if v.is_finite() { v } else { 0.0 }]
                 } else {
                     [0.0, 0.0]
                 };
-                vertices.push(make_vertex(p[c].as_vec3(), normals[c], uv));
+                vertices.push(make_vertex((p[c] - origin).as_vec3(), normals[c], uv));
             }
             tri_material.push(mat);
         }
     }
 
-    Ok(MeshData { vertices, tri_material, materials, textures, texels, degenerate, repaired_normals })
+    Ok(MeshData { origin, vertices, tri_material, materials, textures, texels, degenerate, repaired_normals })
 }
 
 #[cfg(test)]
@@ -1188,8 +1253,10 @@ f 4 4 4
         assert_eq!(s.materials[0].kd_tex, [0.5, 0.5, 0.5, -1.0]);
         assert!(s.tri_material.iter().all(|&m| m == 0));
         assert!(s.vertices.iter().all(|v| v.uv() == glam::Vec2::ZERO));
-        assert_eq!(s.bounds_min, Vec3::ZERO);
-        assert_eq!(s.bounds_max, Vec3::splat(2.0));
+        // Positions are stored relative to the bounds' centre (the local origin).
+        assert_eq!(s.origin, glam::DVec3::splat(1.0));
+        assert_eq!(s.bounds_min, Vec3::splat(-1.0));
+        assert_eq!(s.bounds_max, Vec3::splat(1.0));
     }
 
     #[test]
@@ -1261,6 +1328,23 @@ f 4 4 4
         assert_eq!(s.vertices[2].uv(), glam::Vec2::new(0.25, 0.75));
     }
 
+    /// Far from the origin the loader keeps what f32 world coordinates would lose: at 10⁶ a f32 step is
+    /// 0.0625, but positions 10⁶ + 0.3 parse in f64 and land at exactly their offset from the centre.
+    #[test]
+    fn positions_far_from_the_origin_keep_full_precision() {
+        let dir = temp_dir("far");
+        let obj = "v 1000000.3 2000000.0 -1000000.0\nv 1000001.3 2000000.0 -1000000.0\nv 1000000.3 2000001.0 -1000000.0\nf 1 2 3\n";
+        std::fs::write(dir.join("far.obj"), obj).unwrap();
+        let toml = "mesh = \"far.obj\"\n[camera]\neye = [1000000.8, 2000000.5, -999990.0]\ntarget = [1000000.8, 2000000.5, -1000000.0]\nup = [0.0, 1.0, 0.0]\nfov_y = 40.0\n[[light]]\nposition = [1000000.55, 2000000.25, -999999.0]\nintensity = [1.0, 1.0, 1.0]\n";
+        std::fs::write(dir.join("far.toml"), toml).unwrap();
+        let s = load(&dir.join("far.toml")).unwrap();
+        assert_eq!(s.origin, glam::DVec3::new(1000000.8, 2000000.5, -1000000.0));
+        let p: Vec<Vec3> = s.vertices.iter().map(|v| v.position()).collect();
+        assert_eq!(p, vec![Vec3::new(-0.5, -0.5, 0.0), Vec3::new(0.5, -0.5, 0.0), Vec3::new(-0.5, 0.5, 0.0)]);
+        assert!((s.camera.eye - Vec3::new(0.0, 0.0, 10.0)).length() < 1e-6);
+        assert!((Vec3::from_slice(&s.lights[0].position[..3]) - Vec3::new(-0.25, -0.25, 1.0)).length() < 1e-6);
+    }
+
     #[test]
     fn cornell_box_loads() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
@@ -1270,8 +1354,11 @@ f 4 4 4
         assert_eq!(s.stats.degenerate_triangles, 0);
         assert_eq!(s.lights.len(), 1);
         assert_eq!((s.render_width, s.render_height), (Some(256), Some(256)));
-        assert!((s.bounds_min - Vec3::new(-1.02, 0.0, -1.04)).abs().max_element() < 1e-6);
-        assert!((s.bounds_max - Vec3::new(1.0, 1.99, 0.99)).abs().max_element() < 1e-6);
+        // World bounds = local bounds + origin (the bounds' centre).
+        let world = |p: Vec3| (p.as_dvec3() + s.origin).as_vec3();
+        assert!((world(s.bounds_min) - Vec3::new(-1.02, 0.0, -1.04)).abs().max_element() < 1e-6);
+        assert!((world(s.bounds_max) - Vec3::new(1.0, 1.99, 0.99)).abs().max_element() < 1e-6);
+        assert!((s.bounds_min + s.bounds_max).abs().max_element() < 1e-6, "centred on the origin");
         // Every face has a material from the MTL (no default grey needed).
         assert_eq!(s.materials.len(), 8);
         let red = s.materials.iter().position(|m| m.kd_tex[..3] == [0.63, 0.065, 0.05]);
@@ -1280,7 +1367,9 @@ f 4 4 4
             assert!((v.normal().length() - 1.0).abs() < 1e-6);
         }
         // The floor's normal points into the room (+y) with the file's winding.
-        let floor = s.vertices.chunks(3).position(|t| t.iter().all(|v| v.position().y == 0.0)).expect("floor triangle");
+        let floor_y = s.bounds_min.y; // the floor is the lowest surface (world y = 0)
+        let floor =
+            s.vertices.chunks(3).position(|t| t.iter().all(|v| v.position().y == floor_y)).expect("floor triangle");
         assert_eq!(s.vertices[3 * floor].normal(), Vec3::Y);
         let (near, far) = s.depth_range();
         assert!(near > 0.0 && near < 0.01 && far > 5.0 && far < 6.0, "{near} {far}");

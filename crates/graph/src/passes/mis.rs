@@ -4,9 +4,13 @@
 //! `glsl/mis.comp`. Same inputs, outputs and dispatch as `gather` (its recording is reused); `first` /
 //! `last` count the n_c CDF samples and then the n_g rays, so the loop-limit split covers both.
 //!
-//! The gathering strategy picks VPL v with probability q_g(ω_v) · Ω_v only up to the voxel march (the
-//! hit is known to a cell) and the patch model A_v = Δω d_l² / cos α_v; where those are off, the MIS
-//! estimate is not exactly unbiased with respect to `all` (measured in BENCHMARKS.md and the tests).
+//! Sample space: pairs (VPL v, point y of a square patch Q_v of area A_v in v's tangent plane), with
+//! F(v, y) = c(v) / A_v, so that Σ_v ∫ F dA = Σ_v c(v) exactly. The CDF strategy draws v by P_v and y
+//! uniformly in Q_v; a gathering ray names the texel its first hit projects into and y where it meets
+//! that VPL's plane. Both densities are exact (a CDF sample re-runs the gathering ray map towards its
+//! y), so the balance-heuristic estimate c(v) / (n_c P_v + n_g A_v p_g) is unbiased with respect to
+//! `all` for either visibility; the test `every_method_converges_to_all_at_the_monte_carlo_rate`
+//! checks it.
 
 use super::gather::Gather;
 use crate::shaders;
