@@ -8,6 +8,7 @@ packages=(
   vulkan-validationlayers  # VK_LAYER_KHRONOS_validation (tests and --validation)
   libvulkan1               # the Vulkan loader
   cmake ninja-build g++ python3 git  # the shaderc crate builds glslang/shaderc from source
+  xvfb xauth               # `bounce view` tests: a virtual X display (xvfb-run)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -16,7 +16,7 @@ pub struct TestGpu {
 
 impl TestGpu {
     pub fn new() -> TestGpu {
-        let gpu = Gpu::new(&GpuOptions { validation: true, device: None }).unwrap_or_else(|e| {
+        let gpu = Gpu::new(&GpuOptions { validation: true, ..GpuOptions::default() }).unwrap_or_else(|e| {
             panic!("cannot create a Vulkan device with validation (install mesa-vulkan-drivers and vulkan-validationlayers): {e}")
         });
         assert!(gpu.validation_enabled(), "validation layers requested but no debug messenger");

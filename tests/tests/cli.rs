@@ -320,3 +320,119 @@ fn bad_inputs_give_one_line_and_exit_2() {
         assert!(!out.exists(), "{name}: an output file was written");
     }
 }
+
+/// `bounce view` as its own process under Xvfb (`xvfb-run`, installed by scripts/setup.sh).
+fn view(args: &[&str], display: bool) -> std::process::Output {
+    let bin = env!("CARGO_BIN_EXE_bounce-cli");
+    let mut cmd = if display {
+        let mut c = std::process::Command::new("xvfb-run");
+        c.args(["-a", "-s", "-screen 0 320x240x24", bin]);
+        c
+    } else {
+        let mut c = std::process::Command::new(bin);
+        c.env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY").env_remove("WAYLAND_SOCKET");
+        c
+    };
+    cmd.arg("view").args(args).output().expect("run xvfb-run (package xvfb) and the bounce binary")
+}
+
+const VIEW_SETTINGS: [&str; 14] = [
+    "--width",
+    "32",
+    "--height",
+    "32",
+    "--vpls",
+    "4",
+    "--dprsm-res",
+    "32",
+    "--shadow-res",
+    "128",
+    "--voxels",
+    "32",
+    "--method",
+    "gbg",
+];
+
+/// The viewer's progressive accumulation is exactly the mean of the frames `bounce render` makes with
+/// the same settings and seeds S, S+1, …: 3 frames, validation on, under Xvfb on lavapipe.
+#[test]
+fn view_accumulates_exactly_the_frames_render_makes() {
+    let d = scratch("view");
+    let scene = bounce_tests::default_scene();
+    let shot = d.join("view.png");
+    let mut args = vec![scene.to_str().unwrap(), "--frames", "3", "--screenshot", shot.to_str().unwrap()];
+    args.extend(VIEW_SETTINGS);
+    args.extend(["--seed", "5", "--validation"]);
+    let o = view(&args, true);
+    assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(shot.exists());
+    let (v, meta) = read_exr(&shot.with_extension("exr")).unwrap();
+    assert!(meta.iter().any(|(k, val)| k == "bounce.frames" && val == "3"), "{meta:?}");
+    let mut sum = vec![[0.0f64; 3]; v.pixels.len()];
+    for seed in ["5", "6", "7"] {
+        let exr = d.join(format!("render-{seed}.exr"));
+        let mut a = vec!["render", scene.to_str().unwrap(), "--out", exr.to_str().unwrap(), "--seed", seed];
+        a.extend(VIEW_SETTINGS);
+        let r = bounce(&a);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        let (img, _) = read_exr(&exr).unwrap();
+        assert_eq!((img.width, img.height), (v.width, v.height), "the window was not 32×32");
+        for (s, p) in sum.iter_mut().zip(&img.pixels) {
+            for c in 0..3 {
+                s[c] += p[c] as f64;
+            }
+        }
+    }
+    let mut worst = 0.0f64;
+    for (s, p) in sum.iter().zip(&v.pixels) {
+        for c in 0..3 {
+            let want = s[c] / 3.0;
+            worst = worst.max((p[c] as f64 - want).abs() / want.abs().max(1e-3));
+        }
+    }
+    let mean = v.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * v.pixels.len()) as f64;
+    eprintln!("view vs mean of 3 renders: worst relative difference {worst:.2e}, image mean {mean:.4}");
+    assert!(mean > 0.01, "the screenshot is black");
+    assert!(worst < 1e-5, "the viewer's mean differs from the renders': {worst}");
+}
+
+/// The bar: 30 frames under Xvfb exit 0 and the screenshot shows the scene, its image mean
+/// within 5 % of the converged `all` image's (30 × 4 VPLs per pixel: the mean's noise is ~1 %).
+#[test]
+fn view_30_frames_under_xvfb_shows_the_scene() {
+    let d = scratch("view30");
+    let scene = bounce_tests::default_scene();
+    let shot = d.join("s.png");
+    let mut args = vec![scene.to_str().unwrap(), "--frames", "30", "--screenshot", shot.to_str().unwrap()];
+    args.extend(VIEW_SETTINGS);
+    let o = view(&args, true);
+    assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
+    let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
+    let all_exr = d.join("all.exr");
+    let mut a = vec!["render", scene.to_str().unwrap(), "--out", all_exr.to_str().unwrap()];
+    a.extend(VIEW_SETTINGS[..12].iter().copied());
+    a.extend(["--method", "all"]);
+    let r = bounce(&a);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (all, _) = read_exr(&all_exr).unwrap();
+    let mean = |px: &[[f32; 3]]| px.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * px.len()) as f64;
+    let (mv, ma) = (mean(&v.pixels), mean(&all.pixels));
+    eprintln!("view, 30 frames: mean {mv:.4} vs all {ma:.4} ({:+.2}%)", 100.0 * (mv - ma) / ma);
+    assert!(((mv - ma) / ma).abs() < 0.05, "{mv} vs {ma}");
+    assert!(std::fs::metadata(&shot).unwrap().len() > 100, "no PNG screenshot");
+}
+
+/// Without a display: exit 2, one `error:` line that says so, no screenshot.
+#[test]
+fn view_without_a_display_is_a_clear_error() {
+    let d = scratch("view-nodisplay");
+    let shot = d.join("s.png");
+    let scene = bounce_tests::default_scene();
+    let o = view(&[scene.to_str().unwrap(), "--frames", "1", "--screenshot", shot.to_str().unwrap()], false);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(errors[0].contains("no display"), "{stderr}");
+    assert!(!shot.exists());
+}

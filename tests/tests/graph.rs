@@ -140,4 +140,44 @@ fn an_unchanged_frame_records_only_the_gather() {
     assert!(gbg2.ran.contains(&"importance"), "gbg's importance depends on the seed: {:?}", gbg2.ran);
     let bigger = r.render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
     assert!(bigger.ran.contains(&"gbuffer"));
+    // A resize keeps the light side: the paraboloid maps depend on the lights and their resolutions.
+    assert!(!bigger.ran.contains(&"dprsm") && !bigger.ran.contains(&"dprsm_depth"), "{:?}", bigger.ran);
+}
+
+/// A camera move (the viewer's fly camera) re-records what the camera feeds (G-buffer, direct light,
+/// importance, CDF) and keeps the light side (reflective DPRSM, shadow map); the image equals a fresh
+/// renderer's at the new camera, so nothing stale is reused.
+#[test]
+fn a_camera_move_keeps_the_light_side() {
+    use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+    use bounce_graph::scene::Scene;
+    let gpu = TestGpu::new();
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let s = FrameSettings {
+        width: 24,
+        height: 24,
+        component: Component::Combined,
+        method: Method::Global,
+        vpls: 4,
+        dprsm_res: 32,
+        shadow_res: 128,
+        voxels: 32,
+        ..FrameSettings::default()
+    };
+    r.render(&s).unwrap();
+    let mut moved = scene.camera;
+    moved.eye += glam::Vec3::new(0.2, -0.1, -0.5);
+    r.set_camera(moved);
+    let after = r.render(&s).unwrap();
+    for pass in ["gbuffer", "direct", "importance", "cdf_reduce", "gather"] {
+        assert!(after.ran.contains(&pass), "a camera move must redo {pass}: {:?}", after.ran);
+    }
+    for pass in ["dprsm", "dprsm_depth", "voxelize"] {
+        assert!(!after.ran.contains(&pass), "a camera move must keep {pass}: {:?}", after.ran);
+    }
+    let mut fresh = Renderer::new(&gpu, &scene).unwrap();
+    fresh.set_camera(moved);
+    assert_eq!(fresh.render(&s).unwrap().radiance, after.radiance, "the kept light side changed the image");
+    assert_eq!(r.render(&s).unwrap().ran, vec!["gather"]);
 }

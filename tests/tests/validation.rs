@@ -5,8 +5,8 @@ use bounce_device::{vk, Gpu, GpuOptions};
 
 #[test]
 fn collector_catches_an_invalid_call_per_device() {
-    let bad = Gpu::new(&GpuOptions { validation: true, device: None }).expect("device");
-    let clean = Gpu::new(&GpuOptions { validation: true, device: None }).expect("device");
+    let bad = Gpu::new(&GpuOptions { validation: true, ..GpuOptions::default() }).expect("device");
+    let clean = Gpu::new(&GpuOptions { validation: true, ..GpuOptions::default() }).expect("device");
     // VUID-VkBufferCreateInfo-size-00912: a buffer's size must be greater than 0.
     let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
     if let Ok(b) = unsafe { bad.device.create_buffer(&info, None) } {
@@ -20,14 +20,14 @@ fn collector_catches_an_invalid_call_per_device() {
 
 #[test]
 fn a_device_without_validation_collects_nothing() {
-    let g = Gpu::new(&GpuOptions { validation: false, device: None }).expect("device");
+    let g = Gpu::new(&GpuOptions::default()).expect("device");
     assert!(!g.validation_enabled());
     assert_eq!(g.validation().count(), 0);
 }
 
 #[test]
 fn an_unknown_device_name_is_a_clear_error() {
-    let e = Gpu::new(&GpuOptions { validation: false, device: Some("no-such-device-xyz".into()) }).unwrap_err();
+    let e = Gpu::new(&GpuOptions { device: Some("no-such-device-xyz".into()), ..GpuOptions::default() }).unwrap_err();
     let m = e.to_string();
     assert!(m.contains("no-such-device-xyz") && m.contains("available"), "{m}");
 }

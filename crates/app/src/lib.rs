@@ -1,4 +1,5 @@
-//! bounce, the application: the `bounce` command line (`render`, `info`) and image output.
+//! bounce, the application: the `bounce` command line (`render`, `info`, `compare`, `bench`, `view`) and
+//! image output.
 //!
 //! Exit codes: 0 success; 2 bad input (unreadable or malformed scene, impossible settings, no usable
 //! Vulkan device or validation layer: things the user fixes); 1 a runtime failure. Every error is one
@@ -8,6 +9,7 @@ pub mod bench;
 pub mod metrics;
 pub mod output;
 pub mod plot;
+pub mod view;
 
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions};
@@ -41,6 +43,8 @@ pub enum Command {
     Compare(CompareArgs),
     /// Run time against error for methods × VPL counts: bench.csv, bench.md, time_vs_error.png.
     Bench(BenchArgs),
+    /// Interactive viewer: fly camera, progressive accumulation, screenshots (needs a display).
+    View(view::ViewArgs),
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -273,6 +277,7 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
         Command::Info => info(out),
         Command::Compare(a) => compare(&a, out),
         Command::Bench(a) => bench(&a, out, err),
+        Command::View(a) => view::view(&a, out, err),
     };
     match r {
         Ok(()) => 0,
@@ -319,7 +324,8 @@ fn bench(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> 
         clamp: a.clamp,
         ..FrameSettings::default()
     };
-    let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone() }).map_err(gpu_error)?;
+    let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone(), ..GpuOptions::default() })
+        .map_err(gpu_error)?;
     let renderer = Renderer::new(&gpu, &scene)?;
     for &n in &a.vpls {
         renderer.check(&FrameSettings { vpls: n, ..base.clone() }).map_err(bad)?;
@@ -433,7 +439,8 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         clamp: a.clamp,
         ..FrameSettings::default()
     };
-    let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone() }).map_err(gpu_error)?;
+    let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone(), ..GpuOptions::default() })
+        .map_err(gpu_error)?;
     settings.validate(&gpu).map_err(bad)?;
     let renderer = Renderer::new(&gpu, &scene)?;
     renderer.check(&settings).map_err(bad)?;

@@ -17,6 +17,10 @@ pub struct GpuOptions {
     /// Pick the first device whose name contains this (case-insensitive). `None`: the `BOUNCE_DEVICE`
     /// environment variable, else the first discrete GPU, else integrated, else any (lavapipe).
     pub device: Option<String>,
+    /// Extra instance extensions (the window system's surface extensions, for presenting).
+    pub instance_extensions: Vec<&'static CStr>,
+    /// Enable VK_KHR_swapchain (required then: a device without it is not picked).
+    pub swapchain: bool,
 }
 
 /// Validation messages of one device (warnings and errors), in arrival order.
@@ -263,7 +267,8 @@ impl Gpu {
 
     pub fn new(opts: &GpuOptions) -> Result<Gpu> {
         let entry = load_entry()?;
-        let instance = create_instance(&entry, opts.validation, &[])?;
+        let exts: Vec<*const std::ffi::c_char> = opts.instance_extensions.iter().map(|e| e.as_ptr()).collect();
+        let instance = create_instance(&entry, opts.validation, &exts)?;
         // From here on, a failure must destroy what exists: wrap the rest.
         match Self::with_instance(entry, instance.clone(), opts) {
             Ok(g) => Ok(g),
@@ -360,7 +365,19 @@ impl Gpu {
 
         let prio = [1.0f32];
         let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
-        let dev_exts = [khr::push_descriptor::NAME.as_ptr()];
+        let mut dev_exts = vec![khr::push_descriptor::NAME.as_ptr()];
+        if opts.swapchain {
+            let exts = unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
+            if !exts.iter().any(|e| e.extension_name_as_c_str() == Ok(khr::swapchain::NAME)) {
+                destroy_messenger(&messenger);
+                return Err(Error::MissingFeature {
+                    device: name,
+                    what: "the extension VK_KHR_swapchain (presenting to a window)".into(),
+                    hint: String::new(),
+                });
+            }
+            dev_exts.push(khr::swapchain::NAME.as_ptr());
+        }
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)

@@ -26,6 +26,7 @@ mod error;
 mod gpu;
 mod memory;
 mod pipeline;
+mod swapchain;
 pub mod sync;
 mod timestamps;
 
@@ -36,4 +37,5 @@ pub use gpu::{DeviceInfo, Gpu, GpuOptions, ValidationLog};
 pub use gpu_allocator::MemoryLocation;
 pub use memory::{is_depth_format, texel_size, Buffer, BufferDesc, Image, ImageDesc, Sampler};
 pub use pipeline::{Binding, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc};
+pub use swapchain::{Presented, Swapchain};
 pub use timestamps::TimestampPool;

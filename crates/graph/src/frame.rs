@@ -8,10 +8,11 @@
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Graph, Handle, PassTiming, Persistent};
 use crate::passes::cdf_reduce::CdfReduce;
+use crate::passes::dprsm::{Dprsm, DprsmDepth, DprsmOut};
 use crate::passes::gather::{Gather, GatherInputs};
 use crate::passes::importance::{Importance, ImportanceKind, ImportanceOut, ImportanceParams};
 use crate::passes::voxelize::{self, VoxelGridSpec, Voxelize};
-use crate::passes::{direct::Direct, dprsm::Dprsm, gbuffer::GBuffer, FrameInputs};
+use crate::passes::{direct::Direct, gbuffer::GBuffer, FrameInputs};
 use crate::scene::Scene;
 use crate::shader_types::{FrameUniforms, GatherPush};
 use anyhow::{bail, Context, Result};
@@ -222,9 +223,11 @@ impl FrameSettings {
 }
 
 /// What a frame's static products (G-buffer, VPL maps, direct light, importance, CDF) depend on. The
-/// camera and the lights are fixed for a `Renderer`; everything else that feeds those passes is here.
+/// lights are fixed for a `Renderer`; the camera ([`Renderer::set_camera`]) and everything else that
+/// feeds those passes is here.
 #[derive(Clone, Debug, PartialEq)]
 struct CacheKey {
+    camera: crate::camera::Camera,
     width: u32,
     height: u32,
     combined: bool,
@@ -240,14 +243,25 @@ struct CacheKey {
 }
 
 /// The static products of the last sampled frame, kept so that a frame whose [`CacheKey`] is unchanged
-/// records only the gather ("skip what a scene does not need").
+/// records only the gather ("skip what a scene does not need"). The VPL maps are in the [`LightCache`].
 pub struct FrameCache {
     key: CacheKey,
-    /// G-buffer position, normal, albedo; VPL position, normal, flux; then the direct image if combined.
+    /// G-buffer position, normal, albedo; then the direct image if combined.
     images: Vec<Persistent<Image>>,
     importance: Persistent<Buffer>,
     cdf: Persistent<Buffer>,
     sections: u32,
+}
+
+/// The light-side products: the reflective DPRSM (VPL position, normal, flux) and the direct light's
+/// shadow map. They depend on the lights (fixed for a `Renderer`) and the two map resolutions only, so
+/// a camera move keeps them: only the G-buffer, direct light, importance and CDF are redone.
+pub struct LightCache {
+    /// (dprsm_res, shadow_res).
+    key: (u32, u32),
+    vpls: Vec<Persistent<Image>>,
+    /// Kept when the frame computed direct light (the indirect component alone never renders it).
+    shadow: Option<Persistent<Image>>,
 }
 
 /// The voxel grid of the scene: built once per grid size, reused by every frame and method.
@@ -278,6 +292,7 @@ pub struct Renderer {
     bvh: std::cell::OnceCell<crate::bvh::GpuBvh>,
     voxel_state: RefCell<Option<VoxelState>>,
     frame_cache: RefCell<Option<FrameCache>>,
+    light_cache: RefCell<Option<LightCache>>,
 }
 
 /// A rendered frame, read back.
@@ -308,6 +323,8 @@ impl FrameOutput {
 pub struct FrameHandles {
     /// The image of the asked component (for `all` with VPLs: `None`; the tiles produce it).
     pub out: Option<Handle<Image>>,
+    /// The VPL maps and shadow map when this graph renders them (not imported from a [`LightCache`]).
+    pub fresh_light: Option<(DprsmOut, DprsmDepth)>,
     pub direct: Handle<Image>,
     pub gather_inputs: GatherInputs,
 }
@@ -321,11 +338,30 @@ pub fn build_frame<'a>(
     mut voxels: Handle<Buffer>,
     voxels_built: bool,
     cached: Option<&'a FrameCache>,
+    light: Option<&'a LightCache>,
 ) -> FrameHandles {
     if !voxels_built {
         r.voxelize.add(g, f, &mut voxels);
     }
     let rows = 2 * f.scene.light_count * f.dprsm_res;
+    // The light side: imported when the lights' maps are cached, else rendered (and handed back).
+    let mut fresh_light = None;
+    let (vpls, shadow) = match light {
+        Some(l) => (
+            DprsmOut {
+                position: g.import_image(&l.vpls[0]),
+                normal: g.import_image(&l.vpls[1]),
+                flux: g.import_image(&l.vpls[2]),
+            },
+            l.shadow.as_ref().map(|p| DprsmDepth { depth: g.import_image(p) }),
+        ),
+        None => {
+            let v = r.dprsm.add(g, f);
+            let d = r.dprsm.add_depth(g, f);
+            fresh_light = Some((v, d));
+            (v, Some(d))
+        }
+    };
     let (gather_inputs, direct, imp) = match cached {
         // Nothing these passes read has changed since the cached frame: import their results instead.
         Some(c) => {
@@ -334,22 +370,21 @@ pub fn build_frame<'a>(
                 g_position: im[0],
                 g_normal: im[1],
                 g_albedo: im[2],
-                vpl_position: im[3],
-                vpl_normal: im[4],
-                vpl_flux: im[5],
+                vpl_position: vpls.position,
+                vpl_normal: vpls.normal,
+                vpl_flux: vpls.flux,
                 voxels,
                 importance: g.import_buffer(&c.importance),
                 cdf: g.import_buffer(&c.cdf),
-                direct: im.get(6).copied(),
+                direct: im.get(3).copied(),
             };
             let imp = ImportanceOut { importance: inputs.importance, sections: c.sections };
-            (inputs, im.get(6).copied().unwrap_or(im[2]), imp)
+            (inputs, im.get(3).copied().unwrap_or(im[2]), imp)
         }
         None => {
             let gbuffer = r.gbuffer.add(g, f);
-            let shadow = r.dprsm.add_depth(g, f);
+            let shadow = shadow.expect("a light cache without the shadow map is only used for the indirect component");
             let direct = r.direct.add(g, f, &gbuffer, &shadow);
-            let vpls = r.dprsm.add(g, f);
             let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, r.importance_params(s));
             let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
             let inputs = GatherInputs::new(
@@ -402,7 +437,7 @@ pub fn build_frame<'a>(
             Some(out)
         }
     };
-    FrameHandles { out, direct, gather_inputs }
+    FrameHandles { out, fresh_light, direct, gather_inputs }
 }
 
 fn radiance_desc(name: &str, w: u32, h: u32) -> ImageDesc {
@@ -445,6 +480,7 @@ impl Renderer {
             bvh: std::cell::OnceCell::new(),
             voxel_state: RefCell::new(None),
             frame_cache: RefCell::new(None),
+            light_cache: RefCell::new(None),
         })
     }
 
@@ -473,15 +509,22 @@ impl Renderer {
         ((limit.saturating_sub(64)) / per_vpl).max(1)
     }
 
+    /// Moves the camera (the viewer's fly camera). The next frame re-records what depends on it.
+    pub fn set_camera(&mut self, camera: crate::camera::Camera) {
+        self.camera = camera;
+    }
+
     /// Forget the cached static products: the next frame records every pass it needs. `bounce bench`
     /// does this before each timed frame, so that every method pays for its full frame.
     pub fn clear_frame_cache(&self) {
         *self.frame_cache.borrow_mut() = None;
+        *self.light_cache.borrow_mut() = None;
     }
 
     fn cache_key(&self, s: &FrameSettings) -> CacheKey {
         let p = self.importance_params(s);
         CacheKey {
+            camera: self.camera,
             width: s.width,
             height: s.height,
             combined: s.component == Component::Combined,
@@ -664,18 +707,33 @@ impl Renderer {
         // Sampled indirect/combined frames keep their static products for the next frame.
         let cacheable = s.component != Component::Direct && s.method != Method::All;
         let key = self.cache_key(s);
+        let needs_shadow = s.component == Component::Combined;
+        let light_guard = self.light_cache.borrow();
+        let light_hit = light_guard
+            .as_ref()
+            .filter(|l| cacheable && l.key == (s.dprsm_res, s.shadow_res) && (l.shadow.is_some() || !needs_shadow));
         let cache_guard = self.frame_cache.borrow();
-        let hit = cache_guard.as_ref().filter(|c| cacheable && c.key == key);
+        let hit = cache_guard.as_ref().filter(|c| cacheable && c.key == key && light_hit.is_some());
         let mut g = Graph::new(&self.gpu);
         let voxels = g.import_buffer(&vox.buffer);
-        let h = build_frame(self, &mut g, f, s, voxels, vox.built, hit);
+        let h = build_frame(self, &mut g, f, s, voxels, vox.built, hit, light_hit);
         let keep_products = cacheable && hit.is_none();
+        let keep_light = cacheable && h.fresh_light.is_some();
         if keep_products {
-            for img in h.gather_inputs.images() {
+            for img in h.gather_inputs.camera_images() {
                 g.export(&img);
             }
             g.export(&h.gather_inputs.importance);
             g.export(&h.gather_inputs.cdf);
+        }
+        if keep_light {
+            let (v, d) = h.fresh_light.expect("checked");
+            for img in [v.position, v.normal, v.flux] {
+                g.export(&img);
+            }
+            if needs_shadow {
+                g.export(&d.depth);
+            }
         }
         if let Some(out) = &h.out {
             g.export(out);
@@ -695,6 +753,7 @@ impl Renderer {
         let skipped = done.skipped.clone();
         let mut warnings = vec![];
         let mut new_cache = None;
+        let mut new_light = None;
         let method_sections = self.importance_params(s).kind.method_sections();
         let radiance_bytes = if let Some(out) = &h.out {
             if s.component != Component::Direct && method_sections > 0 {
@@ -711,10 +770,16 @@ impl Renderer {
                 }
             }
             let bytes = done.read_image(out)?;
+            if keep_light {
+                let (v, d) = h.fresh_light.expect("checked");
+                let vpls = [v.position, v.normal, v.flux].iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
+                let shadow = if needs_shadow { Some(done.take_image(&d.depth)?) } else { None };
+                new_light = Some(LightCache { key: (s.dprsm_res, s.shadow_res), vpls, shadow });
+            }
             if keep_products {
                 let i = h.gather_inputs;
                 let images: Vec<Persistent<Image>> =
-                    i.images().iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
+                    i.camera_images().iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
                 new_cache = Some(FrameCache {
                     key: key.clone(),
                     images,
@@ -776,6 +841,10 @@ impl Renderer {
         };
         drop(vox_guard);
         drop(cache_guard);
+        drop(light_guard);
+        if new_light.is_some() {
+            *self.light_cache.borrow_mut() = new_light;
+        }
         if voxelized {
             self.voxel_state.borrow_mut().as_mut().expect("grid exists").built = true;
         }

@@ -54,13 +54,12 @@ pub struct DprsmDepth {
     pub depth: Handle<Image>,
 }
 
-/// The reflective DPRSM: one VPL per non-empty texel.
+/// The reflective DPRSM: one VPL per non-empty texel. (Its depth attachment stays inside the pass.)
 #[derive(Clone, Copy, Debug)]
 pub struct DprsmOut {
     pub position: Handle<Image>,
     pub normal: Handle<Image>,
     pub flux: Handle<Image>,
-    pub depth: Handle<Image>,
 }
 
 impl Dprsm {
@@ -136,17 +135,17 @@ impl Dprsm {
             position: color(g, "dprsm.position"),
             normal: color(g, "dprsm.normal"),
             flux: color(g, "dprsm.flux"),
-            depth: Self::depth_image(g, "dprsm.depth", res, layers),
         };
-        let o = out;
+        let mut depth = Self::depth_image(g, "dprsm.depth", res, layers);
+        let (o, d) = (out, depth);
         g.add_pass("dprsm")
             .overwrite(&mut out.position, Access::ColorAttachment)
             .overwrite(&mut out.normal, Access::ColorAttachment)
             .overwrite(&mut out.flux, Access::ColorAttachment)
-            .overwrite(&mut out.depth, Access::DepthAttachment)
+            .overwrite(&mut depth, Access::DepthAttachment)
             .record(move |ctx| {
                 let colors = [o.position, o.normal, o.flux].map(|h| ctx.image(&h).view);
-                self.record(ctx, &self.reflective, f, res, &colors, &o.depth)
+                self.record(ctx, &self.reflective, f, res, &colors, &d)
             });
         out
     }

@@ -80,6 +80,13 @@ impl GatherInputs {
         v
     }
 
+    /// What depends on the camera: the G-buffer images, then the direct image when there is one.
+    pub fn camera_images(&self) -> Vec<Handle<Image>> {
+        let mut v = vec![self.g_position, self.g_normal, self.g_albedo];
+        v.extend(self.direct);
+        v
+    }
+
     pub fn buffers(&self) -> [Handle<Buffer>; 3] {
         [self.voxels, self.importance, self.cdf]
     }

@@ -1,0 +1,528 @@
+//! `bounce view`: the interactive viewer. A winit window with an ash-window surface and a swapchain
+//! (`bounce_device::Swapchain`); each redraw renders one frame with the same `Renderer` as
+//! `bounce render`, adds it to a running mean while camera and settings stay put (progressive
+//! accumulation, frame k with seed `--seed + k`), tone-maps the mean (Reinhard, as the PNG output) and
+//! presents it. What does not change is not re-rendered: the renderer's frame cache keeps the G-buffer,
+//! the paraboloid maps, the direct light, the importance and the CDF, so a static frame records only
+//! the gather (the title names what was reused).
+//!
+//! Controls: left-drag looks around, W/A/S/D move, Q/E down/up (speed ∝ the scene's diagonal, Shift ×4);
+//! M cycles the sampling method, +/− double/halve the VPL count, C cycles the component, Space toggles
+//! accumulation, P writes a screenshot (PNG + EXR of the linear mean), Esc quits. The title shows
+//! method, VPLs, frames accumulated, frame time and the slowest passes' GPU times.
+//!
+//! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
+//! for scripts and tests (under Xvfb on lavapipe). The mean of those N frames is the mean of
+//! `bounce render --seed S+k` for k < N with the same settings.
+//!
+//! Presenting goes through host memory (read back, tone map, copy into the swapchain image): one copy
+//! of a W × H image per frame, small next to a lavapipe frame; a GPU tone-map pass would remove it.
+
+use crate::output::{self, RgbImage};
+use crate::{bad, gpu_error, method_of, ComponentArg, MethodArg, VisibilityArg};
+use anyhow::{Context, Result};
+use bounce_device::{Gpu, GpuOptions, Presented, Swapchain};
+use bounce_graph::camera::Camera;
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, Visibility};
+use bounce_graph::scene::Scene;
+use glam::Vec3;
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use std::collections::HashSet;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+#[derive(clap::Args, Debug)]
+pub struct ViewArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Window width in pixels (default: the scene's [render] width, else 384).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Window height in pixels (default: the scene's [render] height, else 384).
+    #[arg(long)]
+    pub height: Option<u32>,
+    #[arg(long, value_enum, default_value = "combined")]
+    pub component: ComponentArg,
+    /// The sampling method (M cycles through the sampled ones).
+    #[arg(long, value_enum, default_value = "uniform")]
+    pub method: MethodArg,
+    /// VPLs per pixel per frame (+/− double and halve it).
+    #[arg(long, default_value_t = 16)]
+    pub vpls: u32,
+    /// Reflective DPRSM resolution per face.
+    #[arg(long, default_value_t = 256)]
+    pub dprsm_res: u32,
+    /// Resolution per face of the direct light's shadow map.
+    #[arg(long, default_value_t = 1024)]
+    pub shadow_res: u32,
+    /// Voxels along the longest side of the scene.
+    #[arg(long, default_value_t = 128)]
+    pub voxels: u32,
+    #[arg(long, value_enum, default_value = "voxel")]
+    pub visibility: VisibilityArg,
+    /// Clamp 1/d² below this fraction of the scene diagonal (0: off).
+    #[arg(long, default_value_t = 0.0)]
+    pub clamp: f32,
+    /// Seed of the first frame; frame k uses seed + k.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Render this many frames, write --screenshot and exit.
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Where --frames writes its screenshot (PNG; the linear mean goes next to it as EXR).
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Present without waiting for vertical sync (immediate or mailbox, where the surface has one).
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layers; fail if they report anything.
+    #[arg(long)]
+    pub validation: bool,
+}
+
+/// The sampled methods M cycles through.
+const CYCLE: [Method; 6] =
+    [Method::Uniform, Method::Global, Method::Stratified, Method::Local, Method::Gbg, Method::Mis];
+
+pub fn view(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    if a.frames == Some(0) {
+        return Err(bad(anyhow::anyhow!("--frames must be at least 1")));
+    }
+    if a.frames.is_some() != a.screenshot.is_some() {
+        return Err(bad(anyhow::anyhow!("--frames and --screenshot go together")));
+    }
+    if !(1..=4096).contains(&a.vpls) {
+        return Err(bad(anyhow::anyhow!("--vpls must be between 1 and 4096 (got {})", a.vpls)));
+    }
+    let scene = Scene::load(&a.scene).map_err(bad)?;
+    writeln!(err, "{}", scene.summary())?;
+    // Without a display winit cannot start; say what to do instead of its own message alone.
+    let event_loop = EventLoop::new().map_err(|e| {
+        bad(anyhow::anyhow!(
+            "no display to open a window on ({e}); run it in a desktop session, under `xvfb-run`, or use `bounce render`"
+        ))
+    })?;
+    let width = a.width.or(scene.render_width).unwrap_or(384);
+    let height = a.height.or(scene.render_height).unwrap_or(384);
+    let settings = FrameSettings {
+        width,
+        height,
+        component: match a.component {
+            ComponentArg::Direct => Component::Direct,
+            ComponentArg::Indirect => Component::Indirect,
+            ComponentArg::Combined => Component::Combined,
+        },
+        method: method_of(a.method),
+        vpls: a.vpls,
+        dprsm_res: a.dprsm_res,
+        shadow_res: a.shadow_res,
+        voxels: a.voxels,
+        visibility: match a.visibility {
+            VisibilityArg::Voxel => Visibility::Voxel,
+            VisibilityArg::Exact => Visibility::Exact,
+        },
+        clamp: a.clamp,
+        seed: a.seed,
+        ..FrameSettings::default()
+    };
+    if matches!(settings.method, Method::All) {
+        return Err(bad(anyhow::anyhow!("`all` is not progressive; view a sampled method or use `bounce render`")));
+    }
+    let mut app = Viewer { args: a, scene: &scene, settings, state: None, error: None, log: vec![] };
+    event_loop.run_app(&mut app).context("running the window's event loop")?;
+    for line in &app.log {
+        writeln!(out, "{line}")?;
+    }
+    if let Some(e) = app.error {
+        return Err(e);
+    }
+    Ok(())
+}
+
+struct Viewer<'a> {
+    args: &'a ViewArgs,
+    scene: &'a Scene,
+    settings: FrameSettings,
+    state: Option<State>,
+    error: Option<anyhow::Error>,
+    /// Lines for stdout after the window closes (screenshots written).
+    log: Vec<String>,
+}
+
+/// Everything that lives with the window. Field order is drop order: the swapchain (and its surface)
+/// before the window it presents to.
+struct State {
+    swapchain: Swapchain,
+    renderer: Renderer,
+    gpu: Gpu,
+    window: Window,
+    fly: Fly,
+    /// Sum of the frames since the last change, and their count.
+    sum: Vec<[f64; 3]>,
+    frames: u32,
+    accumulate: bool,
+    last: Instant,
+    /// The passes the first frame after a change ran: what a static frame reuses is the difference.
+    full_passes: Vec<&'static str>,
+    shots: u32,
+    minimized: bool,
+}
+
+/// The fly camera: position, yaw about +Y, pitch, and the input held down.
+struct Fly {
+    eye: Vec3,
+    yaw: f32,
+    pitch: f32,
+    fov_y_deg: f32,
+    speed: f32,
+    keys: HashSet<KeyCode>,
+    dragging: bool,
+    cursor: Option<(f64, f64)>,
+    moved: bool,
+}
+
+impl Fly {
+    fn new(c: &Camera, diagonal: f32) -> Fly {
+        let f = (c.target - c.eye).normalize();
+        Fly {
+            eye: c.eye,
+            yaw: f.x.atan2(f.z),
+            pitch: f.y.clamp(-1.0, 1.0).asin(),
+            fov_y_deg: c.fov_y_deg,
+            speed: 0.3 * diagonal,
+            keys: HashSet::new(),
+            dragging: false,
+            cursor: None,
+            moved: false,
+        }
+    }
+    fn forward(&self) -> Vec3 {
+        Vec3::new(self.pitch.cos() * self.yaw.sin(), self.pitch.sin(), self.pitch.cos() * self.yaw.cos())
+    }
+    fn camera(&self) -> Camera {
+        Camera { eye: self.eye, target: self.eye + self.forward(), up: Vec3::Y, fov_y_deg: self.fov_y_deg }
+    }
+    /// Moves by the held keys over `dt` seconds; whether anything moved.
+    fn step(&mut self, dt: f32) -> bool {
+        let f = self.forward();
+        let right = f.cross(Vec3::Y).normalize_or_zero();
+        let mut d = Vec3::ZERO;
+        for (k, v) in [
+            (KeyCode::KeyW, f),
+            (KeyCode::KeyS, -f),
+            (KeyCode::KeyD, right),
+            (KeyCode::KeyA, -right),
+            (KeyCode::KeyE, Vec3::Y),
+            (KeyCode::KeyQ, -Vec3::Y),
+        ] {
+            if self.keys.contains(&k) {
+                d += v;
+            }
+        }
+        let fast =
+            if self.keys.contains(&KeyCode::ShiftLeft) || self.keys.contains(&KeyCode::ShiftRight) { 4.0 } else { 1.0 };
+        if d != Vec3::ZERO {
+            self.eye += d.normalize() * self.speed * fast * dt.min(0.5);
+            self.moved = true;
+        }
+        std::mem::take(&mut self.moved)
+    }
+}
+
+impl Viewer<'_> {
+    fn start(&mut self, el: &ActiveEventLoop) -> Result<State> {
+        let attrs = Window::default_attributes()
+            .with_title("bounce view")
+            .with_inner_size(PhysicalSize::new(self.settings.width, self.settings.height));
+        let window = el.create_window(attrs).context("creating the window")?;
+        let display = window.display_handle().context("the window's display handle")?.as_raw();
+        let handle = window.window_handle().context("the window's handle")?.as_raw();
+        let exts = ash_window::enumerate_required_extensions(display)
+            .map_err(|r| bad(anyhow::anyhow!("this window system has no Vulkan surface support ({r:?})")))?;
+        // ash-window gives 'static extension names (its own constants).
+        let exts = exts.iter().map(|&p| unsafe { std::ffi::CStr::from_ptr(p) }).collect();
+        let gpu = Gpu::new(&GpuOptions {
+            validation: self.args.validation,
+            device: self.args.device.clone(),
+            instance_extensions: exts,
+            swapchain: true,
+        })
+        .map_err(gpu_error)?;
+        self.settings.validate(&gpu).map_err(bad)?;
+        let surface = unsafe { ash_window::create_surface(&gpu.entry, &gpu.instance, display, handle, None) }
+            .map_err(|r| anyhow::anyhow!("vkCreate*SurfaceKHR failed: {r:?}"))?;
+        let size = window.inner_size();
+        let swapchain =
+            Swapchain::new(&gpu, surface, size.width, size.height, !self.args.no_vsync).map_err(gpu_error)?;
+        self.settings.width = swapchain.extent.width;
+        self.settings.height = swapchain.extent.height;
+        let renderer = Renderer::new(&gpu, self.scene)?;
+        renderer.check(&self.settings).map_err(bad)?;
+        let fly = Fly::new(&self.scene.camera, self.scene.diagonal());
+        let n = (self.settings.width * self.settings.height) as usize;
+        Ok(State {
+            swapchain,
+            renderer,
+            gpu,
+            window,
+            fly,
+            sum: vec![[0.0; 3]; n],
+            frames: 0,
+            accumulate: true,
+            last: Instant::now(),
+            full_passes: vec![],
+            shots: 0,
+            minimized: false,
+        })
+    }
+
+    /// Renders, accumulates and presents one frame; `Ok(true)` when `--frames` is reached.
+    fn redraw(&mut self) -> Result<bool> {
+        let st = self.state.as_mut().expect("started");
+        if st.minimized {
+            return Ok(false);
+        }
+        let now = Instant::now();
+        let dt = (now - st.last).as_secs_f32();
+        st.last = now;
+        if st.fly.step(dt) {
+            st.renderer.set_camera(st.fly.camera());
+            st.frames = 0;
+        }
+        if st.frames == 0 || !st.accumulate {
+            st.sum.iter_mut().for_each(|p| *p = [0.0; 3]);
+            st.frames = 0;
+        }
+        let s = FrameSettings { seed: self.settings.seed.wrapping_add(st.frames as u64), ..self.settings.clone() };
+        let t0 = Instant::now();
+        let f = st.renderer.render(&s)?;
+        let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
+        if st.frames == 0 {
+            st.full_passes = f.ran.clone();
+        }
+        for (acc, p) in st.sum.iter_mut().zip(&f.radiance) {
+            for c in 0..3 {
+                acc[c] += p[c] as f64;
+            }
+        }
+        st.frames += 1;
+        let img = mean_image(st, s.width, s.height);
+        let mapped = output::tonemap_reinhard(&img);
+        let rgba: Vec<u8> = mapped
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2]].map(output::linear_to_srgb8).into_iter().chain([255]))
+            .collect();
+        if st.swapchain.present_rgba8(s.width, s.height, &rgba).map_err(gpu_error)? == Presented::OutOfDate {
+            let size = st.window.inner_size();
+            self.resize(size.width, size.height)?;
+        }
+        let st = self.state.as_mut().expect("started");
+        let mut passes: Vec<(&str, f64)> = f.timings.iter().filter_map(|t| Some((t.name, t.ms?))).collect();
+        passes.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let shown: Vec<String> = passes.iter().take(4).map(|(n, ms)| format!("{n} {ms:.1}")).collect();
+        let reused: Vec<&str> = st.full_passes.iter().copied().filter(|p| !f.ran.contains(p)).collect();
+        st.window.set_title(&format!(
+            "bounce view — {} · {} VPLs · {} · {} frame{} · {frame_ms:.0} ms · GPU ms: {}{}",
+            s.method.name(),
+            s.vpls,
+            s.component.name(),
+            st.frames,
+            if st.frames == 1 { "" } else { "s" },
+            shown.join(", "),
+            if reused.is_empty() { String::new() } else { format!(" · reused: {}", reused.join(" ")) }
+        ));
+        if let (Some(n), Some(path)) = (self.args.frames, &self.args.screenshot) {
+            if st.frames >= n {
+                let path = path.clone();
+                self.screenshot(&path)?;
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
+    fn screenshot(&mut self, png: &Path) -> Result<()> {
+        let st = self.state.as_mut().expect("started");
+        let img = mean_image(st, self.settings.width, self.settings.height);
+        let exr = png.with_extension("exr");
+        let meta = vec![
+            ("scene", self.args.scene.display().to_string()),
+            ("component", self.settings.component.name().to_string()),
+            ("method", self.settings.method.name().to_string()),
+            ("vpls", self.settings.vpls.to_string()),
+            ("frames", st.frames.to_string()),
+            ("seed", format!("{} (frame k: seed + k)", self.settings.seed)),
+            ("device", st.gpu.name.clone()),
+        ];
+        output::write_exr(&exr, &img, &meta)?;
+        output::write_png(png, &img)?;
+        self.log.push(format!("wrote {} and {} ({} frames)", png.display(), exr.display(), st.frames));
+        Ok(())
+    }
+
+    fn resize(&mut self, width: u32, height: u32) -> Result<()> {
+        let st = self.state.as_mut().expect("started");
+        st.minimized = width == 0 || height == 0;
+        if st.minimized {
+            return Ok(());
+        }
+        st.swapchain.recreate(width, height).map_err(gpu_error)?;
+        self.settings.width = st.swapchain.extent.width;
+        self.settings.height = st.swapchain.extent.height;
+        st.sum = vec![[0.0; 3]; (self.settings.width * self.settings.height) as usize];
+        st.frames = 0;
+        Ok(())
+    }
+
+    /// A key press that changes settings; whether accumulation must restart.
+    fn key(&mut self, code: KeyCode, el: &ActiveEventLoop) -> Result<bool> {
+        let s = &mut self.settings;
+        match code {
+            KeyCode::Escape => el.exit(),
+            KeyCode::KeyM => {
+                let i = CYCLE.iter().position(|m| *m == s.method).map_or(0, |i| (i + 1) % CYCLE.len());
+                s.method = CYCLE[i];
+                return Ok(true);
+            }
+            KeyCode::Equal | KeyCode::NumpadAdd => {
+                s.vpls = (s.vpls * 2).min(4096);
+                return Ok(true);
+            }
+            KeyCode::Minus | KeyCode::NumpadSubtract => {
+                s.vpls = (s.vpls / 2).max(1);
+                return Ok(true);
+            }
+            KeyCode::KeyC => {
+                s.component = match s.component {
+                    Component::Combined => Component::Indirect,
+                    Component::Indirect => Component::Direct,
+                    Component::Direct => Component::Combined,
+                };
+                return Ok(true);
+            }
+            KeyCode::Space => {
+                let st = self.state.as_mut().expect("started");
+                st.accumulate = !st.accumulate;
+                return Ok(true);
+            }
+            KeyCode::KeyP => {
+                let st = self.state.as_mut().expect("started");
+                st.shots += 1;
+                let path = PathBuf::from(format!("bounce-screenshot-{}.png", st.shots));
+                self.screenshot(&path)?;
+            }
+            _ => {}
+        }
+        Ok(false)
+    }
+
+    fn fail(&mut self, el: &ActiveEventLoop, e: anyhow::Error) {
+        if self.error.is_none() {
+            self.error = Some(e);
+        }
+        el.exit();
+    }
+}
+
+fn mean_image(st: &State, width: u32, height: u32) -> RgbImage {
+    let k = st.frames.max(1) as f64;
+    RgbImage { width, height, pixels: st.sum.iter().map(|p| p.map(|c| (c / k) as f32)).collect() }
+}
+
+impl ApplicationHandler for Viewer<'_> {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.state.is_some() {
+            return;
+        }
+        match self.start(el) {
+            Ok(st) => {
+                st.window.request_redraw();
+                self.state = Some(st);
+            }
+            Err(e) => self.fail(el, e),
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        if self.state.is_none() {
+            return;
+        }
+        let r: Result<()> = (|| {
+            match event {
+                WindowEvent::CloseRequested => el.exit(),
+                WindowEvent::Resized(size) => self.resize(size.width, size.height)?,
+                WindowEvent::RedrawRequested => {
+                    let finished = self.redraw()?;
+                    if finished {
+                        el.exit();
+                    }
+                }
+                WindowEvent::KeyboardInput { event, .. } => {
+                    let PhysicalKey::Code(code) = event.physical_key else { return Ok(()) };
+                    let st = self.state.as_mut().expect("started");
+                    match event.state {
+                        ElementState::Pressed => {
+                            st.fly.keys.insert(code);
+                            if !event.repeat && self.key(code, el)? {
+                                self.state.as_mut().expect("started").frames = 0;
+                            }
+                        }
+                        ElementState::Released => {
+                            st.fly.keys.remove(&code);
+                        }
+                    }
+                }
+                WindowEvent::MouseInput { state, button: MouseButton::Left, .. } => {
+                    let st = self.state.as_mut().expect("started");
+                    st.fly.dragging = state == ElementState::Pressed;
+                }
+                WindowEvent::CursorMoved { position, .. } => {
+                    let st = self.state.as_mut().expect("started");
+                    if let (true, Some((x, y))) = (st.fly.dragging, st.fly.cursor) {
+                        st.fly.yaw -= ((position.x - x) * 0.005) as f32;
+                        st.fly.pitch = (st.fly.pitch - ((position.y - y) * 0.005) as f32).clamp(-1.5, 1.5);
+                        st.fly.moved = true;
+                    }
+                    st.fly.cursor = Some((position.x, position.y));
+                }
+                _ => {}
+            }
+            Ok(())
+        })();
+        if let Err(e) = r {
+            self.fail(el, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, _el: &ActiveEventLoop) {
+        // Progressive: keep drawing while the window is visible.
+        if let Some(st) = &self.state {
+            if !st.minimized {
+                st.window.request_redraw();
+            }
+        }
+    }
+
+    fn exiting(&mut self, _el: &ActiveEventLoop) {
+        if let Some(st) = &self.state {
+            if self.args.validation {
+                let msgs = st.gpu.validation().messages();
+                if !msgs.is_empty() && self.error.is_none() {
+                    self.error = Some(anyhow::anyhow!("{} validation message(s); first: {}", msgs.len(), msgs[0]));
+                }
+            }
+        }
+        // Drop the swapchain, surface and device while the window (and its display) still exist.
+        self.state = None;
+    }
+}

@@ -1,0 +1,298 @@
+//! Presentation: a swapchain on a surface the caller created (the app owns the window and its
+//! handles; this crate knows no windowing library), and the one way bounce shows an image: a tone-mapped
+//! RGBA8 host image copied into the next swapchain image (`vkCmdCopyBufferToImage`), then presented.
+//!
+//! Synchronisation, one frame in flight: the acquire semaphore is waited by the copy's submission,
+//! whose fence is waited before the next acquire; each swapchain image has its own "copied" semaphore
+//! for the present to wait on (a present's wait semaphore may only be reused once that image is
+//! acquired again).
+
+use crate::error::{Error, Result, VkContext};
+use crate::gpu::Gpu;
+use crate::memory::{Buffer, BufferDesc};
+use ash::{khr, vk};
+use gpu_allocator::MemoryLocation;
+
+/// What [`Swapchain::present_rgba8`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Presented {
+    Yes,
+    /// The surface changed (resize): call [`Swapchain::recreate`] and draw again.
+    OutOfDate,
+}
+
+pub struct Swapchain {
+    gpu: Gpu,
+    surface_fn: khr::surface::Instance,
+    swapchain_fn: khr::swapchain::Device,
+    surface: vk::SurfaceKHR,
+    raw: vk::SwapchainKHR,
+    images: Vec<vk::Image>,
+    /// B8G8R8A8_UNORM or R8G8B8A8_UNORM: the host image is already sRGB-encoded.
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    pub present_mode: vk::PresentModeKHR,
+    vsync: bool,
+    acquired: vk::Semaphore,
+    copied: Vec<vk::Semaphore>,
+    fence: vk::Fence,
+    staging: Option<Buffer>,
+}
+
+impl Swapchain {
+    /// Takes ownership of `surface` (destroyed with the swapchain). `vsync: false` asks for an
+    /// immediate or mailbox present mode and falls back to FIFO (always there) when neither is.
+    pub fn new(gpu: &Gpu, surface: vk::SurfaceKHR, width: u32, height: u32, vsync: bool) -> Result<Swapchain> {
+        let surface_fn = khr::surface::Instance::new(&gpu.entry, &gpu.instance);
+        let swapchain_fn = khr::swapchain::Device::new(&gpu.instance, &gpu.device);
+        let supported =
+            unsafe { surface_fn.get_physical_device_surface_support(gpu.physical, gpu.queue_family, surface) }
+                .unwrap_or(false);
+        let d = &gpu.device;
+        if !supported {
+            unsafe { surface_fn.destroy_surface(surface, None) };
+            return Err(Error::MissingFeature {
+                device: gpu.name.clone(),
+                what: "presentation to this window from its graphics queue".into(),
+                hint: String::new(),
+            });
+        }
+        let acquired =
+            unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?;
+        let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+        let mut s = Swapchain {
+            gpu: gpu.clone(),
+            surface_fn,
+            swapchain_fn,
+            surface,
+            raw: vk::SwapchainKHR::null(),
+            images: vec![],
+            format: vk::Format::UNDEFINED,
+            extent: vk::Extent2D::default(),
+            present_mode: vk::PresentModeKHR::FIFO,
+            vsync,
+            acquired,
+            copied: vec![],
+            fence,
+            staging: None,
+        };
+        s.recreate(width, height)?;
+        Ok(s)
+    }
+
+    /// (Re)creates the swapchain for a window of `width` × `height` (the surface's own extent wins
+    /// where it fixes one).
+    pub fn recreate(&mut self, width: u32, height: u32) -> Result<()> {
+        let d = &self.gpu.device;
+        unsafe { d.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
+        let pd = self.gpu.physical;
+        let caps = unsafe { self.surface_fn.get_physical_device_surface_capabilities(pd, self.surface) }
+            .vk("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
+        let formats = unsafe { self.surface_fn.get_physical_device_surface_formats(pd, self.surface) }
+            .vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
+        let modes = unsafe { self.surface_fn.get_physical_device_surface_present_modes(pd, self.surface) }
+            .vk("vkGetPhysicalDeviceSurfacePresentModesKHR")?;
+        let format = [vk::Format::B8G8R8A8_UNORM, vk::Format::R8G8B8A8_UNORM]
+            .into_iter()
+            .find_map(|f| formats.iter().find(|s| s.format == f).copied())
+            .ok_or_else(|| Error::MissingFeature {
+                device: self.gpu.name.clone(),
+                what: "a B8G8R8A8_UNORM or R8G8B8A8_UNORM surface format".into(),
+                hint: String::new(),
+            })?;
+        if !caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_DST) {
+            return Err(Error::MissingFeature {
+                device: self.gpu.name.clone(),
+                what: "swapchain images usable as copy destinations".into(),
+                hint: String::new(),
+            });
+        }
+        let present_mode = if self.vsync {
+            vk::PresentModeKHR::FIFO
+        } else {
+            [vk::PresentModeKHR::IMMEDIATE, vk::PresentModeKHR::MAILBOX]
+                .into_iter()
+                .find(|m| modes.contains(m))
+                .unwrap_or(vk::PresentModeKHR::FIFO)
+        };
+        let extent = if caps.current_extent.width != u32::MAX {
+            caps.current_extent
+        } else {
+            vk::Extent2D {
+                width: width.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+                height: height.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+            }
+        };
+        let mut count = caps.min_image_count + 1;
+        if caps.max_image_count > 0 {
+            count = count.min(caps.max_image_count);
+        }
+        let info = vk::SwapchainCreateInfoKHR::default()
+            .surface(self.surface)
+            .min_image_count(count)
+            .image_format(format.format)
+            .image_color_space(format.color_space)
+            .image_extent(extent)
+            .image_array_layers(1)
+            .image_usage(vk::ImageUsageFlags::TRANSFER_DST)
+            .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .pre_transform(caps.current_transform)
+            .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
+            .present_mode(present_mode)
+            .clipped(true)
+            .old_swapchain(self.raw);
+        let raw = unsafe { self.swapchain_fn.create_swapchain(&info, None) }.vk("vkCreateSwapchainKHR")?;
+        if self.raw != vk::SwapchainKHR::null() {
+            unsafe { self.swapchain_fn.destroy_swapchain(self.raw, None) };
+        }
+        self.raw = raw;
+        self.images = unsafe { self.swapchain_fn.get_swapchain_images(raw) }.vk("vkGetSwapchainImagesKHR")?;
+        for s in self.copied.drain(..) {
+            unsafe { d.destroy_semaphore(s, None) };
+        }
+        for _ in 0..self.images.len() {
+            let s = unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?;
+            self.copied.push(s);
+        }
+        self.format = format.format;
+        self.extent = extent;
+        self.present_mode = present_mode;
+        Ok(())
+    }
+
+    /// Copies `rgba` (`width` × `height` sRGB-encoded RGBA8, row 0 at the top) into the next swapchain
+    /// image and presents it. Where the sizes differ (a resize in flight) the overlap is copied.
+    pub fn present_rgba8(&mut self, width: u32, height: u32, rgba: &[u8]) -> Result<Presented> {
+        assert_eq!(rgba.len(), 4 * width as usize * height as usize, "RGBA8 image size");
+        let d = self.gpu.device.clone();
+        let (index, _suboptimal) =
+            match unsafe { self.swapchain_fn.acquire_next_image(self.raw, u64::MAX, self.acquired, vk::Fence::null()) }
+            {
+                Ok(r) => r,
+                Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => return Ok(Presented::OutOfDate),
+                Err(result) => return Err(Error::Vk { call: "vkAcquireNextImageKHR", result }),
+            };
+        let size = rgba.len() as u64;
+        if self.staging.as_ref().is_none_or(|b| b.size < size) {
+            self.staging = Some(Buffer::new(
+                &self.gpu,
+                &BufferDesc {
+                    name: "present.staging".into(),
+                    size,
+                    usage: vk::BufferUsageFlags::TRANSFER_SRC,
+                    location: MemoryLocation::CpuToGpu,
+                },
+            )?);
+        }
+        let staging = self.staging.as_mut().expect("made above");
+        let dst = staging.mapped_mut().expect("a CpuToGpu buffer is mapped");
+        if self.format == vk::Format::B8G8R8A8_UNORM {
+            for (o, i) in dst.chunks_exact_mut(4).zip(rgba.chunks_exact(4)) {
+                o.copy_from_slice(&[i[2], i[1], i[0], i[3]]);
+            }
+        } else {
+            dst[..rgba.len()].copy_from_slice(rgba);
+        }
+        let image = self.images[index as usize];
+        let range =
+            vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1);
+        let staging_raw = staging.raw;
+        let copy = vk::BufferImageCopy::default()
+            .buffer_row_length(width)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+            )
+            .image_extent(vk::Extent3D {
+                width: width.min(self.extent.width),
+                height: height.min(self.extent.height),
+                depth: 1,
+            });
+        let pool = self.gpu.command_pool.lock().unwrap();
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { d.allocate_command_buffers(&info) }.vk("vkAllocateCommandBuffers")?[0];
+        let result = (|| {
+            unsafe {
+                d.begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+            }
+            .vk("vkBeginCommandBuffer")?;
+            // The acquire semaphore's wait (at COPY) orders the layout change after the presentation
+            // engine is done with the image; its old contents are not needed.
+            let to_dst = [vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::NONE)
+                .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+                .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .image(image)
+                .subresource_range(range)];
+            let to_present = [vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::NONE)
+                .dst_access_mask(vk::AccessFlags2::NONE)
+                .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .new_layout(vk::ImageLayout::PRESENT_SRC_KHR)
+                .image(image)
+                .subresource_range(range)];
+            unsafe {
+                d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_dst));
+                d.cmd_copy_buffer_to_image(cmd, staging_raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy]);
+                d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_present));
+                d.end_command_buffer(cmd)
+            }
+            .vk("vkEndCommandBuffer")?;
+            let wait =
+                [vk::SemaphoreSubmitInfo::default().semaphore(self.acquired).stage_mask(vk::PipelineStageFlags2::COPY)];
+            let signal = [vk::SemaphoreSubmitInfo::default()
+                .semaphore(self.copied[index as usize])
+                .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+            let submit = [vk::SubmitInfo2::default()
+                .wait_semaphore_infos(&wait)
+                .signal_semaphore_infos(&signal)
+                .command_buffer_infos(&cmds)];
+            unsafe { d.queue_submit2(self.gpu.queue, &submit, self.fence) }.vk("vkQueueSubmit2")?;
+            unsafe { d.wait_for_fences(&[self.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+            unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")?;
+            Ok(())
+        })();
+        unsafe { d.free_command_buffers(*pool, &[cmd]) };
+        drop(pool);
+        result?;
+        let waits = [self.copied[index as usize]];
+        let swapchains = [self.raw];
+        let indices = [index];
+        let present =
+            vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
+        match unsafe { self.swapchain_fn.queue_present(self.gpu.queue, &present) } {
+            Ok(_) => Ok(Presented::Yes),
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Presented::OutOfDate),
+            Err(result) => Err(Error::Vk { call: "vkQueuePresentKHR", result }),
+        }
+    }
+}
+
+impl Drop for Swapchain {
+    fn drop(&mut self) {
+        let d = &self.gpu.device;
+        unsafe {
+            let _ = d.device_wait_idle();
+            for s in self.copied.drain(..) {
+                d.destroy_semaphore(s, None);
+            }
+            d.destroy_semaphore(self.acquired, None);
+            d.destroy_fence(self.fence, None);
+            if self.raw != vk::SwapchainKHR::null() {
+                self.swapchain_fn.destroy_swapchain(self.raw, None);
+            }
+            self.surface_fn.destroy_surface(self.surface, None);
+        }
+    }
+}
