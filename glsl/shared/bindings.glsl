@@ -67,6 +67,10 @@
 #define CDF_ROWS 0
 #define CDF_TOTALS 1
 
+// Specialisation constant ids. SPEC_TEXTURED: the scene has textures (false: albedo_at reads no
+// texture, so an untextured scene runs the shader variant without texture fetches).
+#define SPEC_TEXTURED 0
+
 #define WG_2D 8
 #define WG_1D 64
 

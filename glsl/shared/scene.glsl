@@ -15,10 +15,13 @@ layout(std430, set = 0, binding = B_LIGHTS) readonly buffer Lights { Light light
 
 // Albedo of triangle `tri` at texture coordinate `uv`: Kd × the nearest map_Kd texel (sRGB-decoded),
 // repeat wrap, v flipped (OBJ v = 0 is the bottom row of the image). The CPU reference does the same.
+layout(constant_id = SPEC_TEXTURED) const bool TEXTURED = true;
+
 vec3 albedo_at(uint tri, vec2 uv) {
     Material m = materials[tri_material[tri]];
     vec3 kd = m.kd_tex.rgb;
-    if (m.kd_tex.w < 0.0) return kd;
+    // Specialised away for untextured scenes (the driver drops the fetch path).
+    if (!TEXTURED || m.kd_tex.w < 0.0) return kd;
     TextureInfo t = textures[uint(m.kd_tex.w)];
     uint x = min(uint(floor(fract(uv.x) * float(t.width))), t.width - 1u);
     uint y = min(uint(floor(fract(1.0 - uv.y) * float(t.height))), t.height - 1u);

@@ -436,3 +436,52 @@ fn view_without_a_display_is_a_clear_error() {
     assert!(errors[0].contains("no display"), "{stderr}");
     assert!(!shot.exists());
 }
+
+/// A textured scene renders its texture (the `SPEC_TEXTURED` shader variant is on for it): a floor
+/// quad whose 2 × 1 texture is red on the left and green on the right, lit from above, renders red on
+/// the left half of the image and green on the right.
+#[test]
+fn a_textured_scene_renders_its_texture() {
+    let d = scratch("textured");
+    // 2 × 1 RGBA: red, green.
+    image::RgbaImage::from_raw(2, 1, vec![255, 0, 0, 255, 0, 255, 0, 255]).unwrap().save(d.join("t.png")).unwrap();
+    std::fs::write(d.join("m.mtl"), "newmtl tex\nKd 1 1 1\nmap_Kd t.png\n").unwrap();
+    std::fs::write(
+        d.join("m.obj"),
+        "mtllib m.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nvt 0 1\nvt 1 1\nvt 1 0\nvt 0 0\nusemtl tex\nf 1/1 4/4 3/3 2/2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("s.toml"),
+        "mesh = \"m.obj\"\n[camera]\neye = [0.0, 3.0, 0.001]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\nfov_y = 30.0\n[[light]]\nposition = [0.0, 2.0, 0.0]\nintensity = [4.0, 4.0, 4.0]\n",
+    )
+    .unwrap();
+    let exr = d.join("t.exr");
+    let r = bounce(&[
+        "render",
+        d.join("s.toml").to_str().unwrap(),
+        "--out",
+        exr.to_str().unwrap(),
+        "--component",
+        "direct",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--shadow-res",
+        "128",
+        "--validation",
+    ]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (img, _) = read_exr(&exr).unwrap();
+    let (mut left, mut right) = ([0.0f64; 3], [0.0f64; 3]);
+    for (k, p) in img.pixels.iter().enumerate() {
+        let side = if k % 16 < 8 { &mut left } else { &mut right };
+        for c in 0..3 {
+            side[c] += p[c] as f64;
+        }
+    }
+    eprintln!("textured floor: left {left:?}, right {right:?}");
+    assert!(left[0] > 10.0 * left[1].max(1e-9) && left[2] == 0.0, "left half not red: {left:?}");
+    assert!(right[1] > 10.0 * right[0].max(1e-9) && right[2] == 0.0, "right half not green: {right:?}");
+}

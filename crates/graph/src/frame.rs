@@ -462,20 +462,23 @@ fn clamp_d2(s: &FrameSettings, scene: &GpuScene) -> f32 {
 
 impl Renderer {
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<Self> {
+        let textured = !scene.textures.is_empty();
         Ok(Renderer {
             gpu: gpu.clone(),
             scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
             camera: scene.camera,
             max_intensity: scene.lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max),
-            gbuffer: GBuffer::new(gpu).context("creating the gbuffer pass")?,
-            dprsm: Dprsm::new(gpu).context("creating the dprsm pass")?,
+            // Untextured scenes get the shader variants without texture fetches.
+            gbuffer: GBuffer::new(gpu, textured).context("creating the gbuffer pass")?,
+            dprsm: Dprsm::new(gpu, textured).context("creating the dprsm pass")?,
             direct: Direct::new(gpu).context("creating the direct pass")?,
             voxelize: Voxelize::new(gpu).context("creating the voxelize pass")?,
             importance: Importance::new(gpu).context("creating the importance pass")?,
             cdf_reduce: CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,
             gather: Gather::new(gpu).context("creating the gather pass")?,
             mis: crate::passes::mis::create(gpu).context("creating the mis pass")?,
-            reference: crate::passes::reference::Reference::new(gpu).context("creating the reference pass")?,
+            reference: crate::passes::reference::Reference::new(gpu, textured)
+                .context("creating the reference pass")?,
             vertices: scene.vertices.clone(),
             bvh: std::cell::OnceCell::new(),
             voxel_state: RefCell::new(None),

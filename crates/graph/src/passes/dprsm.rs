@@ -63,7 +63,9 @@ pub struct DprsmOut {
 }
 
 impl Dprsm {
-    pub fn new(gpu: &Gpu) -> Result<Self> {
+    /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).
+    pub fn new(gpu: &Gpu, textured: bool) -> Result<Self> {
+        let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
         let desc = |name, fragment: &'static [u8], colors: &'static [vk::Format]| -> Result<GraphicsPipeline> {
             Ok(GraphicsPipeline::new(
                 gpu,
@@ -77,7 +79,7 @@ impl Dprsm {
                     depth_compare: vk::CompareOp::LESS,
                     bindings: &scene_bindings(),
                     push_constant_size: 4,
-                    spec: &[],
+                    spec: &spec,
                 },
             )?)
         };

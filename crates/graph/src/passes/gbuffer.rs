@@ -31,7 +31,9 @@ pub struct GBufferOut {
 }
 
 impl GBuffer {
-    pub fn new(gpu: &Gpu) -> Result<Self> {
+    /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).
+    pub fn new(gpu: &Gpu, textured: bool) -> Result<Self> {
+        let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
         let pipeline = GraphicsPipeline::new(
             gpu,
             &GraphicsPipelineDesc {
@@ -47,7 +49,7 @@ impl GBuffer {
                 depth_compare: vk::CompareOp::GREATER,
                 bindings: &scene_bindings(),
                 push_constant_size: 0,
-                spec: &[],
+                spec: &spec,
             },
         )?;
         Ok(GBuffer { pipeline })

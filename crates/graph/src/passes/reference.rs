@@ -31,7 +31,8 @@ pub struct ReferenceIo {
 }
 
 impl Reference {
-    pub fn new(gpu: &Gpu) -> Result<Self> {
+    /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).
+    pub fn new(gpu: &Gpu, textured: bool) -> Result<Self> {
         let mut bindings = scene_bindings();
         bindings.extend(super::gbuffer_bindings());
         bindings.extend([
@@ -41,8 +42,9 @@ impl Reference {
         ]);
         bindings.extend(GpuBvh::bindings());
         let push = std::mem::size_of::<GatherPush>() as u32;
+        let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
         let pipeline =
-            ComputePipeline::new(gpu, "reference", &crate::spirv(shaders::REFERENCE_COMP), &bindings, push, &[])?;
+            ComputePipeline::new(gpu, "reference", &crate::spirv(shaders::REFERENCE_COMP), &bindings, push, &spec)?;
         Ok(Reference { pipeline, sampler: Sampler::nearest(gpu)? })
     }
 
