@@ -9,6 +9,12 @@ layout(push_constant) uniform Push { uint map_res; };
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 4) out;
 
+#ifdef PSM_VIEW
+// psm.geom: the viewpoints are the frame's shared VPLs (psm.comp).
+layout(std430, set = 0, binding = B_PSM_VIEWS) readonly buffer PsmViews { PsmView psm_views[]; };
+#include "shared/psm.glsl"
+#endif
+
 layout(location = 0) in vec3 i_world[];
 layout(location = 1) flat in uint i_instance[];
 
@@ -55,10 +61,16 @@ void include_arc(vec3 a, vec3 b, inout vec2 lo, inout vec2 hi) {
 
 void main() {
     uint inst = i_instance[0];
+    vec3 p[3];
+#ifdef PSM_VIEW
+    PsmView view = psm_views[inst];
+    if (!(view.normal_p.w > 0.0)) return;  // no VPL drawn: the map stays empty (never read)
+    for (int k = 0; k < 3; k++) p[k] = psm_to_local(i_world[k] - view.position_v.xyz, view.normal_p.xyz);
+#else
     uint face = inst % 2u;
     vec3 light = lights[inst / 2u].position.xyz;
-    vec3 p[3];
     for (int k = 0; k < 3; k++) p[k] = to_face(i_world[k] - light, face);
+#endif
 
     // Clip to this face's half-space z >= 0 (Sutherland–Hodgman against one plane: at most 4 vertices).
     vec3 poly[4];

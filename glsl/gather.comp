@@ -28,6 +28,18 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"
 
+#ifdef PSM_VISIBILITY
+// `--visibility psm` (gather.psm.comp): sample k is VPL k of the frame's shared set (psm.comp), for
+// every pixel, with visibility from its paraboloid shadow map. PSM_EXACT (gather.psm_exact.comp): the
+// same shared set with exact shadow rays, which isolates the maps' own error.
+layout(std430, set = 0, binding = B_PSM_VIEWS) readonly buffer PsmViews { PsmView psm_views[]; };
+#ifndef PSM_EXACT
+#define PSM_LOOKUP
+layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
+#endif
+#include "shared/psm.glsl"
+#endif
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
@@ -42,6 +54,20 @@ void main() {
         } else if (cdf_total_at(0u) > 0.0) {
             // Samples [first, last) of N: each sample's random numbers depend on (pixel, seed, sample)
             // only, so splitting the samples over dispatches does not change the image.
+#ifdef PSM_VISIBILITY
+            for (uint k = pc.first; k < pc.last; k++) {
+                PsmView w = psm_views[k];
+                float prob = w.normal_p.w;
+                if (!(prob > 0.0)) continue;
+                uint v = floatBitsToUint(w.position_v.w);
+#ifdef PSM_EXACT
+                sum += contribution(x, nx, ax, v) / prob;
+#else
+                vec3 c = vpl_unshadowed(x, nx, ax, vpl_fetch(v), pc.clamp_d2);
+                if (c != vec3(0.0)) sum += c * psm_visible(k, x, nx) / prob;
+#endif
+            }
+#else
             uint base = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
             for (uint k = pc.first; k < pc.last; k++) {
                 uint rng = pcg_hash(base ^ pcg_hash(k + 0x9E3779B9u));
@@ -49,6 +75,7 @@ void main() {
                 uint v = draw_vpl(rng, prob);
                 if (prob > 0.0) sum += contribution(x, nx, ax, v) / prob;
             }
+#endif
             sum /= float(pc.samples);
         }
     }

@@ -57,6 +57,10 @@
 #define BVH_STACK_SIZE 64
 #define B_GBG_SUM 24
 #define B_GBG_COUNT 25
+
+// psm (per-VPL paraboloid shadow maps, `--visibility psm`): the frame's shared VPL set and their maps.
+#define B_PSM_VIEWS 29
+#define B_PSM_DEPTH 30
 #define FACE_RR 0
 #define FACE_UNIFORM 1
 

@@ -61,6 +61,12 @@ struct GatherPush {
     uint pad2;
 };
 
+// One VPL of the frame's shared set under `--visibility psm`, and the viewpoint of its shadow map.
+struct PsmView {
+    vec4 position_v;  // xyz: the VPL lifted off its surface (the map's centre); w: the VPL index (uint bits)
+    vec4 normal_p;    // xyz: the VPL's normal (the map's hemisphere axis); w: its probability (0: no VPL)
+};
+
 // importance push constants.
 struct ImportancePush {
     uint mode;        // IMP_UNIFORM, IMP_GLOBAL, IMP_STRATIFIED, IMP_LOCAL, IMP_GBG_SCATTER, IMP_GBG_RESOLVE

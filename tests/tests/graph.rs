@@ -180,4 +180,67 @@ fn a_camera_move_keeps_the_light_side() {
     fresh.set_camera(moved);
     assert_eq!(fresh.render(&s).unwrap().radiance, after.radiance, "the kept light side changed the image");
     assert_eq!(r.render(&s).unwrap().ran, vec!["gather"]);
+    // The indirect component keeps the maps without the shadow map; a move then must still work (the
+    // direct pass and its shadow map are not needed and not recorded).
+    let indirect = FrameSettings { component: Component::Indirect, ..s.clone() };
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    r.render(&indirect).unwrap();
+    r.set_camera(scene.camera);
+    let mut back = scene.camera;
+    back.eye.z += 0.1;
+    r.set_camera(back);
+    let after = r.render(&indirect).unwrap();
+    assert!(!after.ran.contains(&"dprsm") && !after.ran.contains(&"dprsm_depth"), "{:?}", after.ran);
+    // And a combined frame after it renders the shadow map it lacks.
+    let combined = r.render(&s).unwrap();
+    assert!(combined.ran.contains(&"dprsm_depth"), "{:?}", combined.ran);
+}
+
+/// A paraboloid face that sees nothing (zero flux: all the geometry lies on one side of the light) is
+/// never sampled. With one live face, Russian roulette (probability ∝ face total) and the uniform face
+/// choice (uniform among faces with importance) both give it probability 0 and draw every sample from
+/// the other face, so their images are identical; and, like every face, it is rendered once and then
+/// reused by the light cache.
+#[test]
+fn an_empty_paraboloid_face_is_never_sampled() {
+    use bounce_graph::camera::Camera;
+    use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, Renderer};
+    use bounce_graph::scene::{point_light, Scene};
+    use glam::Vec3;
+    let v = Vec3::new;
+    // Everything at z < 0, the light at z = 0.2: its +z face sees nothing.
+    let tris = [
+        [v(-2.0, 0.0, -2.0), v(2.0, 0.0, -2.0), v(2.0, 0.0, -0.1)],
+        [v(-2.0, 0.0, -2.0), v(2.0, 0.0, -0.1), v(-2.0, 0.0, -0.1)],
+        [v(-2.0, 0.0, -2.0), v(2.0, 0.0, -2.0), v(2.0, 2.0, -2.0)],
+        [v(-2.0, 0.0, -2.0), v(2.0, 2.0, -2.0), v(-2.0, 2.0, -2.0)],
+    ];
+    let camera = Camera { eye: v(0.0, 1.0, 3.0), target: v(0.0, 0.5, -1.0), up: Vec3::Y, fov_y_deg: 60.0 };
+    let scene = Scene::from_triangles(
+        &tris,
+        &[Vec3::splat(0.6); 4],
+        camera,
+        &[point_light(v(0.0, 1.0, 0.2), Vec3::splat(3.0))],
+    );
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    for method in [Method::Global, Method::Gbg] {
+        let s = FrameSettings {
+            width: 24,
+            height: 24,
+            component: Component::Indirect,
+            method,
+            vpls: 8,
+            dprsm_res: 32,
+            voxels: 32,
+            seed: 3,
+            ..FrameSettings::default()
+        };
+        let rr = r.render(&FrameSettings { face: FaceMode::RussianRoulette, ..s.clone() }).unwrap();
+        let uniform = r.render(&FrameSettings { face: FaceMode::Uniform, ..s.clone() }).unwrap();
+        assert!(!uniform.ran.contains(&"dprsm"), "the maps are reused: {:?}", uniform.ran);
+        let mean = rr.radiance.iter().map(|p| p[0] as f64).sum::<f64>() / rr.radiance.len() as f64;
+        assert!(mean > 0.0, "{method:?}: the live face lights the scene");
+        assert_eq!(rr.radiance, uniform.radiance, "{method:?}: a face choice drew the empty face");
+    }
 }

@@ -76,8 +76,23 @@ pub enum MethodArg {
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VisibilityArg {
+    /// Amanatides–Woo march through the voxel grid (the thesis's ch. 7).
     Voxel,
+    /// Exact shadow rays against the triangles (BVH).
     Exact,
+    /// Per-VPL paraboloid shadow maps (thesis ch. 6) for one shared set of --vpls VPLs per frame.
+    Psm,
+    /// The shared set of `psm` with exact shadow rays (the maps' own error).
+    PsmExact,
+}
+
+fn visibility_of(v: VisibilityArg) -> Visibility {
+    match v {
+        VisibilityArg::Voxel => Visibility::Voxel,
+        VisibilityArg::Exact => Visibility::Exact,
+        VisibilityArg::Psm => Visibility::Psm,
+        VisibilityArg::PsmExact => Visibility::PsmExact,
+    }
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -150,12 +165,19 @@ pub struct RenderArgs {
     /// Samples per pixel of --method reference (4096: its own noise is ≈ relMSE 0.002 on the default scene).
     #[arg(long, default_value_t = 4096)]
     pub spp: u32,
-    /// Visibility of the VPL gather: the voxel march, or exact shadow rays against the triangles.
+    /// Visibility of the VPL gather.
     #[arg(long, value_enum, default_value = "voxel")]
     pub visibility: VisibilityArg,
+    /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
+    #[arg(long, default_value_t = 256)]
+    pub psm_res: u32,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Seed of the importance's gather points and rays (default: --seed). `bounce view` keeps it fixed
+    /// across its progressive frames.
+    #[arg(long)]
+    pub cdf_seed: Option<u64>,
     /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
     #[arg(long)]
     pub device: Option<String>,
@@ -415,10 +437,8 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         },
         method: method_of(a.method),
         spp: a.spp,
-        visibility: match a.visibility {
-            VisibilityArg::Voxel => Visibility::Voxel,
-            VisibilityArg::Exact => Visibility::Exact,
-        },
+        visibility: visibility_of(a.visibility),
+        psm_res: a.psm_res,
         mis_weights: match a.mis_weights {
             MisWeightsArg::Consistent => MisWeights::Consistent,
             MisWeightsArg::Thesis => MisWeights::Thesis,
@@ -433,6 +453,7 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         },
         vpls: a.vpls,
         seed: a.seed,
+        cdf_seed: a.cdf_seed,
         dprsm_res: a.dprsm_res,
         shadow_res: a.shadow_res,
         voxels: a.voxels,

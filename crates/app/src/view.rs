@@ -13,7 +13,8 @@
 //!
 //! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
 //! for scripts and tests (under Xvfb on lavapipe). The mean of those N frames is the mean of
-//! `bounce render --seed S+k` for k < N with the same settings.
+//! `bounce render --seed S+k --cdf-seed S` for k < N with the same settings: the frames share one CDF
+//! (drawn with seed S), so the importance and CDF passes run only when the camera or a setting changes.
 //!
 //! Presenting goes through host memory (read back, tone map, copy into the swapchain image): one copy
 //! of a W × H image per frame, small next to a lavapipe frame; a GPU tone-map pass would remove it.
@@ -23,7 +24,7 @@ use crate::{bad, gpu_error, method_of, ComponentArg, MethodArg, VisibilityArg};
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions, Presented, Swapchain};
 use bounce_graph::camera::Camera;
-use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, Visibility};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::Scene;
 use glam::Vec3;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -127,12 +128,11 @@ pub fn view(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         dprsm_res: a.dprsm_res,
         shadow_res: a.shadow_res,
         voxels: a.voxels,
-        visibility: match a.visibility {
-            VisibilityArg::Voxel => Visibility::Voxel,
-            VisibilityArg::Exact => Visibility::Exact,
-        },
+        visibility: crate::visibility_of(a.visibility),
         clamp: a.clamp,
         seed: a.seed,
+        // One CDF for all progressive frames: the importance is redone only when the camera moves.
+        cdf_seed: Some(a.seed),
         ..FrameSettings::default()
     };
     if matches!(settings.method, Method::All) {

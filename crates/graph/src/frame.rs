@@ -65,6 +65,22 @@ pub enum Visibility {
     Voxel,
     /// Shadow rays against the triangles (BVH): separates the voxel error from the rest.
     Exact,
+    /// Per-VPL paraboloid shadow maps (thesis ch. 6) for a shared set of `vpls` VPLs per frame
+    /// (`passes/psm.rs`).
+    Psm,
+    /// The shared set of `Psm` with exact shadow rays: the maps' own error, on identical VPLs.
+    PsmExact,
+}
+
+impl Visibility {
+    /// Whether the gather's shadow rays go through the BVH.
+    pub fn uses_bvh(self) -> bool {
+        matches!(self, Visibility::Exact | Visibility::PsmExact)
+    }
+    /// Whether the frame gathers a shared VPL set (`Psm`, `PsmExact`).
+    pub fn shared_set(self) -> bool {
+        matches!(self, Visibility::Psm | Visibility::PsmExact)
+    }
 }
 
 /// Which MIS weights (`Method::Mis`).
@@ -110,6 +126,12 @@ pub struct FrameSettings {
     /// VPLs per pixel (sampled methods).
     pub vpls: u32,
     pub seed: u64,
+    /// The seed of the importance's gather points and rays (global, stratified, local, gbg, mis);
+    /// `None`: derived from `seed`. The viewer fixes it so that progressive frames, which differ in
+    /// `seed`, keep one CDF (each frame is unbiased given any CDF, so their mean is too).
+    pub cdf_seed: Option<u64>,
+    /// Resolution of each per-VPL paraboloid shadow map (`Visibility::Psm`).
+    pub psm_res: u32,
     /// Reflective DPRSM resolution per face (the VPLs: 2 × lights × res²).
     pub dprsm_res: u32,
     /// Voxels along the longest side of the scene bounds.
@@ -150,6 +172,8 @@ impl Default for FrameSettings {
             method: Method::Uniform,
             vpls: 64,
             seed: 1,
+            cdf_seed: None,
+            psm_res: 256,
             dprsm_res: 512,
             voxels: 128,
             clamp: 0.0,
@@ -188,6 +212,34 @@ impl FrameSettings {
         }
         if self.vpls == 0 {
             bail!("the VPL count must be at least 1");
+        }
+        if self.visibility.shared_set() {
+            if matches!(self.method, Method::All | Method::Mis) && self.component != Component::Direct {
+                bail!(
+                    "--visibility psm needs a sampled method whose samples can be shared by all pixels (not {})",
+                    self.method.name()
+                );
+            }
+            if self.psm_res == 0 || self.psm_res > max {
+                bail!("--psm-res must be between 1 and maxImageDimension2D ({max}) (got {})", self.psm_res);
+            }
+            let layers = gpu.limits().max_image_array_layers;
+            if self.vpls > layers {
+                bail!(
+                    "--visibility psm renders one map per VPL: {} VPLs exceed maxImageArrayLayers ({layers})",
+                    self.vpls
+                );
+            }
+            let bytes = crate::passes::psm::Psm::bytes(self.vpls, self.psm_res);
+            if bytes > crate::passes::psm::MAX_PSM_BYTES {
+                bail!(
+                    "{} shadow maps of {}² take {} MiB, over the {} MiB bound: lower --vpls or --psm-res",
+                    self.vpls,
+                    self.psm_res,
+                    bytes >> 20,
+                    crate::passes::psm::MAX_PSM_BYTES >> 20
+                );
+            }
         }
         if self.spp == 0 {
             bail!("--spp must be at least 1");
@@ -286,6 +338,7 @@ pub struct Renderer {
     cdf_reduce: CdfReduce,
     gather: Gather,
     mis: Gather,
+    psm: crate::passes::psm::Psm,
     reference: crate::passes::reference::Reference,
     /// The scene's triangles, kept for the BVH (built on first use by the reference).
     vertices: Vec<crate::shader_types::Vertex>,
@@ -377,13 +430,16 @@ pub fn build_frame<'a>(
                 importance: g.import_buffer(&c.importance),
                 cdf: g.import_buffer(&c.cdf),
                 direct: im.get(3).copied(),
+                psm: None,
             };
             let imp = ImportanceOut { importance: inputs.importance, sections: c.sections };
             (inputs, im.get(3).copied().unwrap_or(im[2]), imp)
         }
         None => {
             let gbuffer = r.gbuffer.add(g, f);
-            let shadow = shadow.expect("a light cache without the shadow map is only used for the indirect component");
+            // A light cache kept without the shadow map (an indirect frame's): the direct pass that
+            // needs it is then unread too and culled with it.
+            let shadow = shadow.unwrap_or_else(|| r.dprsm.add_depth(g, f));
             let direct = r.direct.add(g, f, &gbuffer, &shadow);
             let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, r.importance_params(s));
             let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
@@ -431,6 +487,11 @@ pub fn build_frame<'a>(
                     ..push
                 };
                 r.mis.add(g, f, &gather_inputs, &mut out, push);
+            } else if s.visibility.shared_set() {
+                // One shared VPL set (and its shadow maps) for every pixel: passes/psm.rs.
+                let psm = r.psm.add(g, f, &vpls, gather_inputs.importance, gather_inputs.cdf, s.psm_res, push);
+                let inputs = GatherInputs { psm: Some(psm), ..gather_inputs };
+                r.gather.add(g, f, &inputs, &mut out, push);
             } else {
                 r.gather.add(g, f, &gather_inputs, &mut out, push);
             }
@@ -477,6 +538,7 @@ impl Renderer {
             cdf_reduce: CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,
             gather: Gather::new(gpu).context("creating the gather pass")?,
             mis: crate::passes::mis::create(gpu).context("creating the mis pass")?,
+            psm: crate::passes::psm::Psm::new(gpu).context("creating the psm pass")?,
             reference: crate::passes::reference::Reference::new(gpu, textured)
                 .context("creating the reference pass")?,
             vertices: scene.vertices.clone(),
@@ -498,7 +560,7 @@ impl Renderer {
         let sections = 1 + self.importance_params(s).kind.method_sections();
         let faces = 2 * self.scene.light_count;
         let march = match (s.visibility, self.bvh.get()) {
-            (Visibility::Exact, Some(b)) => b.max_iterations_per_ray(),
+            (v, Some(b)) if v.uses_bvh() => b.max_iterations_per_ray(),
             _ => dims.x + dims.y + dims.z + 3,
         };
         let per_vpl = march + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
@@ -560,7 +622,7 @@ impl Renderer {
                 Method::Gbg | Method::Mis => ImportanceKind::Gbg { rays: s.gather_rays },
             },
             samples: s.cdf_samples,
-            seed: seed32(s.seed ^ 0xC0FFEE),
+            seed: seed32(s.cdf_seed.unwrap_or(s.seed) ^ 0xC0FFEE),
             min_d2: min_d * min_d,
             fixed_scale: (4294967296.0 / c_ref as f64).min(f32::MAX as f64) as f32,
         }
@@ -599,7 +661,7 @@ impl Renderer {
             scene_min: [lo.x, lo.y, lo.z, diag],
             scene_max: [hi.x, hi.y, hi.z, far_light],
             size: [s.width, s.height, self.scene.light_count, s.dprsm_res],
-            maps: [s.shadow_res, vpl_slots, 0, 0],
+            maps: [s.shadow_res, vpl_slots, s.psm_res, s.vpls],
             shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
             voxel_origin,
             voxel_dims,
@@ -609,7 +671,7 @@ impl Renderer {
     /// The per-frame inputs every pass reads, for settings `s` and their uniform buffer.
     fn frame_inputs<'a>(&'a self, s: &FrameSettings, uniforms: &'a Buffer) -> FrameInputs<'a> {
         FrameInputs {
-            bvh: if s.visibility == Visibility::Exact { self.bvh.get() } else { None },
+            bvh: if s.visibility.uses_bvh() { self.bvh.get() } else { None },
             scene: &self.scene,
             uniforms,
             width: s.width,
@@ -696,7 +758,7 @@ impl Renderer {
 
     pub fn render_with_progress(&self, s: &FrameSettings, progress: &mut dyn FnMut(u64, u64)) -> Result<FrameOutput> {
         self.check(s)?;
-        if s.visibility == Visibility::Exact {
+        if s.visibility.uses_bvh() {
             self.bvh()?;
         }
         if s.method == Method::Reference && s.component != Component::Direct {
@@ -817,6 +879,7 @@ impl Renderer {
                     importance: g.import_buffer(&importance),
                     cdf: g.import_buffer(&cdf),
                     direct: imported.get(6).copied(),
+                    psm: None,
                 };
                 let mut o = g.import_image(&out);
                 let push = GatherPush {

@@ -107,6 +107,18 @@ pub struct GatherPush {
 }
 const _: () = assert!(size_of::<GatherPush>() == 64);
 
+/// One VPL of the frame's shared set under `--visibility psm` and its shadow map's viewpoint
+/// (`PsmView` in `glsl/shared/types.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PsmView {
+    /// xyz: the VPL lifted off its surface; w: the VPL index (u32 bits).
+    pub position_v: [f32; 4],
+    /// xyz: the VPL's normal (the map's axis); w: its probability (0: no VPL).
+    pub normal_p: [f32; 4],
+}
+const _: () = assert!(size_of::<PsmView>() == 32);
+
 /// importance push constants.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -1,5 +1,6 @@
-//! GPU time of a first frame and of an unchanged next frame, per method (the frame cache: the second
-//! frame records only the gather), on the default scene. The figures of BENCHMARKS.md, "Skipping what a
+//! GPU time of a first frame, of an unchanged next frame (the frame cache: it records only the gather)
+//! and of a frame after a camera move (the light-side cache: the paraboloid maps are kept), per method,
+//! on the default scene. The figures of BENCHMARKS.md, "Skipping what a
 //! frame does not need".
 //!
 //!     cargo run -p bounce-tests --bin static-frames [width] [vpls]
@@ -18,10 +19,10 @@ fn main() -> anyhow::Result<()> {
         "{} — default scene, {size}², combined, {vpls} VPLs, DPRSM 512², shadow map 2048², 128 voxels\n",
         gpu.name
     );
-    println!("| method | first frame GPU ms | unchanged next frame GPU ms | next / first | passes of the next frame |");
-    println!("|---|---:|---:|---:|---|");
+    println!("| method | first frame GPU ms | unchanged next frame GPU ms | next / first | passes of the next frame | after a camera move GPU ms | moved / first | passes after the move |");
+    println!("|---|---:|---:|---:|---|---:|---:|---|");
     for method in [Method::Uniform, Method::Global, Method::Stratified, Method::Local, Method::Gbg, Method::Mis] {
-        let r = Renderer::new(&gpu, &scene)?;
+        let mut r = Renderer::new(&gpu, &scene)?;
         let s = FrameSettings {
             width: size,
             height: size,
@@ -35,8 +36,20 @@ fn main() -> anyhow::Result<()> {
         r.clear_frame_cache();
         let first = r.render(&s)?;
         let next = r.render(&s)?;
-        let (a, b) = (first.gpu_ms().unwrap_or(f64::NAN), next.gpu_ms().unwrap_or(f64::NAN));
-        println!("| {} | {a:.1} | {b:.1} | {:.0} % | {} |", method.name(), 100.0 * b / a, next.ran.join(", "));
+        let mut moved = scene.camera;
+        moved.eye += glam::Vec3::new(0.1, 0.0, -0.2);
+        r.set_camera(moved);
+        let after = r.render(&s)?;
+        let (a, b, c) =
+            (first.gpu_ms().unwrap_or(f64::NAN), next.gpu_ms().unwrap_or(f64::NAN), after.gpu_ms().unwrap_or(f64::NAN));
+        println!(
+            "| {} | {a:.1} | {b:.1} | {:.0} % | {} | {c:.1} | {:.0} % | {} |",
+            method.name(),
+            100.0 * b / a,
+            next.ran.join(", "),
+            100.0 * c / a,
+            after.ran.join(", ")
+        );
     }
     Ok(())
 }

@@ -89,7 +89,7 @@ impl Dprsm {
         })
     }
 
-    fn depth_image(g: &mut Graph, name: &str, res: u32, layers: u32) -> Handle<Image> {
+    pub(crate) fn depth_image(g: &mut Graph, name: &str, res: u32, layers: u32) -> Handle<Image> {
         g.create_image(
             ImageDesc::new(
                 name,
@@ -161,39 +161,56 @@ impl Dprsm {
         colors: &[vk::ImageView],
         depth: &Handle<Image>,
     ) {
-        let d = &ctx.gpu.device;
         let layers = 2 * f.scene.light_count;
-        let extent = vk::Extent2D { width: res, height: res };
-        let color_attachments: Vec<_> = colors
-            .iter()
-            .map(|&view| {
-                vk::RenderingAttachmentInfo::default()
-                    .image_view(view)
-                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
-            })
-            .collect();
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(ctx.image(depth).view)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
-        // Layered rendering: the geometry shader routes each (light, face) instance to its layer.
-        let info = vk::RenderingInfo::default()
-            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
-            .layer_count(layers)
-            .color_attachments(&color_attachments)
-            .depth_attachment(&depth);
-        unsafe {
-            d.cmd_begin_rendering(ctx.cmd, &info);
-            if f.scene.triangle_count > 0 {
-                pipeline.bind(ctx.cmd, extent, &f.scene.writes(f.uniforms), bytemuck::bytes_of(&res));
-                d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
-            }
-            d.cmd_end_rendering(ctx.cmd);
+        record_paraboloid(ctx, pipeline, f, f.scene.writes(f.uniforms), res, layers, colors, depth);
+    }
+}
+
+/// Records one layered paraboloid rendering: `layers` instances of every scene triangle, instance k into
+/// layer k (the geometry shader picks the viewpoint: a light's face here, a VPL in `psm.rs`), cleared
+/// to far depth and zero colour first.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn record_paraboloid(
+    ctx: &crate::graph::PassContext,
+    pipeline: &GraphicsPipeline,
+    f: FrameInputs,
+    writes: bounce_device::DescriptorWrites,
+    res: u32,
+    layers: u32,
+    colors: &[vk::ImageView],
+    depth: &Handle<Image>,
+) {
+    let d = &ctx.gpu.device;
+    let extent = vk::Extent2D { width: res, height: res };
+    let color_attachments: Vec<_> = colors
+        .iter()
+        .map(|&view| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(view)
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
+        })
+        .collect();
+    let depth = vk::RenderingAttachmentInfo::default()
+        .image_view(ctx.image(depth).view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+    // Layered rendering: the geometry shader routes each instance to its layer.
+    let info = vk::RenderingInfo::default()
+        .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+        .layer_count(layers)
+        .color_attachments(&color_attachments)
+        .depth_attachment(&depth);
+    unsafe {
+        d.cmd_begin_rendering(ctx.cmd, &info);
+        if f.scene.triangle_count > 0 {
+            pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&res));
+            d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
         }
+        d.cmd_end_rendering(ctx.cmd);
     }
 }

@@ -31,6 +31,8 @@ pub struct Gather {
     pipeline: ComputePipeline,
     /// The `--visibility exact` variant (shadow rays against the BVH).
     exact: ComputePipeline,
+    /// The `--visibility psm` and `psm-exact` variants (the frame's shared VPL set; `gather` only).
+    psm: Option<(ComputePipeline, ComputePipeline)>,
     sampler: Sampler,
 }
 
@@ -48,6 +50,8 @@ pub struct GatherInputs {
     pub cdf: Handle<Buffer>,
     /// Added to the result when set (the combined component).
     pub direct: Option<Handle<Image>>,
+    /// `--visibility psm`/`psm-exact`: the frame's shared VPL set and (psm) its shadow maps.
+    pub psm: Option<crate::passes::psm::PsmOut>,
 }
 
 impl GatherInputs {
@@ -70,6 +74,7 @@ impl GatherInputs {
             importance,
             cdf,
             direct,
+            psm: None,
         }
     }
 
@@ -94,12 +99,20 @@ impl GatherInputs {
 
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
-        Self::with_shaders(gpu, "gather", shaders::GATHER_COMP, shaders::GATHER_EXACT_COMP)
+        let mut g = Self::with_shaders(gpu, "gather", shaders::GATHER_COMP, shaders::GATHER_EXACT_COMP)?;
+        let (bindings, push) = Self::bindings();
+        let mut b = bindings.clone();
+        b.extend(crate::passes::psm::gather_bindings(true));
+        let psm = ComputePipeline::new(gpu, "gather", &crate::spirv(shaders::GATHER_PSM_COMP), &b, push, &[])?;
+        let mut b = bindings;
+        b.extend(crate::passes::psm::gather_bindings(false));
+        b.extend(crate::bvh::GpuBvh::bindings());
+        let exact = ComputePipeline::new(gpu, "gather", &crate::spirv(shaders::GATHER_PSM_EXACT_COMP), &b, push, &[])?;
+        g.psm = Some((psm, exact));
+        Ok(g)
     }
 
-    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. `exact` is
-    /// the variant with exact visibility, which also binds the BVH.
-    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: &[u8], exact: &[u8]) -> Result<Self> {
+    fn bindings() -> (Vec<Binding>, u32) {
         let mut bindings = scene_bindings();
         bindings.extend(super::gbuffer_bindings());
         bindings.extend(super::vpl_bindings());
@@ -110,11 +123,17 @@ impl Gather {
             Binding::sampled_image(B_GATHER_DIRECT),
             Binding::storage_image(B_GATHER_OUT),
         ]);
-        let push = std::mem::size_of::<GatherPush>() as u32;
+        (bindings, std::mem::size_of::<GatherPush>() as u32)
+    }
+
+    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. `exact` is
+    /// the variant with exact visibility, which also binds the BVH.
+    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: &[u8], exact: &[u8]) -> Result<Self> {
+        let (mut bindings, push) = Self::bindings();
         let pipeline = ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &[])?;
         bindings.extend(crate::bvh::GpuBvh::bindings());
         let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
-        Ok(Gather { name, pipeline, exact, sampler: Sampler::nearest(gpu)? })
+        Ok(Gather { name, pipeline, exact, psm: None, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
@@ -138,6 +157,12 @@ impl Gather {
         for h in i.buffers() {
             b = b.read(&h, Access::ComputeRead);
         }
+        if let Some(p) = &i.psm {
+            b = b.read(&p.views, Access::ComputeRead);
+            if f.bvh.is_none() {
+                b = b.read(&p.depth, Access::ComputeRead);
+            }
+        }
         b = if push.accumulate != 0 {
             b.write(out, Access::ComputeWrite)
         } else {
@@ -157,9 +182,21 @@ impl Gather {
                 .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            let (pipeline, writes) = match f.bvh {
-                Some(bvh) => (&self.exact, bvh.writes(writes)),
-                None => (&self.pipeline, writes),
+            let (pipeline, writes) = match (&i.psm, &self.psm, f.bvh) {
+                (Some(p), Some((_, exact)), Some(bvh)) => {
+                    (exact, bvh.writes(writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views))))
+                }
+                (Some(p), Some((maps, _)), None) => (
+                    maps,
+                    writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views)).sampled_image(
+                        B_PSM_DEPTH,
+                        ctx.image(&p.depth),
+                        s,
+                    ),
+                ),
+                (Some(_), None, _) => unreachable!("{}: psm visibility is a gather variant only", self.name),
+                (None, _, Some(bvh)) => (&self.exact, bvh.writes(writes)),
+                (None, _, None) => (&self.pipeline, writes),
             };
             let chunk = f.vpls_per_dispatch.max(1);
             let mut first = push.first;

@@ -8,6 +8,7 @@ pub mod gather;
 pub mod gbuffer;
 pub mod importance;
 pub mod mis;
+pub mod psm;
 pub mod reference;
 pub mod voxelize;
 

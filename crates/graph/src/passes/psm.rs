@@ -1,0 +1,140 @@
+//! psm: per-VPL paraboloid shadow maps, the visibility of the thesis's chapter 6 (`--visibility psm`).
+//!
+//! A shadow map per (pixel, sample) is impossible, so the frame draws one shared set of N VPLs
+//! (`psm.comp`: sample k from the method's CDF mixture with a stream of (seed, k) only; N = `--vpls`),
+//! renders one paraboloid depth map per VPL (`psm.geom`, the light maps' exact geometry shader with the
+//! VPL as viewpoint and its normal as the axis; `dprsm.frag`), and every pixel gathers those N VPLs:
+//!
+//!   L(x) = 1/N Σ_k albedo(x)/π · Φ_k (cos θ_k/π) cos θ_x / d² · V_psm(x, k) / p_k,
+//!
+//! unbiased for the VPL sum given V_psm, exactly as the per-pixel draws are (each pixel's N samples are
+//! the same N draws from the same mixture; the pixels' errors are correlated instead of independent:
+//! the structured noise of the thesis's Fig. 6.1). V_psm compares x's distance with the map's texel
+//! along x's direction, with the direct light's bias (`glsl/shared/psm.glsl`); `--visibility
+//! psm-exact` uses the same shared set with exact shadow rays, so that the maps' own error can be
+//! measured on identical VPLs.
+//!
+//! Memory: N layers of `--psm-res`² f32 depth (N · res² · 4 bytes: 64 maps at 256² are 16 MiB), bounded
+//! by [`MAX_PSM_BYTES`] and the device's array-layer limit, reported by `bounce render --timings`.
+//! Inputs: the VPL images, importance and CDF. Outputs: the views buffer and the layered depth image.
+
+use super::dprsm::{record_paraboloid, Dprsm};
+use super::FrameInputs;
+use crate::bindings::*;
+use crate::gpu_scene::scene_bindings;
+use crate::graph::{Graph, Handle};
+use crate::passes::dprsm::DprsmOut;
+use crate::shader_types::{GatherPush, PsmView};
+use crate::shaders;
+use anyhow::Result;
+use bounce_device::sync::Access;
+use bounce_device::{
+    vk, Binding, Buffer, BufferDesc, ComputePipeline, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Image, Sampler,
+};
+
+/// The most memory the shadow maps of one frame may take.
+pub const MAX_PSM_BYTES: u64 = 1 << 30;
+
+pub struct Psm {
+    select: ComputePipeline,
+    maps: GraphicsPipeline,
+    sampler: Sampler,
+}
+
+/// The frame's shared VPL set and its shadow maps.
+#[derive(Clone, Copy, Debug)]
+pub struct PsmOut {
+    /// N `PsmView`s.
+    pub views: Handle<Buffer>,
+    /// N layers of res² distance / far.
+    pub depth: Handle<Image>,
+}
+
+impl Psm {
+    pub fn new(gpu: &Gpu) -> Result<Self> {
+        let mut bindings = scene_bindings();
+        bindings.extend(super::vpl_bindings());
+        bindings.extend([
+            Binding::storage_buffer(B_IMPORTANCE),
+            Binding::storage_buffer(B_CDF),
+            Binding::storage_buffer(B_PSM_VIEWS),
+        ]);
+        let push = std::mem::size_of::<GatherPush>() as u32;
+        let select = ComputePipeline::new(gpu, "psm_select", &crate::spirv(shaders::PSM_COMP), &bindings, push, &[])?;
+        let mut map_bindings = scene_bindings();
+        map_bindings.push(Binding::storage_buffer(B_PSM_VIEWS));
+        let maps = GraphicsPipeline::new(
+            gpu,
+            &GraphicsPipelineDesc {
+                name: "psm",
+                vertex: &crate::spirv(shaders::DPRSM_VERT),
+                geometry: Some(&crate::spirv(shaders::PSM_GEOM)),
+                fragment: &crate::spirv(shaders::DPRSM_FRAG),
+                color_formats: &[],
+                depth_format: Some(super::dprsm::DPRSM_DEPTH_FORMAT),
+                depth_compare: vk::CompareOp::LESS,
+                bindings: &map_bindings,
+                push_constant_size: 4,
+                spec: &[],
+            },
+        )?;
+        Ok(Psm { select, maps, sampler: Sampler::nearest(gpu)? })
+    }
+
+    /// Bytes of `n` maps of `res`².
+    pub fn bytes(n: u32, res: u32) -> u64 {
+        n as u64 * res as u64 * res as u64 * 4
+    }
+
+    /// Draws the shared set (`push` as the gather's: seed, sections, defensive share, face mode; `samples`
+    /// = N) and renders its maps at `res`².
+    #[allow(clippy::too_many_arguments)]
+    pub fn add<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        vpls: &DprsmOut,
+        importance: Handle<Buffer>,
+        cdf: Handle<Buffer>,
+        res: u32,
+        push: GatherPush,
+    ) -> PsmOut {
+        let n = push.samples.max(1);
+        let mut views =
+            g.create_buffer(BufferDesc::storage("psm.views", n as u64 * std::mem::size_of::<PsmView>() as u64));
+        let (v, view_h) = (*vpls, views);
+        g.add_pass("psm_select")
+            .read(&v.position, Access::ComputeRead)
+            .read(&v.normal, Access::ComputeRead)
+            .read(&v.flux, Access::ComputeRead)
+            .read(&importance, Access::ComputeRead)
+            .read(&cdf, Access::ComputeRead)
+            .overwrite(&mut views, Access::ComputeWrite)
+            .record(move |ctx| {
+                let s = self.sampler.raw;
+                let writes = super::vpl_writes(f.scene.writes(f.uniforms), ctx, [&v.position, &v.normal, &v.flux], s)
+                    .storage_buffer(B_IMPORTANCE, ctx.buffer(&importance))
+                    .storage_buffer(B_CDF, ctx.buffer(&cdf))
+                    .storage_buffer(B_PSM_VIEWS, ctx.buffer(&view_h));
+                self.select.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [n, 1, 1], [WG_1D, 1, 1]);
+            });
+        let mut depth = Dprsm::depth_image(g, "psm.depth", res, n);
+        let (vh, dh) = (views, depth);
+        g.add_pass("psm").read(&views, Access::ShaderRead).overwrite(&mut depth, Access::DepthAttachment).record(
+            move |ctx| {
+                let writes = f.scene.writes(f.uniforms).storage_buffer(B_PSM_VIEWS, ctx.buffer(&vh));
+                record_paraboloid(ctx, &self.maps, f, writes, res, n, &[], &dh);
+            },
+        );
+        PsmOut { views, depth }
+    }
+}
+
+/// Binding declarations the gather adds for `--visibility psm` (maps) or `psm-exact` (views only).
+pub fn gather_bindings(with_maps: bool) -> Vec<Binding> {
+    let mut b = vec![Binding::storage_buffer(B_PSM_VIEWS)];
+    if with_maps {
+        b.push(Binding::sampled_image(B_PSM_DEPTH));
+    }
+    b
+}
