@@ -6,7 +6,7 @@
 #include "shared/watertight.glsl"
 
 // The map resolution per face: the shadow map and the reflective map share these shaders.
-layout(push_constant) uniform Push { uint map_res; };
+layout(push_constant) uniform Push { uint map_res; uint light_map; };
 
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;

@@ -3,8 +3,10 @@
 // shader then intersects each texel's ray with the triangle. See crates/graph/src/passes/dprsm.rs.
 #include "shared/scene.glsl"
 
-// The map resolution per face: the shadow map and the reflective map share these shaders.
-layout(push_constant) uniform Push { uint map_res; };
+// The map resolution per face: the shadow map and the reflective map share these shaders. light_map:
+// 1 for the reflective map, whose faces follow `--light-map` (shared/lightmap.glsl); 0 for the
+// paraboloid shadow maps (the direct light's, and the per-VPL maps of psm.geom).
+layout(push_constant) uniform Push { uint map_res; uint light_map; };
 
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 4) out;
@@ -59,6 +61,50 @@ void include_arc(vec3 a, vec3 b, inout vec2 lo, inout vec2 hi) {
     }
 }
 
+void emit_box(vec3 p[3], uint inst, vec2 lo, vec2 hi) {
+    vec2 corners[4] = vec2[4](vec2(lo.x, lo.y), vec2(hi.x, lo.y), vec2(lo.x, hi.y), vec2(hi.x, hi.y));
+    for (int k = 0; k < 4; k++) {
+        o_a = p[0];
+        o_b = p[1];
+        o_c = p[2];
+        o_tri = uint(gl_PrimitiveIDIn);
+        o_instance = inst;
+        gl_Layer = int(inst);
+        gl_Position = vec4(corners[k], 0.5, 1.0);
+        EmitVertex();
+    }
+    EndPrimitive();
+}
+
+// A perspective face (`--light-map rsm|cube`): clip to z >= z_near (lines stay lines, so the clipped
+// polygon's image is the hull of its vertices' images) and bound those; the fragment test is exact.
+void emit_perspective(vec3 p[3], uint inst) {
+    float far = frame.scene_max.w;
+    float zn = 1e-6 * far;
+    vec3 poly[4];
+    int n = 0;
+    bool touches_light = false;
+    for (int k = 0; k < 3; k++) {
+        vec3 a = p[k], b = p[(k + 1) % 3];
+        if (length(a) < 1e-6 * far) touches_light = true;
+        if (a.z >= zn) poly[n++] = a;
+        if ((a.z >= zn) != (b.z >= zn)) poly[n++] = mix(a, b, (a.z - zn) / (a.z - b.z));
+    }
+    if (n < 3) return;
+    vec2 lo = vec2(1e30), hi = vec2(-1e30);
+    if (touches_light) {
+        lo = vec2(-1.0);
+        hi = vec2(1.0);
+    } else {
+        for (int k = 0; k < n; k++) include_uv(lm_project(poly[k]), lo, hi);
+        float margin = 1.0 / float(map_res);
+        lo = max(lo - margin, vec2(-1.0));
+        hi = min(hi + margin, vec2(1.0));
+    }
+    if (any(greaterThan(lo, hi))) return;
+    emit_box(p, inst, lo, hi);
+}
+
 void main() {
     uint inst = i_instance[0];
     vec3 p[3];
@@ -66,11 +112,20 @@ void main() {
     PsmView view = psm_views[inst];
     if (!(view.normal_p.w > 0.0)) return;  // no VPL drawn: the map stays empty (never read)
     for (int k = 0; k < 3; k++) p[k] = psm_to_local(i_world[k] - view.position_v.xyz, view.normal_p.xyz);
+    bool perspective = false;
 #else
-    uint face = inst % 2u;
-    vec3 light = lights[inst / 2u].position.xyz;
-    for (int k = 0; k < 3; k++) p[k] = to_face(i_world[k] - light, face);
+    bool perspective = light_map != 0u && lm_kind() != LIGHT_MAP_DPRSM;
+    uint faces = light_map != 0u ? lm_faces() : 2u;
+    uint face = inst % faces, li = inst / faces;
+    vec3 light = lights[li].position.xyz;
+    for (int k = 0; k < 3; k++) {
+        p[k] = light_map != 0u ? lm_to_local(i_world[k] - light, li, face) : to_face(i_world[k] - light, face);
+    }
 #endif
+    if (perspective) {
+        emit_perspective(p, inst);
+        return;
+    }
 
     // Clip to this face's half-space z >= 0 (Sutherland–Hodgman against one plane: at most 4 vertices).
     vec3 poly[4];
@@ -109,17 +164,5 @@ void main() {
         hi = min(hi + margin, vec2(1.0));
     }
     if (any(greaterThan(lo, hi))) return;
-
-    vec2 corners[4] = vec2[4](vec2(lo.x, lo.y), vec2(hi.x, lo.y), vec2(lo.x, hi.y), vec2(hi.x, hi.y));
-    for (int k = 0; k < 4; k++) {
-        o_a = p[0];
-        o_b = p[1];
-        o_c = p[2];
-        o_tri = uint(gl_PrimitiveIDIn);
-        o_instance = inst;
-        gl_Layer = int(inst);
-        gl_Position = vec4(corners[k], 0.5, 1.0);
-        EmitVertex();
-    }
-    EndPrimitive();
+    emit_box(p, inst, lo, hi);
 }

@@ -1,14 +1,15 @@
 #version 460
 // dprsm (reflective): like dprsm.frag, the exact hit of each texel's centre ray, plus the VPL it makes:
 // world position, shading normal facing the light, and reflected flux
-//   Φ_v = albedo(v) · I · Δω_v,   Δω_v = 4 / (1 + u² + v²)² · (2 / res)²
+//   Φ_v = albedo(v) · I · Δω_v,   Δω_v = 4 / (1 + u² + v²)² · (2 / res)² (paraboloid faces)
 // (the texel's solid angle seen from the light; the thesis's eqs. 7.1–7.3 leave it out, and without it
-// the VPL sum does not converge to the one-bounce integral). See crates/graph/src/passes/dprsm.rs.
+// the VPL sum does not converge to the one-bounce integral). With `--light-map rsm|cube` the faces are
+// perspective and Δω_v is theirs (shared/lightmap.glsl). See crates/graph/src/passes/dprsm.rs.
 #include "shared/scene.glsl"
 #include "shared/watertight.glsl"
 
 // The map resolution per face: the shadow map and the reflective map share these shaders.
-layout(push_constant) uniform Push { uint map_res; };
+layout(push_constant) uniform Push { uint map_res; uint light_map; };
 
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;
@@ -23,9 +24,8 @@ layout(location = 2) out vec4 o_flux;     // rgb reflected flux (W), w = Δω (s
 void main() {
     float res = float(map_res);
     vec2 uv = gl_FragCoord.xy / res * 2.0 - 1.0;
-    float r2 = dot(uv, uv);
-    if (r2 > 1.0) discard;
-    vec3 dir = paraboloid_direction(uv);
+    if (!lm_covers(uv)) discard;
+    vec3 dir = lm_direction(uv);
     // Watertight, as in dprsm.frag: no texel ray slips between two triangles sharing an edge.
     float t;
     vec2 bary;
@@ -33,17 +33,16 @@ void main() {
     vec3 hit = vec3(t, bary);
     gl_FragDepth = min(t / frame.scene_max.w, 1.0);
 
-    uint face = i_instance % 2u;
-    Light light = lights[i_instance / 2u];
-    vec3 world = light.position.xyz + to_face(dir * t, face);
+    uint face = i_instance % lm_faces(), li = i_instance / lm_faces();
+    Light light = lights[li];
+    vec3 world = light.position.xyz + lm_from_local(dir * t, li, face);
     Vertex v0 = vertices[3u * i_tri], v1 = vertices[3u * i_tri + 1u], v2 = vertices[3u * i_tri + 2u];
     float w0 = 1.0 - hit.y - hit.z;
     vec3 n = normalize(w0 * v0.normal_v.xyz + hit.y * v1.normal_v.xyz + hit.z * v2.normal_v.xyz);
     if (dot(n, light.position.xyz - world) < 0.0) n = -n;
     vec2 tex = w0 * vec2(v0.position_u.w, v0.normal_v.w) + hit.y * vec2(v1.position_u.w, v1.normal_v.w)
              + hit.z * vec2(v2.position_u.w, v2.normal_v.w);
-    float texel = 2.0 / res;
-    float d_omega = 4.0 / ((1.0 + r2) * (1.0 + r2)) * texel * texel;
+    float d_omega = lm_d_omega(uv, res);
     o_position = vec4(world, 1.0);
     o_normal = vec4(n, t);
     o_flux = vec4(albedo_at(i_tri, tex) * light.intensity.rgb * d_omega, d_omega);

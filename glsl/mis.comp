@@ -63,7 +63,7 @@ Patch patch_of(uint v, Vpl vpl) {
     ivec3 t = ivec3(v % res, (v / res) % res, v / (res * res));
     float d_l = texelFetch(vpl_normal, t, 0).w;
     float d_omega = texelFetch(vpl_flux, t, 0).w;
-    vec3 light = lights[uint(t.z) / 2u].position.xyz;
+    vec3 light = lights[uint(t.z) / lm_faces()].position.xyz;
     // Any positive area keeps the estimator exact; the texel's own footprint makes the two strategies
     // overlap where they should. The clamp only stops a grazing VPL's patch from growing without bound.
     float cos_a = max(abs(dot(vpl.normal, normalize(light - vpl.position))), 0.05);
@@ -182,7 +182,7 @@ void main() {
                 float ap_g = area_times_gathering_density(x, nx, q, y);
                 if (ap_g > 0.0) {
                     vec3 hit, d = normalize(y - x);
-                    uint light = v / (2u * frame.size.w * frame.size.w);
+                    uint light = v / (lm_faces() * frame.size.w * frame.size.w);
                     bool reached = gathering_first_hit(x, nx, d, hit) && gathering_texel(x, nx, d, light, hit) == v;
                     if (!reached) ap_g = 0.0;
                 }

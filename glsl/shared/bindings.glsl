@@ -71,6 +71,11 @@
 #define CDF_ROWS 0
 #define CDF_TOTALS 1
 
+// The VPL map at each light (`--light-map`, shared/lightmap.glsl).
+#define LIGHT_MAP_DPRSM 0
+#define LIGHT_MAP_RSM 1
+#define LIGHT_MAP_CUBE 2
+
 // Specialisation constant ids. SPEC_TEXTURED: the scene has textures (false: albedo_at reads no
 // texture, so an untextured scene runs the shader variant without texture fetches).
 #define SPEC_TEXTURED 0

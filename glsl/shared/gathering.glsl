@@ -35,11 +35,11 @@ float voxel_first_hit(vec3 o, vec3 d, float tmax) {
 // deterministic map from rays to texels (see mis.comp).
 uint texel_at_point(vec3 p, uint l) {
     uint res = frame.size.w;
-    vec3 local = p - lights[l].position.xyz;
-    uint face = local.z >= 0.0 ? 0u : 1u;
-    vec2 uv = paraboloid_project(to_face(local, face));
+    uint face;
+    vec2 uv;
+    if (!lm_locate(p - lights[l].position.xyz, l, face, uv)) return NO_VPL;
     uvec2 texel = uvec2(clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(int(res) - 1)));
-    uint v = ((2u * l + face) * res + texel.y) * res + texel.x;
+    uint v = ((lm_faces() * l + face) * res + texel.y) * res + texel.x;
     return vpl_fetch(v).valid ? v : NO_VPL;
 }
 

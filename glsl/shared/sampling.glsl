@@ -3,9 +3,9 @@
 #ifndef BOUNCE_SAMPLING_GLSL
 #define BOUNCE_SAMPLING_GLSL
 
-uint vpl_slots() { return 2u * frame.size.z * frame.size.w * frame.size.w; }
+uint vpl_slots() { return lm_faces() * frame.size.z * frame.size.w * frame.size.w; }
 uint face_rows() { return frame.size.w; }
-uint faces() { return 2u * frame.size.z; }
+uint faces() { return lm_faces() * frame.size.z; }
 
 // Number of faces with weight in method section s (the faces FACE_UNIFORM chooses among).
 uint live_faces(uint cb) {
@@ -96,7 +96,7 @@ vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
     if (c == vec3(0.0)) return c;
 #ifdef EXACT_VISIBILITY
     float lx = surface_lift(x, frame.scene_min.w), lv = surface_lift(vpl.position, frame.scene_min.w);
-    vec3 light = lights[v / (2u * frame.size.w * frame.size.w)].position.xyz;
+    vec3 light = lights[v / (lm_faces() * frame.size.w * frame.size.w)].position.xyz;
     vec3 lifted = vpl.position + normalize(light - vpl.position) * lv;
     return bvh_occluded_lifted(x + nx * lx, lifted) ? vec3(0.0) : c;
 #else

@@ -13,6 +13,8 @@ layout(std430, set = 0, binding = B_TEXTURES) readonly buffer Textures { Texture
 layout(std430, set = 0, binding = B_TEXELS) readonly buffer Texels { uint texels[]; };
 layout(std430, set = 0, binding = B_LIGHTS) readonly buffer Lights { Light lights[]; };
 
+#include "lightmap.glsl"
+
 // Albedo of triangle `tri` at texture coordinate `uv`: Kd × the nearest map_Kd texel (sRGB-decoded),
 // repeat wrap, v flipped (OBJ v = 0 is the bottom row of the image). The CPU reference does the same.
 layout(constant_id = SPEC_TEXTURED) const bool TEXTURED = true;

@@ -39,6 +39,8 @@ struct FrameUniforms {
     vec4 shadow;             // x constant bias (world units), y slope bias (texel units), z,w unused
     vec4 voxel_origin;       // xyz world position of the grid's minimum corner, w cell size (cubic cells)
     uvec4 voxel_dims;        // xyz cells per axis, w total cells
+    uvec4 light_map;         // the VPL map of each light (shared/lightmap.glsl): x kind (LIGHT_MAP_*),
+                             // y faces per light, z tan(fov/2) of a perspective face (float bits), w unused
 };
 
 // gather push constants.

@@ -29,4 +29,5 @@ void main() {
     put4(f.shadow);
     put4(f.voxel_origin);
     put4u(f.voxel_dims);
+    put4u(f.light_map);
 }

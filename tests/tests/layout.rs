@@ -32,6 +32,7 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     f.shadow = [next(), next(), next(), next()];
     f.voxel_origin = [next(), next(), next(), next()];
     f.voxel_dims = [3001, 3002, 3003, 3004];
+    f.light_map = [3501, 3502, 3503, 3504];
     let mut input = vec![];
     input.extend_from_slice(bytemuck::bytes_of(&v));
     input.extend_from_slice(bytemuck::bytes_of(&m));

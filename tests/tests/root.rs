@@ -11,6 +11,7 @@ mod graph;
 mod images;
 
 mod layout;
+mod lightmaps;
 mod psm;
 mod stress;
 mod validation;

@@ -13,7 +13,7 @@ pub mod view;
 
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions};
-use bounce_graph::frame::{Component, FaceMode, FrameSettings, Method, MisWeights, Renderer, Visibility};
+use bounce_graph::frame::{Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, Renderer, Visibility};
 use bounce_graph::scene::Scene;
 use clap::{Parser, Subcommand, ValueEnum};
 use output::RgbImage;
@@ -96,6 +96,16 @@ fn visibility_of(v: VisibilityArg) -> Visibility {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightMapArg {
+    /// Dual paraboloid RSM: two faces, every direction (the thesis's choice).
+    Dprsm,
+    /// One perspective RSM of --rsm-fov looking at the scene's centre (misses what lies outside).
+    Rsm,
+    /// Cube-map RSM: six 90° faces.
+    Cube,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MisWeightsArg {
     /// Both densities in solid angle (unbiased).
     Consistent,
@@ -171,6 +181,12 @@ pub struct RenderArgs {
     /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
     #[arg(long, default_value_t = 256)]
     pub psm_res: u32,
+    /// The VPL map at each light (its faces are --dprsm-res² each).
+    #[arg(long, value_enum, default_value = "dprsm")]
+    pub light_map: LightMapArg,
+    /// Field of view of --light-map rsm, degrees.
+    #[arg(long, default_value_t = 90.0)]
+    pub rsm_fov: f32,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -439,6 +455,11 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         spp: a.spp,
         visibility: visibility_of(a.visibility),
         psm_res: a.psm_res,
+        light_map: match a.light_map {
+            LightMapArg::Dprsm => LightMap::Dprsm,
+            LightMapArg::Rsm => LightMap::Rsm { fov_deg: a.rsm_fov },
+            LightMapArg::Cube => LightMap::Cube,
+        },
         mis_weights: match a.mis_weights {
             MisWeightsArg::Consistent => MisWeights::Consistent,
             MisWeightsArg::Thesis => MisWeights::Thesis,
@@ -513,6 +534,7 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         ("device", gpu.name.clone()),
         ("gpu_ms", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())),
         ("dprsm_res", settings.dprsm_res.to_string()),
+        ("light_map", settings.light_map.name().to_string()),
         ("shadow_res", settings.shadow_res.to_string()),
         ("non_finite_pixels", bad_px.to_string()),
     ];

@@ -149,8 +149,11 @@ pub struct ImageDesc {
     pub name: String,
     pub width: u32,
     pub height: u32,
-    /// Array layers (1: a 2D image; more: a 2D array, viewed as one).
+    /// Array layers.
     pub layers: u32,
+    /// Viewed as a 2D array (set by [`ImageDesc::layers`], also for one layer: shaders that index
+    /// layers need an array view whatever the count); otherwise a plain 2D image.
+    pub array: bool,
     pub format: vk::Format,
     pub usage: vk::ImageUsageFlags,
 }
@@ -163,10 +166,11 @@ impl ImageDesc {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Self {
-        ImageDesc { name: name.into(), width, height, layers: 1, format, usage }
+        ImageDesc { name: name.into(), width, height, layers: 1, array: false, format, usage }
     }
     pub fn layers(mut self, layers: u32) -> Self {
         self.layers = layers;
+        self.array = true;
         self
     }
     pub fn is_depth(&self) -> bool {
@@ -195,7 +199,7 @@ pub fn texel_size(f: vk::Format) -> u64 {
 
 pub struct Image {
     pub raw: vk::Image,
-    /// The whole image: `TYPE_2D` for one layer, `TYPE_2D_ARRAY` for more; null when the usage takes no
+    /// The whole image: `TYPE_2D`, or `TYPE_2D_ARRAY` for array images; null when the usage takes no
     /// view (transfer only).
     pub view: vk::ImageView,
     pub desc: ImageDesc,
@@ -281,7 +285,7 @@ impl Image {
         }
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
-            .view_type(if desc.layers == 1 { vk::ImageViewType::TYPE_2D } else { vk::ImageViewType::TYPE_2D_ARRAY })
+            .view_type(if desc.array { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D })
             .format(desc.format)
             .subresource_range(image.full_range());
         image.view = unsafe { gpu.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;

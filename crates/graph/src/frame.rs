@@ -83,6 +83,54 @@ impl Visibility {
     }
 }
 
+/// The VPL map at each light (thesis §6.3; `glsl/shared/lightmap.glsl`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightMap {
+    /// Two paraboloid faces (the thesis's dual paraboloid RSM): every direction.
+    Dprsm,
+    /// One perspective face of this field of view (degrees) looking at the centre of the scene's
+    /// bounds; what lies outside is never a VPL (the flux it misses is reported).
+    Rsm { fov_deg: f32 },
+    /// Six perspective faces of 90°: every direction, three times the texels of `Dprsm` per res².
+    Cube,
+}
+
+impl LightMap {
+    /// Faces per light.
+    pub fn faces(self) -> u32 {
+        match self {
+            LightMap::Dprsm => 2,
+            LightMap::Rsm { .. } => 1,
+            LightMap::Cube => 6,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            LightMap::Dprsm => "dprsm",
+            LightMap::Rsm { .. } => "rsm",
+            LightMap::Cube => "cube",
+        }
+    }
+    /// tan(fov/2) of a perspective face.
+    fn tan_half_fov(self) -> f32 {
+        match self {
+            LightMap::Rsm { fov_deg } => (fov_deg.to_radians() / 2.0).tan(),
+            _ => 1.0,
+        }
+    }
+    /// The solid angle the faces cover around each light: 4π, or the RSM's square pyramid,
+    /// 4 asin(sin²(fov/2)) (Ω of a square pyramid of half-angle α is 4 asin(sin² α)).
+    pub fn solid_angle(self) -> f64 {
+        match self {
+            LightMap::Rsm { fov_deg } => {
+                let a = (fov_deg as f64).to_radians() / 2.0;
+                4.0 * (a.sin() * a.sin()).asin()
+            }
+            _ => 4.0 * std::f64::consts::PI,
+        }
+    }
+}
+
 /// Which MIS weights (`Method::Mis`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MisWeights {
@@ -132,6 +180,8 @@ pub struct FrameSettings {
     pub cdf_seed: Option<u64>,
     /// Resolution of each per-VPL paraboloid shadow map (`Visibility::Psm`).
     pub psm_res: u32,
+    /// The VPL map at each light (`--light-map`).
+    pub light_map: LightMap,
     /// Reflective DPRSM resolution per face (the VPLs: 2 × lights × res²).
     pub dprsm_res: u32,
     /// Voxels along the longest side of the scene bounds.
@@ -174,6 +224,7 @@ impl Default for FrameSettings {
             seed: 1,
             cdf_seed: None,
             psm_res: 256,
+            light_map: LightMap::Dprsm,
             dprsm_res: 512,
             voxels: 128,
             clamp: 0.0,
@@ -212,6 +263,11 @@ impl FrameSettings {
         }
         if self.vpls == 0 {
             bail!("the VPL count must be at least 1");
+        }
+        if let LightMap::Rsm { fov_deg } = self.light_map {
+            if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0) {
+                bail!("--rsm-fov must be in (0, 180) degrees (got {fov_deg})");
+            }
         }
         if self.visibility.shared_set() {
             if matches!(self.method, Method::All | Method::Mis) && self.component != Component::Direct {
@@ -309,8 +365,8 @@ pub struct FrameCache {
 /// shadow map. They depend on the lights (fixed for a `Renderer`) and the two map resolutions only, so
 /// a camera move keeps them: only the G-buffer, direct light, importance and CDF are redone.
 pub struct LightCache {
-    /// (dprsm_res, shadow_res).
-    key: (u32, u32),
+    /// [`light_key`].
+    key: (u32, u32, &'static str, u32),
     vpls: Vec<Persistent<Image>>,
     /// Kept when the frame computed direct light (the indirect component alone never renders it).
     shadow: Option<Persistent<Image>>,
@@ -396,7 +452,7 @@ pub fn build_frame<'a>(
     if !voxels_built {
         r.voxelize.add(g, f, &mut voxels);
     }
-    let rows = 2 * f.scene.light_count * f.dprsm_res;
+    let rows = f.vpl_faces * f.scene.light_count * f.dprsm_res;
     // The light side: imported when the lights' maps are cached, else rendered (and handed back).
     let mut fresh_light = None;
     let (vpls, shadow) = match light {
@@ -511,6 +567,11 @@ fn radiance_desc(name: &str, w: u32, h: u32) -> ImageDesc {
     )
 }
 
+/// What the light-side products depend on besides the lights: the map resolutions and the VPL map.
+fn light_key(s: &FrameSettings) -> (u32, u32, &'static str, u32) {
+    (s.dprsm_res, s.shadow_res, s.light_map.name(), s.light_map.tan_half_fov().to_bits())
+}
+
 /// Fold a 64-bit seed into the shader's 32-bit one.
 fn seed32(seed: u64) -> u32 {
     (seed ^ (seed >> 32)) as u32
@@ -558,7 +619,7 @@ impl Renderer {
         let dims = self.voxel_spec(s).dims;
         // Sampling adds loops over the CDF sections and, with uniform face choice, over the faces.
         let sections = 1 + self.importance_params(s).kind.method_sections();
-        let faces = 2 * self.scene.light_count;
+        let faces = s.light_map.faces() * self.scene.light_count;
         let march = match (s.visibility, self.bvh.get()) {
             (v, Some(b)) if v.uses_bvh() => b.max_iterations_per_ray(),
             _ => dims.x + dims.y + dims.z + 3,
@@ -653,7 +714,7 @@ impl Renderer {
         // Paraboloid far: no light-to-surface distance exceeds the diagonal of bounds that hold both.
         let far_light = diag * 1.01;
         let (voxel_origin, voxel_dims) = self.voxel_spec(s).uniforms_fields();
-        let vpl_slots = 2 * self.scene.light_count * s.dprsm_res * s.dprsm_res;
+        let vpl_slots = s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res;
         FrameUniforms {
             // near and far swapped: reverse Z (see passes/gbuffer.rs).
             view_proj: self.camera.view_proj(s.width, s.height, far_cam, near).to_cols_array_2d(),
@@ -662,6 +723,16 @@ impl Renderer {
             scene_max: [hi.x, hi.y, hi.z, far_light],
             size: [s.width, s.height, self.scene.light_count, s.dprsm_res],
             maps: [s.shadow_res, vpl_slots, s.psm_res, s.vpls],
+            light_map: [
+                match s.light_map {
+                    LightMap::Dprsm => crate::bindings::LIGHT_MAP_DPRSM,
+                    LightMap::Rsm { .. } => crate::bindings::LIGHT_MAP_RSM,
+                    LightMap::Cube => crate::bindings::LIGHT_MAP_CUBE,
+                },
+                s.light_map.faces(),
+                s.light_map.tan_half_fov().to_bits(),
+                0,
+            ],
             shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
             voxel_origin,
             voxel_dims,
@@ -678,6 +749,7 @@ impl Renderer {
             height: s.height,
             shadow_res: s.shadow_res,
             dprsm_res: s.dprsm_res,
+            vpl_faces: s.light_map.faces(),
             vpls_per_dispatch: self.vpls_per_dispatch(s),
         }
     }
@@ -707,7 +779,7 @@ impl Renderer {
 
     /// Memory the reflective DPRSM takes: 3 RGBA32F images + depth, plus importance and CDF.
     pub fn dprsm_bytes(&self, s: &FrameSettings) -> u64 {
-        2 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2) * (3 * 16 + 4 + 4 + 4)
+        s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2) * (3 * 16 + 4 + 4 + 4)
     }
 
     /// Reject settings this device or scene cannot run (bad input, not a runtime failure).
@@ -720,7 +792,7 @@ impl Renderer {
         ] {
             if bytes > MAX_MAP_BYTES {
                 bail!(
-                    "the {what} would take {} MiB ({} lights × 2 faces); lower {flag} (limit {} MiB)",
+                    "the {what} would take {} MiB ({} lights); lower {flag} (limit {} MiB)",
                     bytes >> 20,
                     self.scene.light_count,
                     MAX_MAP_BYTES >> 20
@@ -729,8 +801,8 @@ impl Renderer {
         }
         let max_range = self.gpu.limits().max_storage_buffer_range as u64;
         let cdf_bytes = 4
-            * (2 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2)
-                + 2 * self.scene.light_count as u64 * s.dprsm_res as u64
+            * (s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2)
+                + s.light_map.faces() as u64 * self.scene.light_count as u64 * s.dprsm_res as u64
                 + 4);
         if cdf_bytes > max_range {
             bail!("the CDF would take {cdf_bytes} bytes, over the device limit maxStorageBufferRange ({max_range}); lower --dprsm-res");
@@ -776,7 +848,7 @@ impl Renderer {
         let light_guard = self.light_cache.borrow();
         let light_hit = light_guard
             .as_ref()
-            .filter(|l| cacheable && l.key == (s.dprsm_res, s.shadow_res) && (l.shadow.is_some() || !needs_shadow));
+            .filter(|l| cacheable && l.key == light_key(s) && (l.shadow.is_some() || !needs_shadow));
         let cache_guard = self.frame_cache.borrow();
         let hit = cache_guard.as_ref().filter(|c| cacheable && c.key == key && light_hit.is_some());
         let mut g = Graph::new(&self.gpu);
@@ -817,6 +889,15 @@ impl Renderer {
         let mut ran = done.ran.clone();
         let skipped = done.skipped.clone();
         let mut warnings = vec![];
+        if let LightMap::Rsm { fov_deg } = s.light_map {
+            let omega = s.light_map.solid_angle();
+            let missing = 1.0 - omega / (4.0 * std::f64::consts::PI);
+            warnings.push(format!(
+                "rsm ({fov_deg}° field of view): the map covers {omega:.3} sr around each light, so {:.1} % of each light's emitted flux (I · (4π − Ω) = {:.3} W per W/sr) reaches no VPL",
+                100.0 * missing,
+                4.0 * std::f64::consts::PI - omega
+            ));
+        }
         let mut new_cache = None;
         let mut new_light = None;
         let method_sections = self.importance_params(s).kind.method_sections();
@@ -824,7 +905,9 @@ impl Renderer {
             if s.component != Component::Direct && method_sections > 0 {
                 // Only the section headers are needed, but a whole readback is cheap next to a frame.
                 let cdf: Vec<f32> = bytemuck::pod_collect_to_vec(&done.read_buffer(&h.gather_inputs.cdf)?);
-                let len = CdfReduce::section_len(2 * self.scene.light_count * s.dprsm_res, s.dprsm_res) as usize;
+                let len =
+                    CdfReduce::section_len(s.light_map.faces() * self.scene.light_count * s.dprsm_res, s.dprsm_res)
+                        as usize;
                 let live =
                     (1..=method_sections as usize).filter(|k| cdf.get(k * len).is_some_and(|t| *t > 0.0)).count();
                 if live == 0 {
@@ -839,7 +922,7 @@ impl Renderer {
                 let (v, d) = h.fresh_light.expect("checked");
                 let vpls = [v.position, v.normal, v.flux].iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
                 let shadow = if needs_shadow { Some(done.take_image(&d.depth)?) } else { None };
-                new_light = Some(LightCache { key: (s.dprsm_res, s.shadow_res), vpls, shadow });
+                new_light = Some(LightCache { key: light_key(s), vpls, shadow });
             }
             if keep_products {
                 let i = h.gather_inputs;
@@ -862,7 +945,7 @@ impl Renderer {
             let cdf = done.take_buffer(&i.cdf)?;
             drop(done);
             let out = Persistent::new(Image::new(&self.gpu, &radiance_desc("gather.radiance", s.width, s.height))?);
-            let total = 2 * self.scene.light_count * s.dprsm_res * s.dprsm_res;
+            let total = s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res;
             let mut first = 0u32;
             loop {
                 let last = first.saturating_add(s.all_tile).min(total);

@@ -78,8 +78,10 @@ pub struct FrameUniforms {
     pub shadow: [f32; 4],
     pub voxel_origin: [f32; 4],
     pub voxel_dims: [u32; 4],
+    /// The VPL map kind (`LIGHT_MAP_*`), faces per light, tan(fov/2) bits (perspective faces), unused.
+    pub light_map: [u32; 4],
 }
-const _: () = assert!(size_of::<FrameUniforms>() == 192);
+const _: () = assert!(size_of::<FrameUniforms>() == 208);
 const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 160);
 const _: () = assert!(offset_of!(FrameUniforms, eye) == 64);
 const _: () = assert!(offset_of!(FrameUniforms, size) == 112);

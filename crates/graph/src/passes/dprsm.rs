@@ -78,7 +78,7 @@ impl Dprsm {
                     depth_format: Some(DPRSM_DEPTH_FORMAT),
                     depth_compare: vk::CompareOp::LESS,
                     bindings: &scene_bindings(),
-                    push_constant_size: 4,
+                    push_constant_size: 8,
                     spec: &spec,
                 },
             )?)
@@ -109,15 +109,26 @@ impl Dprsm {
         let layers = 2 * f.scene.light_count;
         let mut out = DprsmDepth { depth: Self::depth_image(g, "dprsm_depth.depth", f.shadow_res, layers) };
         let o = out;
-        g.add_pass("dprsm_depth")
-            .overwrite(&mut out.depth, Access::DepthAttachment)
-            .record(move |ctx| self.record(ctx, &self.depth_only, f, f.shadow_res, &[], &o.depth));
+        g.add_pass("dprsm_depth").overwrite(&mut out.depth, Access::DepthAttachment).record(move |ctx| {
+            let layers = 2 * f.scene.light_count;
+            record_paraboloid(
+                ctx,
+                &self.depth_only,
+                f,
+                f.scene.writes(f.uniforms),
+                f.shadow_res,
+                layers,
+                false,
+                &[],
+                &o.depth,
+            )
+        });
         out
     }
 
     /// The reflective DPRSM (`dprsm_res` per face).
     pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>) -> DprsmOut {
-        let layers = 2 * f.scene.light_count;
+        let layers = f.vpl_faces * f.scene.light_count;
         let res = f.dprsm_res;
         let color = |g: &mut Graph<'a>, name: &str| {
             g.create_image(
@@ -147,28 +158,17 @@ impl Dprsm {
             .overwrite(&mut depth, Access::DepthAttachment)
             .record(move |ctx| {
                 let colors = [o.position, o.normal, o.flux].map(|h| ctx.image(&h).view);
-                self.record(ctx, &self.reflective, f, res, &colors, &d)
+                let writes = f.scene.writes(f.uniforms);
+                record_paraboloid(ctx, &self.reflective, f, writes, res, layers, true, &colors, &d)
             });
         out
     }
-
-    fn record(
-        &self,
-        ctx: &crate::graph::PassContext,
-        pipeline: &GraphicsPipeline,
-        f: FrameInputs,
-        res: u32,
-        colors: &[vk::ImageView],
-        depth: &Handle<Image>,
-    ) {
-        let layers = 2 * f.scene.light_count;
-        record_paraboloid(ctx, pipeline, f, f.scene.writes(f.uniforms), res, layers, colors, depth);
-    }
 }
 
-/// Records one layered paraboloid rendering: `layers` instances of every scene triangle, instance k into
+/// Records one layered map rendering: `layers` instances of every scene triangle, instance k into
 /// layer k (the geometry shader picks the viewpoint: a light's face here, a VPL in `psm.rs`), cleared
-/// to far depth and zero colour first.
+/// to far depth and zero colour first. `light_map`: the faces follow `--light-map` (the reflective
+/// map); otherwise they are paraboloid pairs (shadow maps).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn record_paraboloid(
     ctx: &crate::graph::PassContext,
@@ -177,6 +177,7 @@ pub(crate) fn record_paraboloid(
     writes: bounce_device::DescriptorWrites,
     res: u32,
     layers: u32,
+    light_map: bool,
     colors: &[vk::ImageView],
     depth: &Handle<Image>,
 ) {
@@ -208,7 +209,8 @@ pub(crate) fn record_paraboloid(
     unsafe {
         d.cmd_begin_rendering(ctx.cmd, &info);
         if f.scene.triangle_count > 0 {
-            pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&res));
+            let push = [res, light_map as u32];
+            pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&push));
             d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
         }
         d.cmd_end_rendering(ctx.cmd);

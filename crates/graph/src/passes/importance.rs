@@ -111,7 +111,7 @@ impl Importance {
 
     /// Number of texels (VPL slots) of the reflective DPRSM.
     pub fn texel_count(f: &FrameInputs) -> u64 {
-        2 * f.scene.light_count as u64 * (f.dprsm_res as u64).pow(2)
+        f.vpl_faces as u64 * f.scene.light_count as u64 * (f.dprsm_res as u64).pow(2)
     }
 
     pub fn add<'a>(
@@ -155,7 +155,7 @@ impl Importance {
                 super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&gb.position, &gb.normal, &gb.albedo], s);
             let mut writes = super::vpl_writes(writes, ctx, [&vpls.position, &vpls.normal, &vpls.flux], s)
                 .storage_buffer(B_IMPORTANCE, ctx.buffer(&out));
-            let layers = 2 * f.scene.light_count;
+            let layers = f.vpl_faces * f.scene.light_count;
             let res = f.dprsm_res;
             let push = |mode, section| ImportancePush {
                 mode,

@@ -26,6 +26,8 @@ pub struct FrameInputs<'a> {
     pub shadow_res: u32,
     /// Resolution per face of the reflective DPRSM (the VPLs).
     pub dprsm_res: u32,
+    /// Faces of each light's VPL map (`--light-map`: 2 dprsm, 1 rsm, 6 cube).
+    pub vpl_faces: u32,
     /// The scene's BVH when the gather tests visibility with exact shadow rays (`--visibility exact`);
     /// `None`: the voxel march.
     pub bvh: Option<&'a crate::bvh::GpuBvh>,

@@ -74,7 +74,7 @@ impl Psm {
                 depth_format: Some(super::dprsm::DPRSM_DEPTH_FORMAT),
                 depth_compare: vk::CompareOp::LESS,
                 bindings: &map_bindings,
-                push_constant_size: 4,
+                push_constant_size: 8,
                 spec: &[],
             },
         )?;
@@ -123,7 +123,7 @@ impl Psm {
         g.add_pass("psm").read(&views, Access::ShaderRead).overwrite(&mut depth, Access::DepthAttachment).record(
             move |ctx| {
                 let writes = f.scene.writes(f.uniforms).storage_buffer(B_PSM_VIEWS, ctx.buffer(&vh));
-                record_paraboloid(ctx, &self.maps, f, writes, res, n, &[], &dh);
+                record_paraboloid(ctx, &self.maps, f, writes, res, n, false, &[], &dh);
             },
         );
         PsmOut { views, depth }
