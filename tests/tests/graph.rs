@@ -140,8 +140,13 @@ fn an_unchanged_frame_records_only_the_gather() {
     assert!(gbg2.ran.contains(&"importance"), "gbg's importance depends on the seed: {:?}", gbg2.ran);
     let bigger = r.render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
     assert!(bigger.ran.contains(&"gbuffer"));
-    // A resize keeps the light side: the paraboloid maps depend on the lights and their resolutions.
-    assert!(!bigger.ran.contains(&"dprsm") && !bigger.ran.contains(&"dprsm_depth"), "{:?}", bigger.ran);
+    // A resize keeps the light side: the paraboloid maps depend on the lights and their resolutions,
+    // and so does `uniform`'s importance and CDF (the VPLs' validity): no importance pass, no scan.
+    for pass in ["dprsm", "dprsm_depth", "importance", "cdf_reduce"] {
+        assert!(!bigger.ran.contains(&pass), "a resize redid {pass}: {:?}", bigger.ran);
+    }
+    let fresh = Renderer::new(&gpu, &scene).unwrap().render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
+    assert_eq!(fresh.radiance, bigger.radiance, "the kept validity CDF changed the image");
 }
 
 /// A camera move (the viewer's fly camera) re-records what the camera feeds (G-buffer, direct light,

@@ -356,8 +356,9 @@ pub struct FrameCache {
     key: CacheKey,
     /// G-buffer position, normal, albedo; then the direct image if combined.
     images: Vec<Persistent<Image>>,
-    importance: Persistent<Buffer>,
-    cdf: Persistent<Buffer>,
+    /// `None` for `uniform`, whose importance and CDF (the VPLs' validity) live in the light cache.
+    importance: Option<Persistent<Buffer>>,
+    cdf: Option<Persistent<Buffer>>,
     sections: u32,
 }
 
@@ -370,6 +371,9 @@ pub struct LightCache {
     vpls: Vec<Persistent<Image>>,
     /// Kept when the frame computed direct light (the indirect component alone never renders it).
     shadow: Option<Persistent<Image>>,
+    /// `uniform`'s importance and CDF: the VPLs' validity, which depends on the maps alone, so a camera
+    /// move does not redo them (once a uniform frame has made them).
+    uniform: Option<(Persistent<Buffer>, Persistent<Buffer>)>,
 }
 
 /// The voxel grid of the scene: built once per grid size, reused by every frame and method.
@@ -434,6 +438,8 @@ pub struct FrameHandles {
     pub out: Option<Handle<Image>>,
     /// The VPL maps and shadow map when this graph renders them (not imported from a [`LightCache`]).
     pub fresh_light: Option<(DprsmOut, DprsmDepth)>,
+    /// `uniform`'s importance and CDF were computed by this graph (not imported from the light cache).
+    pub fresh_uniform: bool,
     pub direct: Handle<Image>,
     pub gather_inputs: GatherInputs,
 }
@@ -471,6 +477,9 @@ pub fn build_frame<'a>(
             (v, Some(d))
         }
     };
+    let uniform_kind = r.importance_params(s).kind == ImportanceKind::Uniform;
+    let cached_uniform = if uniform_kind { light.and_then(|l| l.uniform.as_ref()) } else { None };
+    let mut fresh_uniform = false;
     let (gather_inputs, direct, imp) = match cached {
         // Nothing these passes read has changed since the cached frame: import their results instead.
         Some(c) => {
@@ -483,8 +492,16 @@ pub fn build_frame<'a>(
                 vpl_normal: vpls.normal,
                 vpl_flux: vpls.flux,
                 voxels,
-                importance: g.import_buffer(&c.importance),
-                cdf: g.import_buffer(&c.cdf),
+                importance: match (&c.importance, cached_uniform) {
+                    (Some(i), _) => g.import_buffer(i),
+                    (None, Some((i, _))) => g.import_buffer(i),
+                    (None, None) => unreachable!("a uniform frame cache hit needs the light cache's CDF"),
+                },
+                cdf: match (&c.cdf, cached_uniform) {
+                    (Some(x), _) => g.import_buffer(x),
+                    (None, Some((_, x))) => g.import_buffer(x),
+                    (None, None) => unreachable!("a uniform frame cache hit needs the light cache's CDF"),
+                },
                 direct: im.get(3).copied(),
                 psm: None,
             };
@@ -497,8 +514,15 @@ pub fn build_frame<'a>(
             // needs it is then unread too and culled with it.
             let shadow = shadow.unwrap_or_else(|| r.dprsm.add_depth(g, f));
             let direct = r.direct.add(g, f, &gbuffer, &shadow);
-            let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, r.importance_params(s));
-            let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
+            let (imp, cdf) = match cached_uniform {
+                Some((i, c)) => (ImportanceOut { importance: g.import_buffer(i), sections: 1 }, g.import_buffer(c)),
+                None => {
+                    fresh_uniform = uniform_kind;
+                    let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, r.importance_params(s));
+                    let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
+                    (imp, cdf)
+                }
+            };
             let inputs = GatherInputs::new(
                 &gbuffer,
                 &vpls,
@@ -554,7 +578,7 @@ pub fn build_frame<'a>(
             Some(out)
         }
     };
-    FrameHandles { out, fresh_light, direct, gather_inputs }
+    FrameHandles { out, fresh_light, fresh_uniform, direct, gather_inputs }
 }
 
 fn radiance_desc(name: &str, w: u32, h: u32) -> ImageDesc {
@@ -850,16 +874,22 @@ impl Renderer {
             .as_ref()
             .filter(|l| cacheable && l.key == light_key(s) && (l.shadow.is_some() || !needs_shadow));
         let cache_guard = self.frame_cache.borrow();
-        let hit = cache_guard.as_ref().filter(|c| cacheable && c.key == key && light_hit.is_some());
+        let uniform_kind = self.importance_params(s).kind == ImportanceKind::Uniform;
+        let hit = cache_guard
+            .as_ref()
+            .filter(|c| cacheable && c.key == key && light_hit.is_some_and(|l| !uniform_kind || l.uniform.is_some()));
         let mut g = Graph::new(&self.gpu);
         let voxels = g.import_buffer(&vox.buffer);
         let h = build_frame(self, &mut g, f, s, voxels, vox.built, hit, light_hit);
         let keep_products = cacheable && hit.is_none();
         let keep_light = cacheable && h.fresh_light.is_some();
+        let keep_uniform = cacheable && h.fresh_uniform;
         if keep_products {
             for img in h.gather_inputs.camera_images() {
                 g.export(&img);
             }
+        }
+        if (keep_products && !uniform_kind) || keep_uniform {
             g.export(&h.gather_inputs.importance);
             g.export(&h.gather_inputs.cdf);
         }
@@ -900,6 +930,7 @@ impl Renderer {
         }
         let mut new_cache = None;
         let mut new_light = None;
+        let mut new_uniform = None;
         let method_sections = self.importance_params(s).kind.method_sections();
         let radiance_bytes = if let Some(out) = &h.out {
             if s.component != Component::Direct && method_sections > 0 {
@@ -922,19 +953,23 @@ impl Renderer {
                 let (v, d) = h.fresh_light.expect("checked");
                 let vpls = [v.position, v.normal, v.flux].iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
                 let shadow = if needs_shadow { Some(done.take_image(&d.depth)?) } else { None };
-                new_light = Some(LightCache { key: light_key(s), vpls, shadow });
+                new_light = Some(LightCache { key: light_key(s), vpls, shadow, uniform: None });
+            }
+            if keep_uniform {
+                let i = &h.gather_inputs;
+                new_uniform = Some((done.take_buffer(&i.importance)?, done.take_buffer(&i.cdf)?));
             }
             if keep_products {
                 let i = h.gather_inputs;
                 let images: Vec<Persistent<Image>> =
                     i.camera_images().iter().map(|x| done.take_image(x)).collect::<Result<_>>()?;
-                new_cache = Some(FrameCache {
-                    key: key.clone(),
-                    images,
-                    importance: done.take_buffer(&i.importance)?,
-                    cdf: done.take_buffer(&i.cdf)?,
-                    sections: method_sections + 1,
-                });
+                let (importance, cdf) = if uniform_kind {
+                    (None, None)
+                } else {
+                    (Some(done.take_buffer(&i.importance)?), Some(done.take_buffer(&i.cdf)?))
+                };
+                new_cache =
+                    Some(FrameCache { key: key.clone(), images, importance, cdf, sections: method_sections + 1 });
             }
             bytes
         } else {
@@ -993,6 +1028,11 @@ impl Renderer {
         drop(light_guard);
         if new_light.is_some() {
             *self.light_cache.borrow_mut() = new_light;
+        }
+        if new_uniform.is_some() {
+            if let Some(l) = self.light_cache.borrow_mut().as_mut() {
+                l.uniform = new_uniform;
+            }
         }
         if voxelized {
             self.voxel_state.borrow_mut().as_mut().expect("grid exists").built = true;
