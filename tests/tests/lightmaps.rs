@@ -109,3 +109,55 @@ fn the_three_light_maps_converge_to_the_same_image() {
         assert_eq!(missing, matches!(map, LightMap::Rsm { .. }), "{:?}", f.warnings);
     }
 }
+
+/// Every method runs on every light map, and every sampled method but mis under per-VPL shadow maps:
+/// finite images, no validation message (the TestGpu), on the Cornell box at 16².
+#[test]
+fn every_method_runs_on_every_light_map_and_psm() {
+    use bounce_graph::frame::Visibility;
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let methods = [
+        Method::Uniform,
+        Method::All,
+        Method::Global,
+        Method::Stratified,
+        Method::Local,
+        Method::Gbg,
+        Method::Mis,
+        Method::Reference,
+    ];
+    let mut runs = 0;
+    for map in [LightMap::Dprsm, LightMap::Rsm { fov_deg: 90.0 }, LightMap::Cube] {
+        for visibility in [Visibility::Voxel, Visibility::Psm] {
+            for &method in &methods {
+                if visibility == Visibility::Psm && matches!(method, Method::All | Method::Mis | Method::Reference) {
+                    continue;
+                }
+                let s = FrameSettings {
+                    width: 16,
+                    height: 16,
+                    component: Component::Combined,
+                    method,
+                    visibility,
+                    light_map: map,
+                    vpls: 8,
+                    spp: 8,
+                    dprsm_res: 16,
+                    psm_res: 32,
+                    shadow_res: 64,
+                    voxels: 16,
+                    ..FrameSettings::default()
+                };
+                let f = r.render(&s).unwrap_or_else(|e| panic!("{map:?} {visibility:?} {method:?}: {e:#}"));
+                assert!(
+                    f.radiance.iter().all(|p| p.iter().all(|c| c.is_finite())),
+                    "{map:?} {visibility:?} {method:?}: non-finite"
+                );
+                runs += 1;
+            }
+        }
+    }
+    assert_eq!(runs, 3 * (8 + 5));
+}
