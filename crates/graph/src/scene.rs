@@ -487,13 +487,15 @@ impl Scene {
 
     /// One line for the log: file, triangle count, materials, textures, bounds, lights, load time.
     pub fn summary(&self) -> String {
-        let (lo, hi) = (self.bounds_min, self.bounds_max);
+        // World bounds (the stored ones are local to `origin`).
+        let (lo, hi) = (self.bounds_min.as_dvec3() + self.origin, self.bounds_max.as_dvec3() + self.origin);
         let mut s = format!("{}: {} triangles", self.path.display(), self.triangle_count());
         if self.stats.degenerate_triangles > 0 {
             let _ = write!(s, " ({} degenerate)", self.stats.degenerate_triangles);
         }
         if self.origin != DVec3::ZERO {
-            let o = self.origin;
+            // Rounded to 1e-6 for the log (the f64 value itself is exact).
+            let o = (self.origin * 1e6).round() / 1e6;
             let _ = write!(s, ", local origin at [{}, {}, {}]", o.x, o.y, o.z);
         }
         let _ = write!(
