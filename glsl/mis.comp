@@ -52,6 +52,21 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 #include "shared/sampling.glsl"
 #include "shared/gathering.glsl"
 
+#ifdef PSM_VISIBILITY
+// `--visibility psm` (mis.psm.comp): the n_c CDF samples are the frame's shared set (psm.comp: draws
+// from the same mixture P_v, shared by all pixels) and see through their shadow maps; the gathering
+// samples are per pixel and keep the voxel march. The estimate is then unbiased for the VPL sum with the
+// blended visibility w_c·V_psm + w_g·V_voxel (both approximate the true one within their bias bands).
+// PSM_EXACT (mis.psm_exact.comp): the shared set with exact rays for both strategies, unbiased with
+// respect to `all` with exact visibility.
+layout(std430, set = 0, binding = B_PSM_VIEWS) readonly buffer PsmViews { PsmView psm_views[]; };
+#ifndef PSM_EXACT
+#define PSM_LOOKUP
+layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
+#endif
+#include "shared/psm.glsl"
+#endif
+
 // Q_v: centre, unit normal, two unit tangents and the side √A_v.
 struct Patch {
     vec3 c, n, t1, t2;
@@ -166,10 +181,22 @@ void main() {
         for (uint k = pc.first; k < pc.last; k++) {
             if (k < pc.samples) {
                 uint rng = pcg_hash(base ^ pcg_hash(k + 0x9E3779B9u));
+#ifdef PSM_VISIBILITY
+                PsmView sv = psm_views[k];
+                float p_v = sv.normal_p.w;
+                if (!(p_v > 0.0)) continue;
+                uint v = floatBitsToUint(sv.position_v.w);
+#ifdef PSM_EXACT
+                vec3 c = contribution(x, nx, ax, v);
+#else
+                vec3 c = vpl_unshadowed(x, nx, ax, vpl_fetch(v), pc.clamp_d2) * psm_visible(k, x, nx);
+#endif
+#else
                 float p_v;
                 uint v = draw_vpl(rng, p_v);
                 if (!(p_v > 0.0)) continue;
                 vec3 c = contribution(x, nx, ax, v);
+#endif
                 if (c == vec3(0.0)) continue;
                 Vpl vpl = vpl_fetch(v);
                 if (thesis) {

@@ -270,11 +270,8 @@ impl FrameSettings {
             }
         }
         if self.visibility.shared_set() {
-            if matches!(self.method, Method::All | Method::Mis) && self.component != Component::Direct {
-                bail!(
-                    "--visibility psm needs a sampled method whose samples can be shared by all pixels (not {})",
-                    self.method.name()
-                );
+            if self.method == Method::All && self.component != Component::Direct {
+                bail!("--visibility psm needs a sampled method (`all` would need a shadow map per VPL slot)");
             }
             if self.psm_res == 0 || self.psm_res > max {
                 bail!("--psm-res must be between 1 and maxImageDimension2D ({max}) (got {})", self.psm_res);
@@ -566,7 +563,14 @@ pub fn build_frame<'a>(
                     last: s.vpls + s.gather_rays,
                     ..push
                 };
-                r.mis.add(g, f, &gather_inputs, &mut out, push);
+                if s.visibility.shared_set() {
+                    // The CDF samples are the shared set (passes/psm.rs); the gathering rays stay per pixel.
+                    let psm = r.psm.add(g, f, &vpls, gather_inputs.importance, gather_inputs.cdf, s.psm_res, push);
+                    let inputs = GatherInputs { psm: Some(psm), ..gather_inputs };
+                    r.mis.add(g, f, &inputs, &mut out, push);
+                } else {
+                    r.mis.add(g, f, &gather_inputs, &mut out, push);
+                }
             } else if s.visibility.shared_set() {
                 // One shared VPL set (and its shadow maps) for every pixel: passes/psm.rs.
                 let psm = r.psm.add(g, f, &vpls, gather_inputs.importance, gather_inputs.cdf, s.psm_res, push);

@@ -99,17 +99,26 @@ impl GatherInputs {
 
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
-        let mut g = Self::with_shaders(gpu, "gather", shaders::GATHER_COMP, shaders::GATHER_EXACT_COMP)?;
+        Self::with_shaders(gpu, "gather", shaders::GATHER_COMP, shaders::GATHER_EXACT_COMP)?.with_psm(
+            gpu,
+            shaders::GATHER_PSM_COMP,
+            shaders::GATHER_PSM_EXACT_COMP,
+        )
+    }
+
+    /// Adds the `--visibility psm` and `psm-exact` variants (the frame's shared VPL set, with its shadow
+    /// maps or with exact rays).
+    pub fn with_psm(mut self, gpu: &Gpu, psm: &[u8], psm_exact: &[u8]) -> Result<Self> {
         let (bindings, push) = Self::bindings();
         let mut b = bindings.clone();
         b.extend(crate::passes::psm::gather_bindings(true));
-        let psm = ComputePipeline::new(gpu, "gather", &crate::spirv(shaders::GATHER_PSM_COMP), &b, push, &[])?;
+        let maps = ComputePipeline::new(gpu, self.name, &crate::spirv(psm), &b, push, &[])?;
         let mut b = bindings;
         b.extend(crate::passes::psm::gather_bindings(false));
         b.extend(crate::bvh::GpuBvh::bindings());
-        let exact = ComputePipeline::new(gpu, "gather", &crate::spirv(shaders::GATHER_PSM_EXACT_COMP), &b, push, &[])?;
-        g.psm = Some((psm, exact));
-        Ok(g)
+        let exact = ComputePipeline::new(gpu, self.name, &crate::spirv(psm_exact), &b, push, &[])?;
+        self.psm = Some((maps, exact));
+        Ok(self)
     }
 
     fn bindings() -> (Vec<Binding>, u32) {
@@ -194,7 +203,7 @@ impl Gather {
                         s,
                     ),
                 ),
-                (Some(_), None, _) => unreachable!("{}: psm visibility is a gather variant only", self.name),
+                (Some(_), None, _) => unreachable!("{}: built without its psm variants", self.name),
                 (None, _, Some(bvh)) => (&self.exact, bvh.writes(writes)),
                 (None, _, None) => (&self.pipeline, writes),
             };

@@ -19,5 +19,9 @@ use bounce_device::Gpu;
 
 /// The `mis` pass: the gather's recording with `glsl/mis.comp`.
 pub fn create(gpu: &Gpu) -> Result<Gather> {
-    Gather::with_shaders(gpu, "mis", shaders::MIS_COMP, shaders::MIS_EXACT_COMP)
+    Gather::with_shaders(gpu, "mis", shaders::MIS_COMP, shaders::MIS_EXACT_COMP)?.with_psm(
+        gpu,
+        shaders::MIS_PSM_COMP,
+        shaders::MIS_PSM_EXACT_COMP,
+    )
 }

@@ -12,7 +12,9 @@
 //! the structured noise of the thesis's Fig. 6.1). V_psm compares x's distance with the map's texel
 //! along x's direction, with the direct light's bias (`glsl/shared/psm.glsl`); `--visibility
 //! psm-exact` uses the same shared set with exact shadow rays, so that the maps' own error can be
-//! measured on identical VPLs.
+//! measured on identical VPLs. Under `mis` the shared set is its CDF strategy's samples, and its
+//! gathering rays keep their own (voxel or exact) visibility: `glsl/mis.comp` states what that blend
+//! estimates.
 //!
 //! Memory: N layers of `--psm-res`² f32 depth (N · res² · 4 bytes: 64 maps at 256² are 16 MiB), bounded
 //! by [`MAX_PSM_BYTES`] and the device's array-layer limit, reported by `bounce render --timings`.
