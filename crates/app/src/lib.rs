@@ -553,6 +553,17 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         }
         let total = gpu_ms.map(|m| format!("{m:10.3}")).unwrap_or_else(|| format!("{:>10}", "n/a"));
         writeln!(out, "{:<12} {total}", "total")?;
+        if settings.visibility.shared_set() && settings.component != Component::Direct {
+            let bytes = bounce_graph::passes::psm::Psm::bytes(settings.vpls, settings.psm_res);
+            writeln!(
+                out,
+                "psm maps: {} × {}² depth = {:.1} MiB (bound {} MiB)",
+                settings.vpls,
+                settings.psm_res,
+                bytes as f64 / 1048576.0,
+                bounce_graph::passes::psm::MAX_PSM_BYTES >> 20
+            )?;
+        }
         writeln!(out, "wall {wall:.3} s on {}", gpu.name)?;
     }
     writeln!(

@@ -307,6 +307,8 @@ impl Viewer<'_> {
         let t0 = Instant::now();
         let f = st.renderer.render(&s)?;
         let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
+        // Reported, not hidden: a non-finite pixel is a bug to see.
+        let non_finite = f.radiance.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count();
         if st.frames == 0 {
             st.full_passes = f.ran.clone();
         }
@@ -331,16 +333,22 @@ impl Viewer<'_> {
         passes.sort_by(|a, b| b.1.total_cmp(&a.1));
         let shown: Vec<String> = passes.iter().take(4).map(|(n, ms)| format!("{n} {ms:.1}")).collect();
         let reused: Vec<&str> = st.full_passes.iter().copied().filter(|p| !f.ran.contains(p)).collect();
-        st.window.set_title(&format!(
-            "bounce view — {} · {} VPLs · {} · {} frame{} · {frame_ms:.0} ms · GPU ms: {}{}",
+        let mut title = format!(
+            "bounce view — {} · {} VPLs · {} · {} frame{} · {frame_ms:.0} ms · GPU ms: {}",
             s.method.name(),
             s.vpls,
             s.component.name(),
             st.frames,
             if st.frames == 1 { "" } else { "s" },
             shown.join(", "),
-            if reused.is_empty() { String::new() } else { format!(" · reused: {}", reused.join(" ")) }
-        ));
+        );
+        if !reused.is_empty() {
+            title += &format!(" · reused: {}", reused.join(" "));
+        }
+        if non_finite > 0 {
+            title += &format!(" · {non_finite} NON-FINITE px");
+        }
+        st.window.set_title(&title);
         if let (Some(n), Some(path)) = (self.args.frames, &self.args.screenshot) {
             if st.frames >= n {
                 let path = path.clone();
