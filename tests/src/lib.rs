@@ -143,3 +143,18 @@ impl Rng {
         t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v
     }
 }
+
+/// The 12 triangles of the closed axis-aligned box of half-size `half` around `center` (the sealed
+/// light and camera scenes), each face's two triangles wound alike.
+pub fn closed_box(center: glam::Vec3, half: f32) -> Vec<[glam::Vec3; 3]> {
+    let v = |x: f32, y: f32, z: f32| center + glam::Vec3::new(x, y, z) * half;
+    let faces = [
+        [v(-1., -1., -1.), v(1., -1., -1.), v(1., -1., 1.), v(-1., -1., 1.)],
+        [v(-1., 1., -1.), v(-1., 1., 1.), v(1., 1., 1.), v(1., 1., -1.)],
+        [v(-1., -1., -1.), v(-1., 1., -1.), v(1., 1., -1.), v(1., -1., -1.)],
+        [v(-1., -1., 1.), v(1., -1., 1.), v(1., 1., 1.), v(-1., 1., 1.)],
+        [v(-1., -1., -1.), v(-1., -1., 1.), v(-1., 1., 1.), v(-1., 1., -1.)],
+        [v(1., -1., -1.), v(1., 1., -1.), v(1., 1., 1.), v(1., -1., 1.)],
+    ];
+    faces.iter().flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]]).collect()
+}

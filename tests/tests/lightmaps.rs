@@ -20,18 +20,7 @@ fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> [[Vec3; 3]; 2] {
 #[test]
 fn texel_solid_angles_cover_each_map() {
     let c = Vec3::new(0.0, 1.0, 0.0);
-    let v = |x: f32, y: f32, z: f32| c + Vec3::new(x, y, z) * 0.5;
-    let mut tris = vec![];
-    for (a, b, cc, d) in [
-        (v(-1., -1., -1.), v(1., -1., -1.), v(1., -1., 1.), v(-1., -1., 1.)),
-        (v(-1., 1., -1.), v(-1., 1., 1.), v(1., 1., 1.), v(1., 1., -1.)),
-        (v(-1., -1., -1.), v(-1., 1., -1.), v(1., 1., -1.), v(1., -1., -1.)),
-        (v(-1., -1., 1.), v(1., -1., 1.), v(1., 1., 1.), v(-1., 1., 1.)),
-        (v(-1., -1., -1.), v(-1., -1., 1.), v(-1., 1., 1.), v(-1., 1., -1.)),
-        (v(1., -1., -1.), v(1., 1., -1.), v(1., 1., 1.), v(1., -1., 1.)),
-    ] {
-        tris.extend(quad(a, b, cc, d));
-    }
+    let tris = bounce_tests::closed_box(c, 0.5);
     let camera = Camera { eye: c, target: c + Vec3::Z, up: Vec3::Y, fov_y_deg: 60.0 };
     let scene = Scene::from_triangles(&tris, &vec![Vec3::splat(0.5); tris.len()], camera, &[point_light(c, Vec3::ONE)]);
     let gpu = TestGpu::new();

@@ -256,22 +256,6 @@ fn translated_scenes_keep_their_radiance() {
     let _ = std::fs::remove_dir_all(&root);
 }
 
-fn cube(c: Vec3, h: f32) -> Vec<[Vec3; 3]> {
-    let v = |x: f32, y: f32, z: f32| c + Vec3::new(x, y, z) * h;
-    let mut t = vec![];
-    for (a, b, cc, d) in [
-        (v(-1., -1., -1.), v(1., -1., -1.), v(1., -1., 1.), v(-1., -1., 1.)),
-        (v(-1., 1., -1.), v(-1., 1., 1.), v(1., 1., 1.), v(1., 1., -1.)),
-        (v(-1., -1., -1.), v(-1., 1., -1.), v(1., 1., -1.), v(1., -1., -1.)),
-        (v(-1., -1., 1.), v(1., -1., 1.), v(1., 1., 1.), v(-1., 1., 1.)),
-        (v(-1., -1., -1.), v(-1., -1., 1.), v(-1., 1., 1.), v(-1., 1., -1.)),
-        (v(1., -1., -1.), v(1., 1., -1.), v(1., 1., 1.), v(1., -1., 1.)),
-    ] {
-        t.extend(quad(a, b, cc, d));
-    }
-    t
-}
-
 /// Closed forms: a light sealed in a closed box lights nothing the camera (outside) can see, and a
 /// camera sealed in a closed box sees nothing lit; both images are black with every method, with exact
 /// (BVH) visibility at any voxel count, and with the voxel march once the box's walls are more than the
@@ -283,10 +267,10 @@ fn a_light_inside_a_closed_object_and_a_camera_inside_geometry_render_black() {
     use bounce_graph::frame::Visibility;
     let light = Vec3::new(0.0, 1.5, 0.5);
     let mut t = base_tris(1.0, Vec3::ZERO);
-    t.extend(cube(light, 0.1));
+    t.extend(bounce_tests::closed_box(light, 0.1));
     let sealed_light = scene(&t, 0.6, 1.0, Vec3::ZERO, light, 2.0);
     let mut t = base_tris(1.0, Vec3::ZERO);
-    t.extend(cube(Vec3::new(0.2, 1.2, 3.0), 0.2)); // around the eye of `scene`
+    t.extend(bounce_tests::closed_box(Vec3::new(0.2, 1.2, 3.0), 0.2)); // around the eye of `scene`
     let sealed_camera = scene(&t, 0.6, 1.0, Vec3::ZERO, light, 2.0);
     let gpu = TestGpu::new();
     for (name, s) in [("light in a box", &sealed_light), ("camera in a box", &sealed_camera)] {

@@ -9,6 +9,17 @@ impl Gpu {
     /// Record `f` into a fresh command buffer, submit it, and wait for its fence. Objects parked with
     /// [`Gpu::retire`] are released afterwards.
     pub fn submit<R>(&self, f: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
+        self.submit_synced(&[], &[], f)
+    }
+
+    /// [`Gpu::submit`], waiting on `wait` and signalling `signal` (binary semaphores with the stages
+    /// they guard): how the swapchain orders its copy between acquire and present.
+    pub fn submit_synced<R>(
+        &self,
+        wait: &[vk::SemaphoreSubmitInfo],
+        signal: &[vk::SemaphoreSubmitInfo],
+        f: impl FnOnce(vk::CommandBuffer) -> R,
+    ) -> Result<R> {
         let d = &self.device;
         let pool = self.command_pool.lock().unwrap();
         let info = vk::CommandBufferAllocateInfo::default()
@@ -28,10 +39,13 @@ impl Gpu {
             let r = f(cmd);
             unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
             let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
-            let cmds = [cmd];
-            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-            let waited = unsafe { d.queue_submit(self.queue, &submit, fence) }
-                .vk("vkQueueSubmit")
+            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+            let submit = [vk::SubmitInfo2::default()
+                .wait_semaphore_infos(wait)
+                .signal_semaphore_infos(signal)
+                .command_buffer_infos(&cmds)];
+            let waited = unsafe { d.queue_submit2(self.queue, &submit, fence) }
+                .vk("vkQueueSubmit2")
                 .and_then(|_| unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
             unsafe { d.destroy_fence(fence, None) };
             waited.map(|_| r)

@@ -2,8 +2,8 @@
 //! handles; this crate knows no windowing library), and the one way bounce shows an image: a tone-mapped
 //! RGBA8 host image copied into the next swapchain image (`vkCmdCopyBufferToImage`), then presented.
 //!
-//! Synchronisation, one frame in flight: the acquire semaphore is waited by the copy's submission,
-//! whose fence is waited before the next acquire; each swapchain image has its own "copied" semaphore
+//! Synchronisation, one frame in flight: the acquire semaphore is waited by the copy's submission
+//! (`Gpu::submit_synced`), which completes before the next acquire; each swapchain image has its own "copied" semaphore
 //! for the present to wait on (a present's wait semaphore may only be reused once that image is
 //! acquired again).
 
@@ -35,7 +35,6 @@ pub struct Swapchain {
     vsync: bool,
     acquired: vk::Semaphore,
     copied: Vec<vk::Semaphore>,
-    fence: vk::Fence,
     staging: Option<Buffer>,
 }
 
@@ -59,7 +58,6 @@ impl Swapchain {
         }
         let acquired =
             unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?;
-        let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
         let mut s = Swapchain {
             gpu: gpu.clone(),
             surface_fn,
@@ -73,7 +71,6 @@ impl Swapchain {
             vsync,
             acquired,
             copied: vec![],
-            fence,
             staging: None,
         };
         s.recreate(width, height)?;
@@ -207,65 +204,38 @@ impl Swapchain {
                 height: height.min(self.extent.height),
                 depth: 1,
             });
-        let pool = self.gpu.command_pool.lock().unwrap();
-        let info = vk::CommandBufferAllocateInfo::default()
-            .command_pool(*pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        let cmd = unsafe { d.allocate_command_buffers(&info) }.vk("vkAllocateCommandBuffers")?[0];
-        let result = (|| {
-            unsafe {
-                d.begin_command_buffer(
-                    cmd,
-                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )
-            }
-            .vk("vkBeginCommandBuffer")?;
-            // The acquire semaphore's wait (at COPY) orders the layout change after the presentation
-            // engine is done with the image; its old contents are not needed.
-            let to_dst = [vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::COPY)
-                .src_access_mask(vk::AccessFlags2::NONE)
-                .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-                .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .old_layout(vk::ImageLayout::UNDEFINED)
-                .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-                .image(image)
-                .subresource_range(range)];
-            let to_present = [vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::COPY)
-                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::NONE)
-                .dst_access_mask(vk::AccessFlags2::NONE)
-                .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-                .new_layout(vk::ImageLayout::PRESENT_SRC_KHR)
-                .image(image)
-                .subresource_range(range)];
-            unsafe {
-                d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_dst));
-                d.cmd_copy_buffer_to_image(cmd, staging_raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy]);
-                d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_present));
-                d.end_command_buffer(cmd)
-            }
-            .vk("vkEndCommandBuffer")?;
-            let wait =
-                [vk::SemaphoreSubmitInfo::default().semaphore(self.acquired).stage_mask(vk::PipelineStageFlags2::COPY)];
-            let signal = [vk::SemaphoreSubmitInfo::default()
-                .semaphore(self.copied[index as usize])
-                .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
-            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-            let submit = [vk::SubmitInfo2::default()
-                .wait_semaphore_infos(&wait)
-                .signal_semaphore_infos(&signal)
-                .command_buffer_infos(&cmds)];
-            unsafe { d.queue_submit2(self.gpu.queue, &submit, self.fence) }.vk("vkQueueSubmit2")?;
-            unsafe { d.wait_for_fences(&[self.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
-            unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")?;
-            Ok(())
-        })();
-        unsafe { d.free_command_buffers(*pool, &[cmd]) };
-        drop(pool);
-        result?;
+        // The acquire semaphore's wait (at COPY) orders the layout change after the presentation
+        // engine is done with the image; its old contents are not needed.
+        let to_dst = [vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::NONE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .image(image)
+            .subresource_range(range)];
+        let to_present = [vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::NONE)
+            .dst_access_mask(vk::AccessFlags2::NONE)
+            .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .new_layout(vk::ImageLayout::PRESENT_SRC_KHR)
+            .image(image)
+            .subresource_range(range)];
+        let wait =
+            [vk::SemaphoreSubmitInfo::default().semaphore(self.acquired).stage_mask(vk::PipelineStageFlags2::COPY)];
+        let signal = [vk::SemaphoreSubmitInfo::default()
+            .semaphore(self.copied[index as usize])
+            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        // One frame in flight: this waits for the copy, so the staging buffer and the acquire
+        // semaphore are free again before the next present.
+        self.gpu.submit_synced(&wait, &signal, |cmd| unsafe {
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_dst));
+            d.cmd_copy_buffer_to_image(cmd, staging_raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy]);
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_present));
+        })?;
         let waits = [self.copied[index as usize]];
         let swapchains = [self.raw];
         let indices = [index];
@@ -288,7 +258,6 @@ impl Drop for Swapchain {
                 d.destroy_semaphore(s, None);
             }
             d.destroy_semaphore(self.acquired, None);
-            d.destroy_fence(self.fence, None);
             if self.raw != vk::SwapchainKHR::null() {
                 self.swapchain_fn.destroy_swapchain(self.raw, None);
             }
