@@ -107,16 +107,7 @@ fn every_method_runs_on_every_light_map_and_psm() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, &scene).unwrap();
-    let methods = [
-        Method::Uniform,
-        Method::All,
-        Method::Global,
-        Method::Stratified,
-        Method::Local,
-        Method::Gbg,
-        Method::Mis,
-        Method::Reference,
-    ];
+    let methods = Method::ALL;
     let mut runs = 0;
     for map in [LightMap::Dprsm, LightMap::Rsm { fov_deg: 90.0 }, LightMap::Cube] {
         for visibility in [Visibility::Voxel, Visibility::Psm] {

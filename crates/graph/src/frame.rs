@@ -141,6 +141,18 @@ pub enum MisWeights {
 }
 
 impl Method {
+    /// Every method, in declaration order.
+    pub const ALL: [Method; 8] = [
+        Method::Uniform,
+        Method::All,
+        Method::Global,
+        Method::Stratified,
+        Method::Local,
+        Method::Gbg,
+        Method::Mis,
+        Method::Reference,
+    ];
+
     pub fn name(self) -> &'static str {
         match self {
             Method::Uniform => "uniform",
