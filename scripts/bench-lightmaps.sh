@@ -57,3 +57,9 @@ for v in voxel exact; do
   b=$("$bin" compare "$out/pp-$v.exr" "$out/all-exact.exr" --json | field rel_mse)
   printf '| %s, per-pixel draws | – | – | %s | – | %.4f |\n' "$v" "$(pass_ms total "$out/pp-$v.txt")" "$b"
 done
+for v in psm psm-exact voxel; do
+  "$bin" render "$scene" "${common[@]}" --method mis --vpls 64 --dprsm-res 128 --visibility "$v" --timings \
+    --out "$out/mis-$v.exr" > "$out/mis-$v.txt" 2>/dev/null
+  b=$("$bin" compare "$out/mis-$v.exr" "$out/all-exact.exr" --json | field rel_mse)
+  printf '| mis, %s | – | – | %s | – | %.4f |\n' "$v" "$(pass_ms total "$out/mis-$v.txt")" "$b"
+done
