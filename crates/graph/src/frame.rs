@@ -1,9 +1,12 @@
 //! The frame recipe. [`build_frame`] is the one place that says what runs, in what order, on what data:
-//! gbuffer → dprsm (+ its depth map) → direct → voxelize → importance → cdf_reduce → gather, handles
-//! flowing from call to call. Passes whose outputs the asked component does not need are culled by the
-//! graph (`--component direct` records no VPL pass). [`Renderer`] owns the passes (their pipelines),
-//! the uploaded scene and the voxel grid (built once per scene and grid size); [`Renderer::render`]
-//! builds, executes and reads back one frame.
+//! gbuffer → dprsm (+ its depth map) → direct → voxelize → importance → cdf_reduce → [psm_select → psm]
+//! → gather (or mis), handles flowing from call to call. Passes whose outputs the asked component does
+//! not need are culled by the graph (`--component direct` records no VPL pass). [`Renderer`] owns the
+//! passes (their pipelines), the uploaded scene, the voxel grid (built once per scene and grid size)
+//! and two caches that let a frame import instead of record: the light cache (the VPL maps, the shadow
+//! map and `uniform`'s validity CDF: kept until the map settings change, lights being fixed) and the
+//! frame cache (G-buffer, direct light, importance, CDF: kept while the camera and settings stay).
+//! [`Renderer::render`] builds, executes and reads back one frame.
 
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Graph, Handle, PassTiming, Persistent};
