@@ -50,7 +50,7 @@ pub const DEFAULT_ALBEDO: f32 = 0.5;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// A file could not be read (scene, mesh or material library).
-    #[error("cannot read {}: {source}", path.display())]
+    #[error("{}", one_line(&format!("cannot read {}: {source}", path.display())))]
     Io {
         path: PathBuf,
         #[source]
@@ -61,26 +61,26 @@ pub enum SceneError {
     #[error("{}", located(path, *line, msg))]
     Toml { path: PathBuf, line: Option<usize>, msg: String },
     /// The scene TOML parsed but a value is out of range (fov, intensity, light count, camera...).
-    #[error("{}: {msg}", path.display())]
+    #[error("{}", one_line(&format!("{}: {msg}", path.display())))]
     Invalid { path: PathBuf, msg: String },
     /// The OBJ or MTL file is malformed. `line` is 1-based where it is known.
     #[error("{}", located(path, *line, msg))]
     Mesh { path: PathBuf, line: Option<usize>, msg: String },
     /// A `map_Kd` texture is missing or cannot be decoded.
-    #[error("texture {}: {msg}", path.display())]
+    #[error("{}", one_line(&format!("texture {}: {msg}", path.display())))]
     Texture { path: PathBuf, msg: String },
 }
 
 /// `file:line: msg` or `file: msg`, collapsed to one line.
 fn located(path: &Path, line: Option<usize>, msg: &str) -> String {
-    let msg = one_line(msg);
-    match line {
+    one_line(&match line {
         Some(line) => format!("{}:{line}: {msg}", path.display()),
         None => format!("{}: {msg}", path.display()),
-    }
+    })
 }
 
-/// Collapses whitespace runs (including newlines) to single spaces.
+/// Collapses whitespace runs (including newlines and carriage returns, which file and material names
+/// may carry: the fuzzer found `newmtl a\rKd …`) to single spaces: every error is one line.
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
