@@ -321,8 +321,12 @@ fn bad_inputs_give_one_line_and_exit_2() {
     }
 }
 
-/// `bounce view` as its own process under Xvfb (`xvfb-run`, installed by scripts/setup.sh).
+/// `bounce view` as its own process under Xvfb (`xvfb-run`, installed by scripts/setup.sh). One at a
+/// time: `xvfb-run -a` picks a free display number by looking for lock files, which two runs starting
+/// together can both pick.
 fn view(args: &[&str], display: bool) -> std::process::Output {
+    static XVFB: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = XVFB.lock().unwrap_or_else(|e| e.into_inner());
     let bin = env!("CARGO_BIN_EXE_bounce-cli");
     let mut cmd = if display {
         let mut c = std::process::Command::new("xvfb-run");
