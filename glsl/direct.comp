@@ -20,15 +20,7 @@ float visibility(vec3 x, float d, float cos_theta, uint li) {
     int res = int(frame.maps.x);
     ivec2 texel = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(res - 1));
     float stored = texelFetch(shadow_map, ivec3(texel, int(li * 2u + face)), 0).r * frame.scene_max.w;
-    // The texel stores the depth along its centre direction, up to ~0.71 texel away from x's direction.
-    // On a surface tilted by θ that changes the depth by ≈ d · Δangle · tan θ: the slope term. The
-    // angular size of a texel is 2/(1+r²) · (2/res) radians. tan θ is capped: at grazing angles cos θ
-    // (and so the light) is tiny anyway.
-    float r2 = dot(uv, uv);
-    float texel_angle = 2.0 / (1.0 + r2) * (2.0 / float(res));
-    float tan_theta = min(sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / max(cos_theta, 1e-4), 50.0);
-    float bias = frame.shadow.x + frame.shadow.y * d * texel_angle * tan_theta;
-    return d <= stored + bias ? 1.0 : 0.0;
+    return d <= stored + paraboloid_shadow_bias(uv, res, d, cos_theta) ? 1.0 : 0.0;
 }
 
 void main() {

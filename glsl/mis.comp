@@ -85,8 +85,7 @@ Patch patch_of(uint v, Vpl vpl) {
     Patch q;
     q.c = vpl.position;
     q.n = vpl.normal;
-    q.t1 = normalize(abs(q.n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), q.n) : cross(vec3(1.0, 0.0, 0.0), q.n));
-    q.t2 = cross(q.n, q.t1);
+    tangent_basis(q.n, q.t1, q.t2);
     q.side = sqrt(max(d_omega * d_l * d_l / cos_a, 1e-30));
     return q;
 }

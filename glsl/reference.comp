@@ -43,16 +43,13 @@ void main() {
         vec3 x = gp.xyz;
         vec3 n = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
-        vec3 t1 = normalize(abs(n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), n) : cross(vec3(1.0, 0.0, 0.0), n));
-        vec3 t2 = cross(n, t1);
         // Leave x's own triangle: a small offset along the normal (see surface_lift).
         vec3 o = x + n * surface_lift(x, frame.scene_min.w);
         uint base = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x2545F491u;
         for (uint k = pc.first; k < pc.last; k++) {
             uint rng = pcg_hash(base ^ pcg_hash(k + 0x9E3779B9u));
             float u1 = rand01(rng), u2 = rand01(rng);
-            float rad = sqrt(u1), phi = 2.0 * PI * u2;
-            vec3 d = t1 * (rad * cos(phi)) + t2 * (rad * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0));
+            vec3 d = cosine_direction(n, u1, u2);
             uint tri;
             vec2 bary;
             float t = bvh_closest(o, d, 1e30, tri, bary);

@@ -27,6 +27,21 @@ vec3 paraboloid_direction(vec2 uv) {
     return vec3(2.0 * uv, 1.0 - r2) / (1.0 + r2);
 }
 
+// An orthonormal basis (t1, t2, n) around unit n: fixed for each n (the gathering rays, the reference's
+// bounces, the MIS patches and the per-VPL shadow maps all use this one).
+void tangent_basis(vec3 n, out vec3 t1, out vec3 t2) {
+    t1 = normalize(abs(n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), n) : cross(vec3(1.0, 0.0, 0.0), n));
+    t2 = cross(n, t1);
+}
+
+// A cosine-distributed direction around unit n, from two uniforms (Malley's method).
+vec3 cosine_direction(vec3 n, float u1, float u2) {
+    vec3 t1, t2;
+    tangent_basis(n, t1, t2);
+    float rad = sqrt(u1), phi = 2.0 * PI * u2;
+    return t1 * (rad * cos(phi)) + t2 * (rad * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0));
+}
+
 // How far to lift a ray's origin off the surface at x: 1e-5 of the scene diagonal, but never less than
 // 2⁻¹⁸ of |x| (about 32 float ulps of x's largest coordinate), so that the lift survives rounding far
 // from the origin.

@@ -61,14 +61,6 @@ uint vpl_at_point(vec3 p, uint l) {
     return v;
 }
 
-// A cosine-distributed direction around unit n, from two uniforms (Malley's method).
-vec3 cosine_direction(vec3 n, float u1, float u2) {
-    vec3 t1 = normalize(abs(n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), n) : cross(vec3(1.0, 0.0, 0.0), n));
-    vec3 t2 = cross(n, t1);
-    float rad = sqrt(u1), phi = 2.0 * PI * u2;
-    return t1 * (rad * cos(phi)) + t2 * (rad * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0));
-}
-
 // The first occupied voxel cell a ray from x (unit normal n) in direction d reaches: its entry point
 // (world space), or false. The ray starts 2 cells off the surface, as the visibility march does.
 bool gathering_hit(vec3 x, vec3 n, vec3 d, out vec3 hit) {

@@ -34,8 +34,7 @@ void lm_axes(uint l, uint face, out vec3 X, out vec3 Y, out vec3 Z) {
         vec3 d = centre - lights[l].position.xyz;
         Z = dot(d, d) > 1e-12 ? normalize(d) : vec3(0.0, -1.0, 0.0);
     }
-    X = normalize(abs(Z.y) > 0.9 ? cross(vec3(1.0, 0.0, 0.0), Z) : cross(vec3(0.0, 1.0, 0.0), Z));
-    Y = cross(Z, X);
+    tangent_basis(Z, X, Y);
 }
 
 vec3 lm_to_local(vec3 d, uint l, uint face) {

@@ -8,15 +8,14 @@
 
 // d in the frame of a map whose axis is n (unit): z along n; x, y a fixed tangent basis of n.
 vec3 psm_to_local(vec3 d, vec3 n) {
-    vec3 t1 = normalize(abs(n.x) > 0.9 ? cross(vec3(0.0, 1.0, 0.0), n) : cross(vec3(1.0, 0.0, 0.0), n));
-    vec3 t2 = cross(n, t1);
+    vec3 t1, t2;
+    tangent_basis(n, t1, t2);
     return vec3(dot(d, t1), dot(d, t2), dot(d, n));
 }
 
 #ifdef PSM_LOOKUP
 // 1 when x (unit normal nx) is the first surface map k sees in x's direction, within the bias; 0
-// otherwise (or behind the VPL). The bias is the direct light's (direct.comp): a constant plus the
-// slope term d · Δα · tan θ for the ~0.71 texel between x's direction and the texel centre's.
+// otherwise (or behind the VPL), with the direct light's bias (paraboloid_shadow_bias, scene.glsl).
 float psm_visible(uint k, vec3 x, vec3 nx) {
     PsmView w = psm_views[k];
     vec3 d = x - w.position_v.xyz;
@@ -28,11 +27,7 @@ float psm_visible(uint k, vec3 x, vec3 nx) {
     ivec2 texel = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(res - 1));
     float stored = texelFetch(psm_depth, ivec3(texel, int(k)), 0).r * frame.scene_max.w;
     float cos_theta = clamp(-dot(nx, d) / max(dist, 1e-30), 0.0, 1.0);
-    float r2 = dot(uv, uv);
-    float texel_angle = 2.0 / (1.0 + r2) * (2.0 / float(res));
-    float tan_theta = min(sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / max(cos_theta, 1e-4), 50.0);
-    float bias = frame.shadow.x + frame.shadow.y * dist * texel_angle * tan_theta;
-    return dist <= stored + bias ? 1.0 : 0.0;
+    return dist <= stored + paraboloid_shadow_bias(uv, res, dist, cos_theta) ? 1.0 : 0.0;
 }
 #endif
 

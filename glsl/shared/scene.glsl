@@ -15,6 +15,19 @@ layout(std430, set = 0, binding = B_LIGHTS) readonly buffer Lights { Light light
 
 #include "lightmap.glsl"
 
+// The depth bias of a paraboloid shadow-map test (the direct light's maps and the per-VPL maps): at
+// map coordinates uv of a res² face, a point at distance d whose normal makes cos θ with the map's
+// direction. The texel stores the depth along its centre direction, up to ~0.71 texel away from the
+// point's; on a surface tilted by θ that changes the depth by ≈ d · Δangle · tan θ, the slope term. A
+// texel's angular size is 2/(1+r²) · (2/res) radians. tan θ is capped: at grazing angles cos θ (and so
+// the light) is tiny anyway. frame.shadow: x constant (world units), y slope scale (texels).
+float paraboloid_shadow_bias(vec2 uv, int res, float d, float cos_theta) {
+    float r2 = dot(uv, uv);
+    float texel_angle = 2.0 / (1.0 + r2) * (2.0 / float(res));
+    float tan_theta = min(sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / max(cos_theta, 1e-4), 50.0);
+    return frame.shadow.x + frame.shadow.y * d * texel_angle * tan_theta;
+}
+
 // Albedo of triangle `tri` at texture coordinate `uv`: Kd × the nearest map_Kd texel (sRGB-decoded),
 // repeat wrap, v flipped (OBJ v = 0 is the bottom row of the image). The CPU reference does the same.
 layout(constant_id = SPEC_TEXTURED) const bool TEXTURED = true;

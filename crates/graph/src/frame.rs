@@ -952,8 +952,10 @@ impl Renderer {
         let mut new_uniform = None;
         let method_sections = self.importance_params(s).kind.method_sections();
         let radiance_bytes = if let Some(out) = &h.out {
-            if s.component != Component::Direct && method_sections > 0 {
-                // Only the section headers are needed, but a whole readback is cheap next to a frame.
+            // Checked on the frame that builds the CDF (a cached one was checked when it was built, and a
+            // viewer frame should not read it back again). Only the section headers are needed, but a
+            // whole readback is cheap next to a frame that ran the importance.
+            if s.component != Component::Direct && method_sections > 0 && hit.is_none() {
                 let cdf: Vec<f32> = bytemuck::pod_collect_to_vec(&done.read_buffer(&h.gather_inputs.cdf)?);
                 let len =
                     CdfReduce::section_len(s.light_map.faces() * self.scene.light_count * s.dprsm_res, s.dprsm_res)

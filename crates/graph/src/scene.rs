@@ -421,12 +421,6 @@ impl Scene {
         self.origin = origin;
     }
 
-    /// [`Scene::rebase`] to the centre of the bounds, as loading does. For in-memory scenes.
-    pub fn rebase_to_center(&mut self) {
-        let centre = self.origin + (self.bounds_min.as_dvec3() + self.bounds_max.as_dvec3()) * 0.5;
-        self.rebase(centre);
-    }
-
     /// Builds an in-memory untextured scene: one material (linear albedo) per triangle, face
     /// normals (counter-clockwise winding seen from the normal side), UV 0. For tests.
     ///

@@ -38,18 +38,6 @@ fn split(data: &[u8]) -> Vec<&[u8]> {
     parts
 }
 
-/// Builds the inverse of the input layout: the bytes whose [`check_load`] writes these files.
-pub fn encode(fixed_toml: bool, parts: &[&[u8]]) -> Vec<u8> {
-    let mut out = vec![u8::from(fixed_toml)];
-    for (k, p) in parts.iter().enumerate() {
-        if k > 0 {
-            out.extend_from_slice(SEPARATOR);
-        }
-        out.extend_from_slice(p);
-    }
-    out
-}
-
 /// Writes the scene files of `data` into `dir` (created if needed), loads `dir/scene.toml` and checks
 /// the contract. Panics when it is broken; returns whether the scene loaded.
 pub fn check_load(data: &[u8], dir: &Path) -> bool {

@@ -110,7 +110,6 @@ impl Dprsm {
         let mut out = DprsmDepth { depth: Self::depth_image(g, "dprsm_depth.depth", f.shadow_res, layers) };
         let o = out;
         g.add_pass("dprsm_depth").overwrite(&mut out.depth, Access::DepthAttachment).record(move |ctx| {
-            let layers = 2 * f.scene.light_count;
             record_paraboloid(
                 ctx,
                 &self.depth_only,

@@ -31,8 +31,10 @@ pub struct Gather {
     pipeline: ComputePipeline,
     /// The `--visibility exact` variant (shadow rays against the BVH).
     exact: ComputePipeline,
-    /// The `--visibility psm` and `psm-exact` variants (the frame's shared VPL set; `gather` only).
-    psm: Option<(ComputePipeline, ComputePipeline)>,
+    /// The `--visibility psm` variant (the frame's shared VPL set and its shadow maps).
+    psm: ComputePipeline,
+    /// The `--visibility psm-exact` variant (the shared set with exact rays; binds the BVH).
+    psm_exact: ComputePipeline,
     sampler: Sampler,
 }
 
@@ -99,26 +101,8 @@ impl GatherInputs {
 
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
-        Self::with_shaders(gpu, "gather", shaders::GATHER_COMP, shaders::GATHER_EXACT_COMP)?.with_psm(
-            gpu,
-            shaders::GATHER_PSM_COMP,
-            shaders::GATHER_PSM_EXACT_COMP,
-        )
-    }
-
-    /// Adds the `--visibility psm` and `psm-exact` variants (the frame's shared VPL set, with its shadow
-    /// maps or with exact rays).
-    pub fn with_psm(mut self, gpu: &Gpu, psm: &[u8], psm_exact: &[u8]) -> Result<Self> {
-        let (bindings, push) = Self::bindings();
-        let mut b = bindings.clone();
-        b.extend(crate::passes::psm::gather_bindings(true));
-        let maps = ComputePipeline::new(gpu, self.name, &crate::spirv(psm), &b, push, &[])?;
-        let mut b = bindings;
-        b.extend(crate::passes::psm::gather_bindings(false));
-        b.extend(crate::bvh::GpuBvh::bindings());
-        let exact = ComputePipeline::new(gpu, self.name, &crate::spirv(psm_exact), &b, push, &[])?;
-        self.psm = Some((maps, exact));
-        Ok(self)
+        use shaders::*;
+        Self::with_shaders(gpu, "gather", [GATHER_COMP, GATHER_EXACT_COMP, GATHER_PSM_COMP, GATHER_PSM_EXACT_COMP])
     }
 
     fn bindings() -> (Vec<Binding>, u32) {
@@ -135,14 +119,23 @@ impl Gather {
         (bindings, std::mem::size_of::<GatherPush>() as u32)
     }
 
-    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. `exact` is
-    /// the variant with exact visibility, which also binds the BVH.
-    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: &[u8], exact: &[u8]) -> Result<Self> {
+    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. The four
+    /// SPIR-V variants: voxel visibility; exact visibility (also binds the BVH); `psm` (also binds the
+    /// shared set and its maps); `psm-exact` (the shared set and the BVH).
+    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 4]) -> Result<Self> {
+        let [spirv, exact, psm, psm_exact] = spirv;
         let (mut bindings, push) = Self::bindings();
+        let mut b = bindings.clone();
+        b.extend(crate::passes::psm::gather_bindings(true));
+        let psm = ComputePipeline::new(gpu, name, &crate::spirv(psm), &b, push, &[])?;
+        let mut b = bindings.clone();
+        b.extend(crate::passes::psm::gather_bindings(false));
+        b.extend(crate::bvh::GpuBvh::bindings());
+        let psm_exact = ComputePipeline::new(gpu, name, &crate::spirv(psm_exact), &b, push, &[])?;
         let pipeline = ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &[])?;
         bindings.extend(crate::bvh::GpuBvh::bindings());
         let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
-        Ok(Gather { name, pipeline, exact, psm: None, sampler: Sampler::nearest(gpu)? })
+        Ok(Gather { name, pipeline, exact, psm, psm_exact, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
@@ -191,21 +184,20 @@ impl Gather {
                 .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            let (pipeline, writes) = match (&i.psm, &self.psm, f.bvh) {
-                (Some(p), Some((_, exact)), Some(bvh)) => {
-                    (exact, bvh.writes(writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views))))
+            let (pipeline, writes) = match (&i.psm, f.bvh) {
+                (Some(p), Some(bvh)) => {
+                    (&self.psm_exact, bvh.writes(writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views))))
                 }
-                (Some(p), Some((maps, _)), None) => (
-                    maps,
+                (Some(p), None) => (
+                    &self.psm,
                     writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views)).sampled_image(
                         B_PSM_DEPTH,
                         ctx.image(&p.depth),
                         s,
                     ),
                 ),
-                (Some(_), None, _) => unreachable!("{}: built without its psm variants", self.name),
-                (None, _, Some(bvh)) => (&self.exact, bvh.writes(writes)),
-                (None, _, None) => (&self.pipeline, writes),
+                (None, Some(bvh)) => (&self.exact, bvh.writes(writes)),
+                (None, None) => (&self.pipeline, writes),
             };
             let chunk = f.vpls_per_dispatch.max(1);
             let mut first = push.first;

@@ -19,9 +19,6 @@ use bounce_device::Gpu;
 
 /// The `mis` pass: the gather's recording with `glsl/mis.comp`.
 pub fn create(gpu: &Gpu) -> Result<Gather> {
-    Gather::with_shaders(gpu, "mis", shaders::MIS_COMP, shaders::MIS_EXACT_COMP)?.with_psm(
-        gpu,
-        shaders::MIS_PSM_COMP,
-        shaders::MIS_PSM_EXACT_COMP,
-    )
+    use shaders::*;
+    Gather::with_shaders(gpu, "mis", [MIS_COMP, MIS_EXACT_COMP, MIS_PSM_COMP, MIS_PSM_EXACT_COMP])
 }
