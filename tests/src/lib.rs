@@ -5,6 +5,8 @@
 //! (the messenger's user data, not a process global: tests run as threads of one process) and checked
 //! when the test ends: any message fails the test.
 
+pub mod maps;
+
 use bounce::output::{self, RgbImage};
 use bounce_device::{Gpu, GpuOptions};
 use std::path::{Path, PathBuf};

@@ -15,7 +15,7 @@ use bounce_tests::TestGpu;
 
 fn compare(name: &str, scene: &Scene, w: u32, h: u32, shadow_res: u32, max_excluded: f64) {
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, scene).unwrap();
+    let mut r = Renderer::new(&gpu, scene).unwrap();
     let s = FrameSettings { width: w, height: h, component: Component::Direct, shadow_res, ..FrameSettings::default() };
     let frame = r.render(&s).unwrap();
     let bvh = Bvh::new(scene);

@@ -60,7 +60,7 @@ fn check_against_ray_cast(scene: &Scene, res: u32) {
     let r = Renderer::new(&gpu, scene).unwrap();
     let s = FrameSettings { shadow_res: res, ..FrameSettings::default() };
     let far = r.uniforms(&s).scene_max[3] as f64;
-    let depth = r.render_dprsm(&s).unwrap();
+    let depth = bounce_tests::maps::render_dprsm(&r, &s).unwrap();
     let bvh = Bvh::new(scene);
     let n = res as usize;
     let (mut checked, mut edge, mut worst) = (0usize, 0usize, 0.0f64);
@@ -128,7 +128,7 @@ fn a_light_sealed_in_a_box_has_every_vpl_on_the_box() {
     for res in [16u32, 64, 256] {
         let gpu = TestGpu::new();
         let r = Renderer::new(&gpu, &scene).unwrap();
-        let [pos, _, _] = r.render_vpls(&FrameSettings { dprsm_res: res, ..FrameSettings::default() }).unwrap();
+        let [pos, _, _] = bounce_tests::maps::render_vpls(&r, &FrameSettings { dprsm_res: res, ..FrameSettings::default() }).unwrap();
         let outside: Vec<String> = pos
             .iter()
             .enumerate()
@@ -146,7 +146,7 @@ fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, &scene).unwrap();
     let s = FrameSettings { dprsm_res: res, ..FrameSettings::default() };
-    let [pos, nrm, flux] = r.render_vpls(&s).unwrap();
+    let [pos, nrm, flux] = bounce_tests::maps::render_vpls(&r, &s).unwrap();
     let bvh = Bvh::new(&scene);
     let n = res as usize;
     let (mut checked, mut edge) = (0usize, 0usize);

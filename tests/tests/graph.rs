@@ -111,7 +111,7 @@ fn an_unchanged_frame_records_only_the_gather() {
     use bounce_graph::scene::Scene;
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let s = FrameSettings {
         width: 24,
         height: 24,
@@ -228,7 +228,7 @@ fn an_empty_paraboloid_face_is_never_sampled() {
         &[point_light(v(0.0, 1.0, 0.2), Vec3::splat(3.0))],
     );
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     for method in [Method::Global, Method::Gbg] {
         let s = FrameSettings {
             width: 24,
@@ -248,4 +248,114 @@ fn an_empty_paraboloid_face_is_never_sampled() {
         assert!(mean > 0.0, "{method:?}: the live face lights the scene");
         assert_eq!(rr.radiance, uniform.radiance, "{method:?}: a face choice drew the empty face");
     }
+}
+
+/// A graph of one 4×4 image per test below, cleared by a pass named `make`.
+fn make(g: &mut Graph, v: f32) -> Handle<Image> {
+    let mut x = image(g, "x");
+    let hx = x;
+    g.add_pass("make").overwrite(&mut x, Access::TransferWrite).record(move |ctx| clear(ctx, &hx, v));
+    x
+}
+
+fn read(done: &bounce_graph::graph::Executed, h: &Handle<Image>) -> Vec<f32> {
+    bytemuck::pod_collect_to_vec(&done.read_image(h).unwrap())
+}
+
+/// A cached product is made once and lent back to later graphs while its key stays the same (its passes
+/// are not even added again); another key makes it anew and drops the old one; a product whose passes
+/// were culled is not kept.
+#[test]
+fn cached_products_are_kept_across_graphs_until_their_key_changes() {
+    use bounce_graph::graph::Retained;
+    let gpu = TestGpu::new();
+    let mut kept = Retained::default();
+    let mut built = 0;
+    for (key, value, want) in [(1, 3.0, 3.0), (1, 5.0, 3.0), (2, 7.0, 7.0), (2, 9.0, 7.0)] {
+        let mut g = Graph::with_retained(&gpu, &mut kept);
+        let x = g.cached("x", &key, |g| {
+            built += 1;
+            make(g, value)
+        });
+        g.export(&x);
+        let done = g.execute().unwrap();
+        assert!(read(&done, &x).iter().all(|&v| v == want), "key {key}: expected {want}");
+        assert_eq!(done.ran.is_empty(), value != want, "key {key}: ran {:?}", done.ran);
+    }
+    assert_eq!(built, 2);
+    assert_eq!(kept.product_names(), ["x"]);
+
+    // Culled: nothing consumes the product, so its pass does not run and nothing is kept.
+    let mut g = Graph::with_retained(&gpu, &mut kept);
+    g.cached("unused", &0, |g| make(g, 1.0));
+    let done = g.execute().unwrap();
+    assert_eq!(done.skipped, ["make"]);
+    drop(done);
+    assert_eq!(kept.product_names(), ["x"]);
+}
+
+/// A temporal image keeps its contents across graphs and says when they are undefined (first use, a new
+/// key); a history image gives last frame's version after `next_frame`.
+#[test]
+fn temporal_and_history_images_live_across_graphs() {
+    use bounce_graph::graph::Retained;
+    let gpu = TestGpu::new();
+    let mut kept = Retained::default();
+    let desc = ImageDesc::new(
+        "acc",
+        4,
+        4,
+        vk::Format::R32G32B32A32_SFLOAT,
+        vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC,
+    );
+    for (key, fresh, value) in [(0, true, 1.0), (0, false, 2.0), (1, true, 3.0)] {
+        let mut g = Graph::with_retained(&gpu, &mut kept);
+        let t = g.temporal_image("acc", desc.clone(), &key);
+        assert_eq!(t.fresh, fresh, "key {key}, value {value}");
+        let mut h = t.handle;
+        let hh = h;
+        g.add_pass("write").write(&mut h, Access::TransferWrite).record(move |ctx| clear(ctx, &hh, value));
+        g.export(&h);
+        assert!(read(&g.execute().unwrap(), &h).iter().all(|&v| v == value));
+    }
+    for frame in 0..3u32 {
+        let mut g = Graph::with_retained(&gpu, &mut kept);
+        let hist = g.history_image("hist", desc.clone(), &());
+        assert_eq!(hist.previous.is_some(), frame > 0, "frame {frame}");
+        let mut cur = hist.current;
+        let hc = cur;
+        g.add_pass("write").overwrite(&mut cur, Access::TransferWrite).record(move |ctx| clear(ctx, &hc, frame as f32));
+        g.export(&cur);
+        let mut prev_copy = image(&mut g, "previous copy");
+        if let Some(p) = hist.previous {
+            let hp = prev_copy;
+            g.add_pass("copy").read(&p, Access::TransferRead).overwrite(&mut prev_copy, Access::TransferWrite).record(
+                move |ctx| copy(ctx, &p, &hp),
+            );
+            g.export(&prev_copy);
+        }
+        let done = g.execute().unwrap();
+        if hist.previous.is_some() {
+            assert!(read(&done, &prev_copy).iter().all(|&v| v == frame as f32 - 1.0), "frame {frame}");
+        }
+        drop(done);
+        kept.next_frame();
+    }
+}
+
+/// A pass may touch only what it declared: the planner derived no barrier for anything else.
+#[test]
+#[should_panic(expected = "without declaring it")]
+fn a_pass_that_uses_an_undeclared_handle_is_refused() {
+    let gpu = TestGpu::new();
+    let mut g = Graph::new(&gpu);
+    let x = make(&mut g, 1.0);
+    let mut y = image(&mut g, "y");
+    let hy = y;
+    g.add_pass("sneaky").overwrite(&mut y, Access::TransferWrite).record(move |ctx| {
+        clear(ctx, &hy, 2.0);
+        clear(ctx, &x, 2.0);
+    });
+    g.export(&y);
+    let _ = g.execute();
 }

@@ -18,7 +18,7 @@ fn image_test(name: &str, component: Component, w: u32, h: u32, max_rel_mse: f64
     assert_eq!((reference.width, reference.height), (w, h), "reference size");
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let frame = r.render(&FrameSettings { width: w, height: h, component, ..FrameSettings::default() }).unwrap();
     let actual = RgbImage::from_rgba(w, h, &frame.radiance);
     assert_eq!(actual.non_finite_count(), 0, "non-finite pixels");

@@ -34,7 +34,7 @@ fn texel_solid_angles_cover_each_map() {
     ] {
         assert!((map.solid_angle() - want).abs() < 1e-9, "{map:?}: solid_angle() {}", map.solid_angle());
         let [pos, _, flux] =
-            r.render_vpls(&FrameSettings { dprsm_res: res, light_map: map, ..FrameSettings::default() }).unwrap();
+            bounce_tests::maps::render_vpls(&r, &FrameSettings { dprsm_res: res, light_map: map, ..FrameSettings::default() }).unwrap();
         let valid = pos.iter().filter(|p| p[3] != 0.0).count();
         let sum: f64 = flux.iter().zip(&pos).filter(|(_, p)| p[3] != 0.0).map(|(f, _)| f[3] as f64).sum();
         eprintln!("{map:?}: {valid} VPLs, Σ Δω = {sum:.5} vs {want:.5}");
@@ -63,8 +63,8 @@ fn the_three_light_maps_converge_to_the_same_image() {
         &[point_light(v(0.0, 3.0, 0.0), Vec3::splat(20.0))],
     );
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
-    let render = |map| {
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let mut render = |map| {
         let s = FrameSettings {
             width: 32,
             height: 32,
@@ -106,7 +106,7 @@ fn every_method_runs_on_every_light_map_and_psm() {
     use bounce_graph::frame::Visibility;
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let methods = Method::ALL;
     let mut runs = 0;
     for map in [LightMap::Dprsm, LightMap::Rsm { fov_deg: 90.0 }, LightMap::Cube] {

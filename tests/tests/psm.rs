@@ -35,7 +35,7 @@ fn mean(img: &[[f32; 4]]) -> f64 {
 fn psm_visibility_agrees_with_exact_rays_on_the_same_vpls() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     for seed in [1u64, 2] {
         let psm = r.render(&settings(Visibility::Psm, seed)).unwrap();
         let exact = r.render(&settings(Visibility::PsmExact, seed)).unwrap();
@@ -65,7 +65,7 @@ fn psm_visibility_agrees_with_exact_rays_on_the_same_vpls() {
 fn the_shared_vpl_set_is_unbiased() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let all = r
         .render(&FrameSettings { method: Method::All, visibility: Visibility::Exact, ..settings(Visibility::Exact, 0) })
         .unwrap();
@@ -105,7 +105,7 @@ fn impossible_psm_settings_are_refused() {
 fn mis_with_a_shared_vpl_set() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let mis = |visibility, seed| FrameSettings { method: Method::Mis, vpls: 64, ..settings(visibility, seed) };
     let all = r
         .render(&FrameSettings { method: Method::All, visibility: Visibility::Exact, ..settings(Visibility::Exact, 0) })

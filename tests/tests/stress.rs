@@ -42,9 +42,9 @@ fn scene(tris: &[[Vec3; 3]], albedo: f32, scale: f32, offset: Vec3, light: Vec3,
 /// Then every sampling method's indirect image against `all`'s ([`agrees_with_all`]).
 fn render_all_methods(name: &str, s: &Scene) -> Vec<(Method, f64)> {
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, s).unwrap_or_else(|e| panic!("{name}: {e:#}"));
-    let means = render_methods(name, &r);
-    agrees_with_all(name, &r);
+    let mut r = Renderer::new(&gpu, s).unwrap_or_else(|e| panic!("{name}: {e:#}"));
+    let means = render_methods(name, &mut r);
+    agrees_with_all(name, &mut r);
     means
 }
 
@@ -52,7 +52,7 @@ fn render_all_methods(name: &str, s: &Scene) -> Vec<(Method, f64)> {
 /// errors of `all`'s (the seeds' spread; the clamp at 1 % of the diagonal on both sides and a defensive
 /// share of 0.5 keep the heavy tails from fooling the spread estimate, as in the Cornell-box test of
 /// `vpl.rs`). `reference` is left out: it integrates the continuous surface, not this VPL set.
-fn agrees_with_all(name: &str, r: &Renderer) {
+fn agrees_with_all(name: &str, r: &mut Renderer) {
     let settings = |method, seed| FrameSettings {
         width: 16,
         height: 16,
@@ -67,7 +67,7 @@ fn agrees_with_all(name: &str, r: &Renderer) {
         defensive: 0.5,
         ..FrameSettings::default()
     };
-    let mean = |method, seed| {
+    let mut mean = |method, seed| {
         let f = r.render(&settings(method, seed)).unwrap_or_else(|e| panic!("{name}, {method:?}: {e:#}"));
         f.radiance.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * f.radiance.len()) as f64
     };
@@ -85,12 +85,12 @@ fn agrees_with_all(name: &str, r: &Renderer) {
     }
 }
 
-fn render_methods(name: &str, r: &Renderer) -> Vec<(Method, f64)> {
+fn render_methods(name: &str, r: &mut Renderer) -> Vec<(Method, f64)> {
     render_methods_with(name, r, |_| {})
 }
 
 /// [`render_methods`] with the settings adjusted by `tweak`.
-fn render_methods_with(name: &str, r: &Renderer, tweak: impl Fn(&mut FrameSettings)) -> Vec<(Method, f64)> {
+fn render_methods_with(name: &str, r: &mut Renderer, tweak: impl Fn(&mut FrameSettings)) -> Vec<(Method, f64)> {
     METHODS
         .iter()
         .map(|&method| {
@@ -221,8 +221,8 @@ fn translated_scenes_keep_their_radiance() {
             s.rebase(DVec3::ZERO);
         }
         let gpu = TestGpu::new();
-        let r = Renderer::new(&gpu, &s).unwrap();
-        render_methods(&format!("offset {off:e}"), &r)
+        let mut r = Renderer::new(&gpu, &s).unwrap();
+        render_methods(&format!("offset {off:e}"), &mut r)
     };
     let base = mean_of(0.0, false);
     for off in [1e4, 1e5, 1e6] {
@@ -265,10 +265,10 @@ fn a_light_inside_a_closed_object_and_a_camera_inside_geometry_render_black() {
     let sealed_camera = scene(&t, 0.6, 1.0, Vec3::ZERO, light, 2.0);
     let gpu = TestGpu::new();
     for (name, s) in [("light in a box", &sealed_light), ("camera in a box", &sealed_camera)] {
-        let r = Renderer::new(&gpu, s).unwrap();
-        let exact = render_methods_with(name, &r, |f| f.visibility = Visibility::Exact);
-        let fine = render_methods_with(name, &r, |f| f.voxels = 64);
-        let coarse = render_methods_with(name, &r, |_| {});
+        let mut r = Renderer::new(&gpu, s).unwrap();
+        let exact = render_methods_with(name, &mut r, |f| f.visibility = Visibility::Exact);
+        let fine = render_methods_with(name, &mut r, |f| f.voxels = 64);
+        let coarse = render_methods_with(name, &mut r, |_| {});
         for i in 0..METHODS.len() {
             let m = METHODS[i].name();
             eprintln!(
@@ -278,7 +278,7 @@ fn a_light_inside_a_closed_object_and_a_camera_inside_geometry_render_black() {
             assert_eq!(exact[i].1, 0.0, "{name}, {m}, exact visibility: must be black");
             assert_eq!(fine[i].1, 0.0, "{name}, {m}, 64 voxels: must be black");
         }
-        agrees_with_all(name, &r);
+        agrees_with_all(name, &mut r);
     }
 }
 
@@ -290,7 +290,7 @@ fn a_light_inside_a_closed_object_and_a_camera_inside_geometry_render_black() {
 fn a_1024_squared_dprsm_and_4096_vpls_per_pixel_agree_with_all() {
     let s = scene(&base_tris(1.0, Vec3::ZERO), 0.6, 1.0, Vec3::ZERO, Vec3::new(0.0, 1.5, 0.5), 2.0);
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &s).unwrap();
+    let mut r = Renderer::new(&gpu, &s).unwrap();
     let settings = |method, seed| FrameSettings {
         width: 4,
         height: 4,
@@ -305,7 +305,7 @@ fn a_1024_squared_dprsm_and_4096_vpls_per_pixel_agree_with_all() {
         defensive: 0.5,
         ..FrameSettings::default()
     };
-    let mean = |method, seed| {
+    let mut mean = |method, seed| {
         let f = r.render(&settings(method, seed)).unwrap();
         assert!(f.radiance.iter().all(|p| p.iter().all(|c| c.is_finite())), "{method:?}: non-finite radiance");
         f.radiance.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * f.radiance.len()) as f64

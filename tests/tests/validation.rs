@@ -31,3 +31,19 @@ fn an_unknown_device_name_is_a_clear_error() {
     let m = e.to_string();
     assert!(m.contains("no-such-device-xyz") && m.contains("available"), "{m}");
 }
+
+/// Synchronization validation is on wherever validation is (tests, `--validation`): two writes of one
+/// buffer with no barrier between them are reported as a hazard. (Lavapipe runs commands in order, so
+/// without it a missing barrier could never fail a test.)
+#[test]
+fn synchronization_validation_catches_a_missing_barrier() {
+    let gpu = Gpu::new(&GpuOptions { validation: true, ..GpuOptions::default() }).expect("device");
+    let b = bounce_device::Buffer::new(&gpu, &bounce_device::BufferDesc::storage("hazard", 256)).expect("buffer");
+    gpu.submit(|cmd| unsafe {
+        gpu.device.cmd_fill_buffer(cmd, b.raw, 0, vk::WHOLE_SIZE, 1);
+        gpu.device.cmd_fill_buffer(cmd, b.raw, 0, vk::WHOLE_SIZE, 2);
+    })
+    .expect("submit");
+    let msgs = gpu.validation().messages();
+    assert!(msgs.iter().any(|m| m.contains("WRITE_AFTER_WRITE")), "no hazard reported: {msgs:?}");
+}

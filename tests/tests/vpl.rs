@@ -39,7 +39,7 @@ pub fn sphere_scene(r: f32, lat: usize, albedo: f32, light: Vec3, intensity: f32
 
 #[allow(clippy::too_many_arguments)]
 fn indirect(
-    r: &Renderer,
+    r: &mut Renderer,
     method: Method,
     seed: u64,
     vpls: u32,
@@ -51,7 +51,7 @@ fn indirect(
     indirect_with(r, FrameSettings { method, seed, vpls, ..FrameSettings::default() }, w, h, dprsm_res, voxels)
 }
 
-fn indirect_with(r: &Renderer, base: FrameSettings, w: u32, h: u32, dprsm_res: u32, voxels: u32) -> Vec<[f32; 3]> {
+fn indirect_with(r: &mut Renderer, base: FrameSettings, w: u32, h: u32, dprsm_res: u32, voxels: u32) -> Vec<[f32; 3]> {
     let s = FrameSettings { width: w, height: h, component: Component::Indirect, dprsm_res, voxels, ..base };
     let f = r.render(&s).unwrap();
     assert!(f.radiance.iter().all(|p| p.iter().all(|c| c.is_finite())), "non-finite radiance");
@@ -69,9 +69,9 @@ fn sphere_closed_form_all_and_uniform() {
     let scene = sphere_scene(radius, 48, rho, Vec3::new(0.25, 0.3, -0.15), intensity);
     let want = rho * rho * intensity / (PI * radius * radius);
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     for (method, vpls, mean_tol, pixel_tol) in [(Method::Uniform, 256, 0.02, 0.15), (Method::All, 1, 0.02, 0.03)] {
-        let img = indirect(&r, method, 7, vpls, 24, 24, 64, 32);
+        let img = indirect(&mut r, method, 7, vpls, 24, 24, 64, 32);
         let vals: Vec<f32> = img.iter().map(|p| p[0]).collect();
         assert!(img.iter().all(|p| p[0] == p[1] && p[1] == p[2]), "grey scene, grey result");
         let mean = vals.iter().sum::<f32>() / vals.len() as f32;
@@ -109,11 +109,11 @@ fn sphere_closed_form_all_and_uniform() {
 fn every_method_converges_to_all_at_the_monte_carlo_rate() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (24, 24, 32, 32);
     let clamp = 0.01;
     let all =
-        indirect_with(&r, FrameSettings { method: Method::All, clamp, ..FrameSettings::default() }, w, h, res, vox);
+        indirect_with(&mut r, FrameSettings { method: Method::All, clamp, ..FrameSettings::default() }, w, h, res, vox);
     for (method, face) in [
         (Method::Uniform, FaceMode::RussianRoulette),
         (Method::Global, FaceMode::RussianRoulette),
@@ -134,11 +134,11 @@ fn every_method_converges_to_all_at_the_monte_carlo_rate() {
             ..FrameSettings::default()
         };
         let name = format!("{} (face {:?})", method.name(), face);
-        converges_to(&name, &all, |seed| indirect_with(&r, settings(seed), w, h, res, vox));
+        converges_to(&name, &all, |seed| indirect_with(&mut r, settings(seed), w, h, res, vox));
     }
 }
 
-fn converges_to(name: &str, all: &[[f32; 3]], run: impl Fn(u64) -> Vec<[f32; 3]>) {
+fn converges_to(name: &str, all: &[[f32; 3]], mut run: impl FnMut(u64) -> Vec<[f32; 3]>) {
     let k_max = 48usize;
     let runs: Vec<Vec<[f32; 3]>> = (0..k_max).map(|k| run(1000 + k as u64)).collect();
     let mse_of_mean = |k: usize| {
@@ -205,8 +205,8 @@ fn all_agrees_with_the_exact_one_bounce_reference_in_the_cornell_box() {
     let reference = bounce_graph::cpu_ref::render_indirect(&scene, &bvh, w, h, 2048, 11);
     let r_img: Vec<[f32; 3]> = reference.iter().map(|(m, _)| *m).collect();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
-    let all = indirect(&r, Method::All, 0, 1, w, h, 128, 128);
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let all = indirect(&mut r, Method::All, 0, 1, w, h, 128, 128);
     let e = bounce_tests::rel_mse(&all, &r_img);
     let (ma, mr) = (bounce_tests::mean(&all), bounce_tests::mean(&r_img));
     // The reference's own noise, in the same metric.
@@ -235,11 +235,11 @@ fn all_agrees_with_the_exact_one_bounce_reference_in_the_cornell_box() {
 fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (24, 24, 32, 32);
     for visibility in [Visibility::Voxel, Visibility::Exact] {
         let base = FrameSettings { clamp: 0.01, visibility, ..FrameSettings::default() };
-        let all = indirect_with(&r, FrameSettings { method: Method::All, ..base.clone() }, w, h, res, vox);
+        let all = indirect_with(&mut r, FrameSettings { method: Method::All, ..base.clone() }, w, h, res, vox);
         let target = bounce_tests::mean(&all);
         for weights in [MisWeights::Consistent, MisWeights::Thesis] {
             let seeds = if weights == MisWeights::Consistent { 64 } else { 8 };
@@ -253,7 +253,7 @@ fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
                         gather_rays: 16,
                         ..base.clone()
                     };
-                    bounce_tests::mean(&indirect_with(&r, s, w, h, res, vox))
+                    bounce_tests::mean(&indirect_with(&mut r, s, w, h, res, vox))
                 })
                 .collect();
             let n = means.len() as f64;
@@ -302,16 +302,16 @@ pub fn corner_scene() -> Scene {
 fn around_a_corner_gbg_and_mis_beat_uniform_and_global() {
     let scene = corner_scene();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (64, 64, 64, 64);
-    let all = indirect(&r, Method::All, 0, 1, w, h, res, vox);
+    let all = indirect(&mut r, Method::All, 0, 1, w, h, res, vox);
     eprintln!("around the corner: mean indirect radiance {:.4}", bounce_tests::mean(&all));
     let mut err = std::collections::BTreeMap::new();
     for method in [Method::Uniform, Method::Global, Method::Gbg, Method::Mis] {
         let e = (0..3)
             .map(|k| {
                 let s = FrameSettings { method, seed: 40 + k, vpls: 32, ..FrameSettings::default() };
-                bounce_tests::rel_mse(&indirect_with(&r, s, w, h, res, vox), &all)
+                bounce_tests::rel_mse(&indirect_with(&mut r, s, w, h, res, vox), &all)
             })
             .sum::<f64>()
             / 3.0;
@@ -331,13 +331,13 @@ fn around_a_corner_gbg_and_mis_beat_uniform_and_global() {
 fn local_has_no_seam_at_region_borders() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (32, 32, 32, 32);
-    let all = indirect(&r, Method::All, 0, 1, w, h, res, vox);
+    let all = indirect(&mut r, Method::All, 0, 1, w, h, res, vox);
     let mut diffs = vec![];
     for k in 0..12 {
         let s = FrameSettings { method: Method::Local, regions: 4, seed: 70 + k, vpls: 8, ..FrameSettings::default() };
-        let img = indirect_with(&r, s, w, h, res, vox);
+        let img = indirect_with(&mut r, s, w, h, res, vox);
         for y in 0..h as usize {
             let (l, rr) = (y * w as usize + w as usize / 2 - 1, y * w as usize + w as usize / 2);
             let lum = |p: [f32; 3]| (p[0] + p[1] + p[2]) as f64 / 3.0;
@@ -357,10 +357,10 @@ fn local_has_no_seam_at_region_borders() {
 fn a_seed_gives_one_image() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     for method in [Method::Uniform, Method::Gbg, Method::Mis] {
-        let run = |seed| {
-            indirect_with(&r, FrameSettings { method, seed, vpls: 4, ..FrameSettings::default() }, 16, 16, 32, 32)
+        let mut run = |seed| {
+            indirect_with(&mut r, FrameSettings { method, seed, vpls: 4, ..FrameSettings::default() }, 16, 16, 32, 32)
         };
         let (a, b, c) = (run(9), run(9), run(10));
         assert_eq!(a, b, "{}: the same seed gave two images", method.name());
@@ -376,18 +376,18 @@ fn gpu_reference_matches_the_closed_form_and_the_cpu_tracer() {
     let sphere = sphere_scene(radius, 48, rho, Vec3::new(0.25, 0.3, -0.15), intensity);
     let want = (rho * rho * intensity / (PI * radius * radius)) as f64;
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &sphere).unwrap();
+    let mut r = Renderer::new(&gpu, &sphere).unwrap();
     let s = FrameSettings { method: Method::Reference, spp: 64, ..FrameSettings::default() };
-    let img = indirect_with(&r, s, 16, 16, 32, 32);
+    let img = indirect_with(&mut r, s, 16, 16, 32, 32);
     let m = bounce_tests::mean(&img);
     eprintln!("gpu reference, sphere: {m:.5} vs closed form {want:.5} ({:+.2}%)", 100.0 * (m - want) / want);
     assert!(((m - want) / want).abs() < 0.01, "{m} vs {want}");
 
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h) = (24, 24);
     let gpu_img = indirect_with(
-        &r,
+        &mut r,
         FrameSettings { method: Method::Reference, spp: 1024, ..FrameSettings::default() },
         w,
         h,
@@ -417,10 +417,10 @@ fn all_with_exact_visibility_agrees_with_the_reference() {
     use bounce_graph::frame::Visibility;
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
-    let r = Renderer::new(&gpu, &scene).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h) = (24, 24);
     let exact = indirect_with(
-        &r,
+        &mut r,
         FrameSettings { method: Method::All, visibility: Visibility::Exact, ..FrameSettings::default() },
         w,
         h,
@@ -428,7 +428,7 @@ fn all_with_exact_visibility_agrees_with_the_reference() {
         64,
     );
     let reference = indirect_with(
-        &r,
+        &mut r,
         FrameSettings { method: Method::Reference, spp: 2048, ..FrameSettings::default() },
         w,
         h,

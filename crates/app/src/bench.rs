@@ -65,7 +65,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// The cached reference (`all`) for the plan's settings, rendering it when absent.
-fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<RgbImage> {
+fn reference(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<RgbImage> {
     let b = &plan.base;
     let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let parent =
@@ -99,7 +99,7 @@ fn reference(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
     Ok(img)
 }
 
-pub fn run(r: &Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<Sample>> {
+pub fn run(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<Sample>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let reference = reference(r, plan, scene, dir, err)?;
     let total = (plan.methods.len() * plan.vpls.len()) as u64 * plan.repeats as u64;

@@ -364,7 +364,7 @@ fn bench(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> 
     };
     let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone(), ..GpuOptions::default() })
         .map_err(gpu_error)?;
-    let renderer = Renderer::new(&gpu, &scene)?;
+    let mut renderer = Renderer::new(&gpu, &scene)?;
     for &n in &a.vpls {
         renderer.check(&FrameSettings { vpls: n, ..base.clone() }).map_err(bad)?;
     }
@@ -378,7 +378,7 @@ fn bench(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> 
             ReferenceArg::All => bench::Reference::All,
         },
     };
-    let samples = bench::run(&renderer, &plan, &a.scene, &a.out, err)?;
+    let samples = bench::run(&mut renderer, &plan, &a.scene, &a.out, err)?;
     if a.validation {
         let msgs = gpu.validation().messages();
         anyhow::ensure!(msgs.is_empty(), "{} validation message(s); first: {}", msgs.len(), msgs[0]);
@@ -484,7 +484,7 @@ fn render(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     let gpu = Gpu::new(&GpuOptions { validation: a.validation, device: a.device.clone(), ..GpuOptions::default() })
         .map_err(gpu_error)?;
     settings.validate(&gpu).map_err(bad)?;
-    let renderer = Renderer::new(&gpu, &scene)?;
+    let mut renderer = Renderer::new(&gpu, &scene)?;
     renderer.check(&settings).map_err(bad)?;
     let t0 = Instant::now();
     let frame =

@@ -6,8 +6,7 @@ use crate::memory::{Buffer, Image};
 use ash::vk;
 
 impl Gpu {
-    /// Record `f` into a fresh command buffer, submit it, and wait for its fence. Objects parked with
-    /// [`Gpu::retire`] are released afterwards.
+    /// Record `f` into a fresh command buffer, submit it, and wait for its fence.
     pub fn submit<R>(&self, f: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
         self.submit_synced(&[], &[], f)
     }
@@ -21,7 +20,7 @@ impl Gpu {
         f: impl FnOnce(vk::CommandBuffer) -> R,
     ) -> Result<R> {
         let d = &self.device;
-        let pool = self.command_pool.lock().unwrap();
+        let pool = self.command_pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let info = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
@@ -52,7 +51,6 @@ impl Gpu {
         })();
         unsafe { d.free_command_buffers(*pool, &[cmd]) };
         drop(pool);
-        self.drain_retired();
         result
     }
 }

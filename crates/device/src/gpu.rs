@@ -5,7 +5,7 @@ use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, PoisonError};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -31,16 +31,16 @@ pub struct ValidationLog {
 
 impl ValidationLog {
     pub fn messages(&self) -> Vec<String> {
-        self.messages.lock().unwrap().clone()
+        self.messages.lock().unwrap_or_else(PoisonError::into_inner).clone()
     }
     pub fn count(&self) -> usize {
-        self.messages.lock().unwrap().len()
+        self.messages.lock().unwrap_or_else(PoisonError::into_inner).len()
     }
     pub fn clear(&self) {
-        self.messages.lock().unwrap().clear();
+        self.messages.lock().unwrap_or_else(PoisonError::into_inner).clear();
     }
     fn push(&self, m: String) {
-        self.messages.lock().unwrap().push(m);
+        self.messages.lock().unwrap_or_else(PoisonError::into_inner).push(m);
     }
 }
 
@@ -109,7 +109,6 @@ pub struct Shared {
     pub debug_utils: Option<ext::debug_utils::Device>,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) command_pool: Mutex<vk::CommandPool>,
-    pub(crate) retired: Mutex<Vec<Box<dyn Send + Sync>>>,
     messenger: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     validation: Arc<ValidationLog>,
 }
@@ -200,6 +199,15 @@ fn create_instance(
             return Err(Error::NoValidationLayer);
         }
         layers.push(VALIDATION_LAYER.as_ptr());
+        // Synchronization validation checks every barrier the graph derives (lavapipe runs commands in
+        // order, so a missing barrier could not fail a test otherwise). It needs the layer's
+        // VK_EXT_validation_features; a layer without it is too old for bounce's tests.
+        let layer_exts = unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
+            .vk("vkEnumerateInstanceExtensionProperties")?;
+        if !layer_exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::validation_features::NAME)) {
+            return Err(Error::NoValidationLayer);
+        }
+        exts.push(ext::validation_features::NAME.as_ptr());
     }
     let has_debug_utils = unsafe { entry.enumerate_instance_extension_properties(None) }
         .unwrap_or_default()
@@ -208,10 +216,15 @@ fn create_instance(
     if has_debug_utils {
         exts.push(ext::debug_utils::NAME.as_ptr());
     }
-    let info = vk::InstanceCreateInfo::default()
+    let enabled = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled);
+    let mut info = vk::InstanceCreateInfo::default()
         .application_info(&app)
         .enabled_layer_names(&layers)
         .enabled_extension_names(&exts);
+    if validation {
+        info = info.push_next(&mut features);
+    }
     unsafe { entry.create_instance(&info, None) }.map_err(|result| match result {
         vk::Result::ERROR_INCOMPATIBLE_DRIVER => Error::NoDevice(" (vkCreateInstance: incompatible driver)".into()),
         result => Error::Vk { call: "vkCreateInstance", result },
@@ -439,7 +452,6 @@ impl Gpu {
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             command_pool: Mutex::new(command_pool),
-            retired: Mutex::new(vec![]),
             messenger,
             validation,
         })))
@@ -456,16 +468,6 @@ impl Gpu {
 
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
         &self.properties.limits
-    }
-
-    /// Keep `object` alive until the next submission has completed.
-    pub fn retire<T: Send + Sync + 'static>(&self, object: T) {
-        self.retired.lock().unwrap().push(Box::new(object));
-    }
-
-    pub(crate) fn drain_retired(&self) {
-        let drained = std::mem::take(&mut *self.retired.lock().unwrap());
-        drop(drained);
     }
 
     /// Give a Vulkan object a name that shows in validation messages and RenderDoc.
@@ -495,12 +497,11 @@ impl Gpu {
 
     pub fn wait_idle(&self) -> Result<()> {
         unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
-        self.drain_retired();
         Ok(())
     }
 
     pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
-        self.allocator.lock().unwrap()
+        self.allocator.lock().unwrap_or_else(PoisonError::into_inner)
     }
 }
 
@@ -508,8 +509,7 @@ impl Drop for Shared {
     fn drop(&mut self) {
         unsafe {
             let _ = self.device.device_wait_idle();
-            self.retired.get_mut().unwrap().clear();
-            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap(), None);
+            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(PoisonError::into_inner), None);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             if let Some((du, m)) = self.messenger.take() {

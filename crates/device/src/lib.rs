@@ -6,15 +6,16 @@
 //!
 //! Contracts (everything here is explicit; convenience lives in `bounce-graph`):
 //! 1. **No automatic synchronisation.** Nothing here inserts a barrier on the caller's behalf, except the
-//!    upload/readback helpers, which document the state they leave a resource in. Barriers come from one
-//!    table, [`sync::Access`] → (stage, access, layout), and the graph derives them.
+//!    upload/readback helpers, which document the state they leave a resource in. Every barrier is
+//!    planned by [`sync::plan`] from one table, [`sync::Access`] → (stage, access, layout), and recorded
+//!    by [`sync::transition`]: by the graph for its passes, here for readbacks and presentation.
 //! 2. **Ownership and lifetime.** [`Buffer`], [`Image`] and pipelines hold a [`Gpu`] clone and destroy
 //!    themselves on drop, *immediately*. Drop a resource only when the GPU no longer uses it: every
 //!    submission here waits for its fence before returning, so after [`Gpu::submit`] everything it used may
-//!    be dropped. [`Gpu::retire`] parks an object until the next submission completes, for code that
-//!    records before it knows whether it still needs an object. The device itself is destroyed when the
-//!    last clone of [`Gpu`] (held by every resource) goes: wait idle → retired objects → allocator →
-//!    device → debug messenger → instance.
+//!    be dropped. The device itself is destroyed when the last clone of [`Gpu`] (held by every
+//!    resource) goes: wait idle → allocator → device → debug messenger → instance. A panic while
+//!    recording (a contract violation caught by a debug assertion) poisons no lock for good: the
+//!    device still tears down cleanly.
 //! 3. **Validation messages are collected per device**, through the messenger's user-data pointer, never in
 //!    a process global: tests run as threads of one process, each with its own [`Gpu`] and
 //!    [`ValidationLog`].

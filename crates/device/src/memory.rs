@@ -2,12 +2,12 @@
 
 use crate::error::{Error, Result, VkContext};
 use crate::gpu::Gpu;
-use crate::sync::{self, Access};
+use crate::sync::{self, Access, Target, Tracked};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct BufferDesc {
     pub name: String,
     pub size: u64,
@@ -126,10 +126,12 @@ impl Buffer {
             },
         )?;
         gpu.submit(|cmd| unsafe {
-            sync::buffer_barrier(gpu, cmd, self.raw, current, Access::TransferRead);
+            let mut state = Tracked::after(current, false);
+            sync::transition(gpu, cmd, Target::Buffer(self.raw), &mut state, Access::TransferRead);
             let region = vk::BufferCopy::default().size(self.size);
             gpu.device.cmd_copy_buffer(cmd, self.raw, staging.raw, &[region]);
-            sync::buffer_barrier(gpu, cmd, staging.raw, Access::TransferWrite, Access::HostRead);
+            let mut staged = Tracked::after(Access::TransferWrite, false);
+            sync::transition(gpu, cmd, Target::Buffer(staging.raw), &mut staged, Access::HostRead);
         })?;
         Ok(staging.mapped().expect("GpuToCpu memory is mapped").to_vec())
     }
@@ -144,7 +146,7 @@ impl Drop for Buffer {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ImageDesc {
     pub name: String,
     pub width: u32,
@@ -325,7 +327,8 @@ impl Image {
             },
         )?;
         gpu.submit(|cmd| unsafe {
-            sync::image_barrier(gpu, cmd, self, current, Access::TransferRead);
+            let mut state = Tracked::after(current, self.desc.is_depth());
+            sync::transition(gpu, cmd, Target::Image(self), &mut state, Access::TransferRead);
             let region = vk::BufferImageCopy::default()
                 .image_subresource(
                     vk::ImageSubresourceLayers::default().aspect_mask(self.aspect()).layer_count(self.desc.layers),
@@ -338,7 +341,8 @@ impl Image {
                 staging.raw,
                 &[region],
             );
-            sync::buffer_barrier(gpu, cmd, staging.raw, Access::TransferWrite, Access::HostRead);
+            let mut staged = Tracked::after(Access::TransferWrite, false);
+            sync::transition(gpu, cmd, Target::Buffer(staging.raw), &mut staged, Access::HostRead);
         })?;
         Ok(staging.mapped().expect("GpuToCpu memory is mapped")[..(layer_bytes * self.desc.layers as u64) as usize]
             .to_vec())

@@ -10,6 +10,7 @@
 use crate::error::{Error, Result, VkContext};
 use crate::gpu::Gpu;
 use crate::memory::{Buffer, BufferDesc};
+use crate::sync::{self, Access, Target, Tracked};
 use ash::{khr, vk};
 use gpu_allocator::MemoryLocation;
 
@@ -204,26 +205,6 @@ impl Swapchain {
                 height: height.min(self.extent.height),
                 depth: 1,
             });
-        // The acquire semaphore's wait (at COPY) orders the layout change after the presentation
-        // engine is done with the image; its old contents are not needed.
-        let to_dst = [vk::ImageMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::NONE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-            .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .old_layout(vk::ImageLayout::UNDEFINED)
-            .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-            .image(image)
-            .subresource_range(range)];
-        let to_present = [vk::ImageMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::NONE)
-            .dst_access_mask(vk::AccessFlags2::NONE)
-            .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-            .new_layout(vk::ImageLayout::PRESENT_SRC_KHR)
-            .image(image)
-            .subresource_range(range)];
         let wait =
             [vk::SemaphoreSubmitInfo::default().semaphore(self.acquired).stage_mask(vk::PipelineStageFlags2::COPY)];
         let signal = [vk::SemaphoreSubmitInfo::default()
@@ -232,9 +213,13 @@ impl Swapchain {
         // One frame in flight: this waits for the copy, so the staging buffer and the acquire
         // semaphore are free again before the next present.
         self.gpu.submit_synced(&wait, &signal, |cmd| unsafe {
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_dst));
+            // The barriers come from the access table like every other: acquired (the semaphore's wait
+            // at the transfer stage, old contents discarded) → copy destination → presentation.
+            let target = Target::External { image, range };
+            let mut state = Tracked::after(Access::Acquired, false);
+            sync::transition(&self.gpu, cmd, target, &mut state, Access::TransferWrite);
             d.cmd_copy_buffer_to_image(cmd, staging_raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy]);
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_present));
+            sync::transition(&self.gpu, cmd, target, &mut state, Access::Present);
         })?;
         let waits = [self.copied[index as usize]];
         let swapchains = [self.raw];

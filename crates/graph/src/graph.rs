@@ -1,19 +1,35 @@
-//! The pass graph: typed resource handles, passes that declare what they read and write, barriers derived
-//! from the one access table, a debug label and two GPU timestamps around every pass, and culling of
-//! passes whose outputs nothing consumes.
+//! The pass graph: typed resource handles, passes that declare what they read and write, barriers planned
+//! from the one access table (`bounce_device::sync`), a debug label and two GPU timestamps around every
+//! pass, culling of passes whose outputs nothing consumes, and the resources that outlive a frame.
 //!
 //! Life of a frame: passes call [`Graph::add_pass`] with their reads and writes and a recording closure;
 //! the caller marks what it wants with [`Graph::export`]; [`Graph::execute`] walks the passes backwards
 //! to find the live ones, allocates transient resources, records everything into one command buffer
-//! (barriers before each pass from the resources' tracked state), submits, waits, and returns an
-//! [`Executed`] frame from which exported resources are read back, with per-pass GPU times.
+//! (before each pass, the planner's barriers from the resources' tracked state), submits, waits, and
+//! returns an [`Executed`] frame from which exported resources are read back, with per-pass GPU times.
 //!
-//! No reordering, aliasing or async compute: passes run in the order they were added.
+//! **Across frames** (kajiya's `get_or_create_temporal`, generalised to keyed products): a graph made
+//! with [`Graph::with_retained`] borrows a [`Retained`] store.
+//! - [`Graph::cached`] asks for a pass's products under a name and a key built from everything they
+//!   depend on. With a stored product of that name and key, its resources are lent to this graph and the
+//!   build closure does not run (its passes are not even added); otherwise the closure adds the passes,
+//!   and when they ran, the products are kept for the next graph. The recipe asks the same way either
+//!   way, so it has no branch on what is cached.
+//! - [`Graph::temporal_image`] / [`Graph::temporal_buffer`] are one resource per name that lives across
+//!   graphs (accumulators), recreated empty when its description or key changes; [`Graph::history_image`]
+//!   is this frame's and last frame's version of one (ping-pong, swapped by [`Retained::next_frame`]).
+//!
+//! The store is handed back when the [`Executed`] frame is dropped, with each resource's last access, so
+//! the next graph's barriers start from the right state. Resources owned outside the graph (test inputs)
+//! are imported from a [`Persistent`]. No reordering, aliasing or async compute: passes run in the order
+//! they were added.
 
 use anyhow::{Context, Result};
-use bounce_device::sync::{self, Access, Src};
+use bounce_device::sync::{self, Access, Target, Tracked};
 use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, ImageDesc, TimestampPool};
 use std::cell::Cell;
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 use std::marker::PhantomData;
 
 /// A typed reference to a graph resource. Reads take `&Handle`, writes `&mut Handle`.
@@ -22,6 +38,11 @@ pub struct Handle<T> {
     _t: PhantomData<fn() -> T>,
 }
 
+impl<T> Handle<T> {
+    fn new(id: usize) -> Self {
+        Handle { id, _t: PhantomData }
+    }
+}
 impl<T> Clone for Handle<T> {
     fn clone(&self) -> Self {
         *self
@@ -34,8 +55,8 @@ impl<T> std::fmt::Debug for Handle<T> {
     }
 }
 
-/// A resource that outlives frames (owned by a pass struct or the renderer) with its last access, so the
-/// next frame's barriers start from the right state.
+/// A resource owned outside the graph (a test's uploaded input), with its last access, so the next
+/// graph's barriers start from the right state.
 pub struct Persistent<T> {
     pub res: T,
     last: Cell<Access>,
@@ -55,45 +76,229 @@ impl<T> Persistent<T> {
     }
 }
 
-enum Storage<'a> {
-    TransientBuffer(BufferDesc, Option<Buffer>),
-    TransientImage(ImageDesc, Option<Image>),
-    ImportedBuffer(&'a Persistent<Buffer>),
-    ImportedImage(&'a Persistent<Image>),
+/// A realised resource the graph keeps between frames.
+enum Res {
+    Buffer(Buffer),
+    Image(Image),
 }
 
-/// Per-resource synchronisation state while recording.
-#[derive(Clone, Copy)]
-struct State {
-    layout: vk::ImageLayout,
-    last_write: Option<Access>,
-    /// Stages that read since the last write (a later write must wait for them).
-    readers: vk::PipelineStageFlags2,
-    /// Accesses already made visible since the last write (a read among them needs no barrier).
-    visible: vk::AccessFlags2,
-    visible_stages: vk::PipelineStageFlags2,
-    /// The last access, handed back to a [`Persistent`] after execution.
+impl Res {
+    fn depth(&self) -> bool {
+        matches!(self, Res::Image(i) if i.desc.is_depth())
+    }
+}
+
+/// A kept resource and its last access.
+struct Kept {
+    res: Res,
     last: Access,
 }
 
-impl State {
-    fn from_access(a: Access, depth: bool) -> State {
-        let i = a.info();
-        State {
-            layout: a.layout_for(depth),
-            last_write: i.writes.then_some(a),
-            readers: if i.writes { vk::PipelineStageFlags2::NONE } else { i.stage },
-            visible: vk::AccessFlags2::NONE,
-            visible_stages: vk::PipelineStageFlags2::NONE,
-            last: a,
+/// The products of one [`Graph::cached`] name: the key they were made under and their resources, in
+/// [`Products::handles`] order.
+struct Product {
+    key: u64,
+    resources: Vec<Kept>,
+}
+
+/// A temporal resource: what it was made for (description and key) and the resource.
+struct TemporalSlot {
+    fingerprint: u64,
+    kept: Kept,
+}
+
+/// What the graph keeps across frames: cached products by name and temporal resources by name. Owned by
+/// whoever renders frames (the `Renderer`'s frame state) and lent to each graph.
+#[derive(Default)]
+pub struct Retained {
+    products: HashMap<&'static str, Product>,
+    temporal: HashMap<String, TemporalSlot>,
+    frame: u64,
+}
+
+impl Retained {
+    /// Forget everything kept: the next graph records every pass it needs.
+    pub fn clear(&mut self) {
+        self.products.clear();
+        self.temporal.clear();
+    }
+    /// Start a new frame: [`Graph::history_image`]'s current and previous versions swap.
+    pub fn next_frame(&mut self) {
+        self.frame += 1;
+    }
+    /// The frame counter ([`Retained::next_frame`] calls).
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+    /// Names of the cached products held now (diagnostics and tests).
+    pub fn product_names(&self) -> Vec<&'static str> {
+        let mut v: Vec<_> = self.products.keys().copied().collect();
+        v.sort_unstable();
+        v
+    }
+}
+
+/// A stable 64-bit fingerprint of a cache key (std's SipHash with fixed keys: the same in every run).
+pub fn fingerprint(key: &impl Hash) -> u64 {
+    #[allow(deprecated)]
+    let mut h = std::hash::SipHasher::new();
+    key.hash(&mut h);
+    h.finish()
+}
+
+/// A resource handle without its type, for [`Products`].
+#[derive(Clone, Copy, Debug)]
+pub struct RawHandle {
+    id: usize,
+    image: bool,
+}
+
+/// A bundle of handles a pass (or a few passes) produces, that [`Graph::cached`] can keep and lend back.
+/// Implemented for handles, tuples and the passes' output structs ([`crate::products!`]).
+pub trait Products: Copy {
+    /// The handles, in a fixed order.
+    fn handles(&self, out: &mut Vec<RawHandle>);
+    /// The same bundle from handles in [`Products::handles`] order.
+    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self;
+}
+
+impl Products for Handle<Image> {
+    fn handles(&self, out: &mut Vec<RawHandle>) {
+        out.push(RawHandle { id: self.id, image: true });
+    }
+    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self {
+        let h = it.next().expect("a product bundle lost a handle");
+        assert!(h.image, "a cached product changed type (buffer where an image was kept)");
+        Handle::new(h.id)
+    }
+}
+
+impl Products for Handle<Buffer> {
+    fn handles(&self, out: &mut Vec<RawHandle>) {
+        out.push(RawHandle { id: self.id, image: false });
+    }
+    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self {
+        let h = it.next().expect("a product bundle lost a handle");
+        assert!(!h.image, "a cached product changed type (image where a buffer was kept)");
+        Handle::new(h.id)
+    }
+}
+
+impl<A: Products, B: Products> Products for (A, B) {
+    fn handles(&self, out: &mut Vec<RawHandle>) {
+        self.0.handles(out);
+        self.1.handles(out);
+    }
+    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self {
+        let a = A::from_handles(it);
+        (a, B::from_handles(it))
+    }
+}
+
+/// `products!(Struct { field, ... })`: implement [`Products`] for a struct whose fields are handles or
+/// other products.
+#[macro_export]
+macro_rules! products {
+    ($t:ident { $($f:ident),+ $(,)? }) => {
+        impl $crate::graph::Products for $t {
+            fn handles(&self, out: &mut Vec<$crate::graph::RawHandle>) {
+                $( $crate::graph::Products::handles(&self.$f, out); )+
+            }
+            fn from_handles(it: &mut dyn Iterator<Item = $crate::graph::RawHandle>) -> Self {
+                $t { $( $f: $crate::graph::Products::from_handles(it), )+ }
+            }
+        }
+    };
+}
+
+/// A temporal resource as a graph lends it.
+#[derive(Clone, Copy, Debug)]
+pub struct Temporal<T> {
+    pub handle: Handle<T>,
+    /// The contents are undefined (just made, or its description or key changed): the first pass must
+    /// overwrite rather than add to it.
+    pub fresh: bool,
+}
+
+/// This frame's and last frame's version of a temporal image.
+#[derive(Clone, Copy, Debug)]
+pub struct History {
+    pub current: Handle<Image>,
+    /// Last frame's image, `None` when there is none with the same description (first frame, resize).
+    pub previous: Option<Handle<Image>>,
+}
+
+enum Storage<'a> {
+    TransientBuffer(BufferDesc, Option<Buffer>),
+    TransientImage(ImageDesc, Option<Image>),
+    /// Lent by the [`Retained`] store (a cached product or a temporal resource).
+    Lent(Res),
+    ExternalBuffer(&'a Persistent<Buffer>),
+    ExternalImage(&'a Persistent<Image>),
+}
+
+impl Storage<'_> {
+    fn buffer(&self) -> Option<&Buffer> {
+        match self {
+            Storage::TransientBuffer(_, Some(b)) | Storage::Lent(Res::Buffer(b)) => Some(b),
+            Storage::ExternalBuffer(p) => Some(&p.res),
+            _ => None,
         }
     }
+    fn image(&self) -> Option<&Image> {
+        match self {
+            Storage::TransientImage(_, Some(i)) | Storage::Lent(Res::Image(i)) => Some(i),
+            Storage::ExternalImage(p) => Some(&p.res),
+            _ => None,
+        }
+    }
+    /// Realised and owned by the graph (transient or lent), so it can be kept.
+    fn keepable(&self) -> bool {
+        matches!(self, Storage::TransientBuffer(_, Some(_)) | Storage::TransientImage(_, Some(_)) | Storage::Lent(_))
+    }
+    fn target(&self) -> Option<Target<'_>> {
+        self.image().map(Target::Image).or_else(|| self.buffer().map(|b| Target::Buffer(b.raw)))
+    }
+    /// Move the realised resource out (to keep it); `None` if it was never realised or is external.
+    fn take(&mut self) -> Option<Res> {
+        match std::mem::replace(self, Storage::TransientBuffer(BufferDesc::storage("taken", 0), None)) {
+            Storage::TransientBuffer(_, Some(b)) => Some(Res::Buffer(b)),
+            Storage::TransientImage(_, Some(i)) => Some(Res::Image(i)),
+            Storage::Lent(r) => Some(r),
+            other => {
+                *self = other;
+                None
+            }
+        }
+    }
+}
+
+/// Where a resource goes when the frame is done.
+#[derive(Clone, Debug)]
+enum Home {
+    /// Dropped with the frame (or, if a cached product claims it, kept with that product).
+    Frame,
+    /// Back to the store's temporal slot of this name, made for this fingerprint.
+    Temporal(String, u64),
 }
 
 struct ResourceEntry<'a> {
     name: String,
     storage: Storage<'a>,
-    state: State,
+    /// Interior mutability so a pass can serialize its own commands through the planner while it
+    /// holds references to other resources ([`PassContext::serialize`]).
+    state: Cell<Tracked>,
+    home: Home,
+}
+
+impl ResourceEntry<'_> {
+    /// Plan and record the barrier that makes this resource ready for `next`.
+    fn transition(&self, gpu: &Gpu, cmd: vk::CommandBuffer, next: Access) {
+        let target = self.storage.target().unwrap_or_else(|| panic!("`{}` used before it was realised", self.name));
+        let mut s = self.state.get();
+        sync::transition(gpu, cmd, target, &mut s, next);
+        self.state.set(s);
+    }
 }
 
 type Record<'a> = Box<dyn FnOnce(&PassContext) + 'a>;
@@ -143,27 +348,38 @@ impl<'g, 'a> PassBuilder<'g, 'a> {
     }
 }
 
-/// What a recording closure sees: the device, the command buffer, and its resources.
+/// What a recording closure sees: the device, the command buffer, and the resources it declared.
 pub struct PassContext<'r> {
     pub gpu: &'r Gpu,
     pub cmd: vk::CommandBuffer,
     resources: &'r [ResourceEntry<'r>],
+    declared: &'r [(usize, Access, Use)],
 }
 
 impl PassContext<'_> {
+    /// The access this pass declared for resource `id`; a handle it did not declare is a bug.
+    fn declared(&self, id: usize) -> Access {
+        let found = self.declared.iter().find(|(d, _, _)| *d == id).map(|(_, a, _)| *a);
+        debug_assert!(found.is_some(), "pass used `{}` without declaring it", self.resources[id].name);
+        found.unwrap_or(Access::Nothing)
+    }
     pub fn buffer(&self, h: &Handle<Buffer>) -> &Buffer {
-        match &self.resources[h.id].storage {
-            Storage::TransientBuffer(_, Some(b)) => b,
-            Storage::ImportedBuffer(p) => &p.res,
-            _ => panic!("handle {} is not a realised buffer", h.id),
-        }
+        self.declared(h.id);
+        let r = &self.resources[h.id];
+        r.storage.buffer().unwrap_or_else(|| panic!("`{}` is not a realised buffer", r.name))
     }
     pub fn image(&self, h: &Handle<Image>) -> &Image {
-        match &self.resources[h.id].storage {
-            Storage::TransientImage(_, Some(i)) => i,
-            Storage::ImportedImage(p) => &p.res,
-            _ => panic!("handle {} is not a realised image", h.id),
-        }
+        self.declared(h.id);
+        let r = &self.resources[h.id];
+        r.storage.image().unwrap_or_else(|| panic!("`{}` is not a realised image", r.name))
+    }
+    /// Serialized accumulation inside one pass: the pass's next command reads or adds to what its
+    /// previous command wrote to `h`. The planner records the write-after-write barrier from `h`'s tracked
+    /// state to the access the pass declared for it.
+    pub fn serialize<T>(&self, h: &Handle<T>) {
+        let access = self.declared(h.id);
+        debug_assert!(access.info().writes, "serialize() on `{}`, which this pass only reads", self.resources[h.id].name);
+        self.resources[h.id].transition(self.gpu, self.cmd, access);
     }
 }
 
@@ -175,49 +391,133 @@ pub struct PassTiming {
     pub ms: Option<f64>,
 }
 
+/// One [`Graph::cached`] request: its key and its handles.
+struct Request {
+    key: u64,
+    handles: Vec<RawHandle>,
+}
+
 pub struct Graph<'a> {
     gpu: Gpu,
     resources: Vec<ResourceEntry<'a>>,
     passes: Vec<PassEntry<'a>>,
     exported: Vec<usize>,
+    retained: Option<&'a mut Retained>,
+    requests: Vec<(&'static str, Request)>,
 }
 
 impl<'a> Graph<'a> {
+    /// A graph that keeps nothing across frames (`cached` always builds).
     pub fn new(gpu: &Gpu) -> Self {
-        Graph { gpu: gpu.clone(), resources: vec![], passes: vec![], exported: vec![] }
+        Graph { gpu: gpu.clone(), resources: vec![], passes: vec![], exported: vec![], retained: None, requests: vec![] }
     }
 
-    fn push(&mut self, name: String, storage: Storage<'a>, state: State) -> usize {
-        self.resources.push(ResourceEntry { name, storage, state });
+    /// A graph that borrows `retained` for its cached products and temporal resources.
+    pub fn with_retained(gpu: &Gpu, retained: &'a mut Retained) -> Self {
+        Graph { retained: Some(retained), ..Graph::new(gpu) }
+    }
+
+    fn push(&mut self, name: String, storage: Storage<'a>, state: Tracked, home: Home) -> usize {
+        self.resources.push(ResourceEntry { name, storage, state: Cell::new(state), home });
         self.resources.len() - 1
     }
 
     /// A buffer that lives for this frame only.
     pub fn create_buffer(&mut self, desc: BufferDesc) -> Handle<Buffer> {
-        let id = self.push(
-            desc.name.clone(),
-            Storage::TransientBuffer(desc, None),
-            State::from_access(Access::Nothing, false),
-        );
-        Handle { id, _t: PhantomData }
+        let name = desc.name.clone();
+        Handle::new(self.push(name, Storage::TransientBuffer(desc, None), Tracked::after(Access::Nothing, false), Home::Frame))
     }
     /// An image that lives for this frame only.
     pub fn create_image(&mut self, desc: ImageDesc) -> Handle<Image> {
-        let id = self.push(
-            desc.name.clone(),
-            Storage::TransientImage(desc, None),
-            State::from_access(Access::Nothing, false),
-        );
-        Handle { id, _t: PhantomData }
+        let name = desc.name.clone();
+        Handle::new(self.push(name, Storage::TransientImage(desc, None), Tracked::after(Access::Nothing, false), Home::Frame))
     }
     pub fn import_buffer(&mut self, p: &'a Persistent<Buffer>) -> Handle<Buffer> {
-        let id = self.push(p.res.name.clone(), Storage::ImportedBuffer(p), State::from_access(p.last.get(), false));
-        Handle { id, _t: PhantomData }
+        let state = Tracked::after(p.last.get(), false);
+        Handle::new(self.push(p.res.name.clone(), Storage::ExternalBuffer(p), state, Home::Frame))
     }
     pub fn import_image(&mut self, p: &'a Persistent<Image>) -> Handle<Image> {
-        let depth = p.res.desc.is_depth();
-        let id = self.push(p.res.desc.name.clone(), Storage::ImportedImage(p), State::from_access(p.last.get(), depth));
-        Handle { id, _t: PhantomData }
+        let state = Tracked::after(p.last.get(), p.res.desc.is_depth());
+        Handle::new(self.push(p.res.desc.name.clone(), Storage::ExternalImage(p), state, Home::Frame))
+    }
+
+    /// The products of `build` under `name`, kept across frames while `key` stays the same. With a kept
+    /// product of this name and key, its resources are lent to this graph and `build` does not run;
+    /// otherwise `build` adds its passes, and if they run, what it returns is kept (an older product of
+    /// the name is dropped). Asking twice in one graph returns the same handles.
+    pub fn cached<P: Products>(&mut self, name: &'static str, key: &impl Hash, build: impl FnOnce(&mut Self) -> P) -> P {
+        let key = fingerprint(key);
+        if let Some((_, r)) = self.requests.iter().find(|(n, r)| *n == name && r.key == key) {
+            return P::from_handles(&mut r.handles.iter().copied());
+        }
+        let kept = self.retained.as_mut().and_then(|st| match st.products.remove(name) {
+            Some(p) if p.key == key => Some(p.resources),
+            _ => None, // a product made under another key is stale: dropped now (no GPU work is pending)
+        });
+        let p = match kept {
+            Some(resources) => {
+                let handles: Vec<RawHandle> = resources.into_iter().map(|k| self.lend(name, k)).collect();
+                P::from_handles(&mut handles.iter().copied())
+            }
+            None => build(self),
+        };
+        let mut handles = vec![];
+        p.handles(&mut handles);
+        self.requests.push((name, Request { key, handles }));
+        p
+    }
+
+    fn lend(&mut self, name: &str, k: Kept) -> RawHandle {
+        let image = matches!(k.res, Res::Image(_));
+        let state = Tracked::after(k.last, k.res.depth());
+        let res_name = match &k.res {
+            Res::Image(i) => i.desc.name.clone(),
+            Res::Buffer(b) => b.name.clone(),
+        };
+        RawHandle { id: self.push(format!("{res_name} ({name})"), Storage::Lent(k.res), state, Home::Frame), image }
+    }
+
+    fn temporal(&mut self, name: &str, fingerprint: u64, fresh_storage: Storage<'a>) -> (usize, bool) {
+        // Asked twice in one graph: the same resource.
+        let same = |r: &ResourceEntry| matches!(&r.home, Home::Temporal(n, f) if n == name && *f == fingerprint);
+        if let Some(id) = self.resources.iter().position(same) {
+            return (id, false);
+        }
+        let slot = self.retained.as_mut().and_then(|st| st.temporal.remove(name));
+        let home = Home::Temporal(name.to_string(), fingerprint);
+        match slot {
+            Some(s) if s.fingerprint == fingerprint => {
+                let state = Tracked::after(s.kept.last, s.kept.res.depth());
+                (self.push(name.to_string(), Storage::Lent(s.kept.res), state, home), false)
+            }
+            _ => (self.push(name.to_string(), fresh_storage, Tracked::after(Access::Nothing, false), home), true),
+        }
+    }
+
+    /// An image that lives across graphs under `name` (an accumulator), recreated with undefined contents
+    /// when `desc` or `key` changes. Without a [`Retained`] store it lives for this frame only.
+    pub fn temporal_image(&mut self, name: &str, desc: ImageDesc, key: &impl Hash) -> Temporal<Image> {
+        let fp = fingerprint(&(format!("{desc:?}"), fingerprint(key)));
+        let (id, fresh) = self.temporal(name, fp, Storage::TransientImage(desc, None));
+        Temporal { handle: Handle::new(id), fresh }
+    }
+
+    /// A buffer that lives across graphs under `name` (see [`Graph::temporal_image`]).
+    pub fn temporal_buffer(&mut self, name: &str, desc: BufferDesc, key: &impl Hash) -> Temporal<Buffer> {
+        let fp = fingerprint(&(format!("{desc:?}"), fingerprint(key)));
+        let (id, fresh) = self.temporal(name, fp, Storage::TransientBuffer(desc, None));
+        Temporal { handle: Handle::new(id), fresh }
+    }
+
+    /// This frame's and last frame's version of an image (two temporal images that swap roles at each
+    /// [`Retained::next_frame`]). `previous` is `None` when last frame's has another description or key,
+    /// or was never written.
+    pub fn history_image(&mut self, name: &str, desc: ImageDesc, key: &impl Hash) -> History {
+        let frame = self.retained.as_ref().map_or(0, |st| st.frame);
+        let slot = |parity: u64| format!("{name}#{}", parity % 2);
+        let current = self.temporal_image(&slot(frame), desc.clone(), key).handle;
+        let previous = self.temporal_image(&slot(frame + 1), desc, key);
+        History { current, previous: (!previous.fresh).then_some(previous.handle) }
     }
 
     /// Start declaring a pass. `name` is the pass's file stem: labels, timing rows and tests use it.
@@ -257,24 +557,18 @@ impl<'a> Graph<'a> {
         live
     }
 
-    /// Record, submit and wait. Returns the executed frame (exported resources, timings, pass lists).
-    pub fn execute(mut self) -> Result<Executed<'a>> {
-        let live = self.live_passes();
+    /// Create the transient resources that live passes use or that are exported.
+    fn realise(&mut self, live: &[bool]) -> Result<()> {
         let mut used = vec![false; self.resources.len()];
-        for (p, &l) in self.passes.iter().zip(&live) {
-            if l {
-                for (id, _, _) in &p.uses {
-                    used[*id] = true;
-                }
+        for (p, _) in self.passes.iter().zip(live).filter(|(_, &l)| l) {
+            for (id, _, _) in &p.uses {
+                used[*id] = true;
             }
         }
         for &e in &self.exported {
             used[e] = true;
         }
-        for (r, &u) in self.resources.iter_mut().zip(&used) {
-            if !u {
-                continue;
-            }
+        for (r, _) in self.resources.iter_mut().zip(&used).filter(|(_, &u)| u) {
             match &mut r.storage {
                 Storage::TransientBuffer(d, slot @ None) => {
                     *slot = Some(Buffer::new(&self.gpu, d).with_context(|| format!("creating buffer `{}`", d.name))?)
@@ -285,15 +579,19 @@ impl<'a> Graph<'a> {
                 _ => {}
             }
         }
+        Ok(())
+    }
 
+    /// Record, submit and wait. Returns the executed frame (exported resources, timings, pass lists).
+    pub fn execute(mut self) -> Result<Executed<'a>> {
+        let live = self.live_passes();
+        self.realise(&live)?;
         let n_live = live.iter().filter(|&&l| l).count() as u32;
         let mut ts = TimestampPool::new(&self.gpu, 2 * n_live)?;
-        let mut ran = vec![];
-        let mut skipped = vec![];
-        let mut stamps = vec![];
+        let (mut ran, mut skipped, mut stamps) = (vec![], vec![], vec![]);
         let gpu = self.gpu.clone();
         let passes = std::mem::take(&mut self.passes);
-        let resources = &mut self.resources;
+        let resources = &self.resources;
         gpu.submit(|cmd| {
             ts.reset(cmd);
             for (pass, is_live) in passes.into_iter().zip(live) {
@@ -302,11 +600,11 @@ impl<'a> Graph<'a> {
                     continue;
                 }
                 for (id, access, _) in &pass.uses {
-                    transition(&gpu, cmd, &mut resources[*id], *access);
+                    resources[*id].transition(&gpu, cmd, *access);
                 }
                 gpu.begin_label(cmd, pass.name);
                 let begin = ts.write(cmd);
-                let ctx = PassContext { gpu: &gpu, cmd, resources: resources.as_slice() };
+                let ctx = PassContext { gpu: &gpu, cmd, resources: resources.as_slice(), declared: &pass.uses };
                 (pass.record.expect("a pass is added only by record()"))(&ctx);
                 let end = ts.write(cmd);
                 gpu.end_label(cmd);
@@ -326,74 +624,23 @@ impl<'a> Graph<'a> {
                 },
             })
             .collect();
-        for r in resources.iter() {
-            match &r.storage {
-                Storage::ImportedBuffer(p) => p.last.set(r.state.last),
-                Storage::ImportedImage(p) => p.last.set(r.state.last),
-                _ => {}
-            }
-        }
-        Ok(Executed { resources: std::mem::take(&mut self.resources), timings, ran, skipped })
+        Ok(Executed {
+            resources: std::mem::take(&mut self.resources),
+            retained: self.retained.take(),
+            requests: std::mem::take(&mut self.requests),
+            timings,
+            ran,
+            skipped,
+        })
     }
 }
 
-/// Record the barrier (if any) that makes `r` ready for `next`.
-fn transition(gpu: &Gpu, cmd: vk::CommandBuffer, r: &mut ResourceEntry, next: Access) {
-    let ni = next.info();
-    let s = &mut r.state;
-    let image = match &r.storage {
-        Storage::TransientImage(_, Some(i)) => Some(i),
-        Storage::ImportedImage(p) => Some(&p.res),
-        _ => None,
-    };
-    let new_layout = image.map(|i| next.layout_for(i.desc.is_depth()));
-    let layout_change = new_layout.is_some_and(|l| l != s.layout);
-    let write_src = s.last_write.map(Src::of).unwrap_or_default();
-    let src = if ni.writes || layout_change {
-        // WAR and WAW hazards, and layout transitions (which are writes), wait for readers and writer.
-        Some(Src { stage: write_src.stage | s.readers, access: write_src.access })
-    } else if s.last_write.is_some() && !(s.visible.contains(ni.access) && s.visible_stages.contains(ni.stage)) {
-        Some(write_src)
-    } else {
-        None
-    };
-    if let Some(src) = src {
-        match (image, &r.storage) {
-            (Some(img), _) => {
-                // From `Nothing` the old contents are discarded: UNDEFINED is the honest old layout.
-                sync::image_barrier_src(gpu, cmd, img, src, s.layout, next);
-            }
-            (None, Storage::TransientBuffer(_, Some(b))) => sync::buffer_barrier_src(gpu, cmd, b.raw, src, next),
-            (None, Storage::ImportedBuffer(p)) => sync::buffer_barrier_src(gpu, cmd, p.res.raw, src, next),
-            _ => unreachable!("resource `{}` used before it was realised", r.name),
-        }
-    }
-    if ni.writes {
-        s.last_write = Some(next);
-        s.readers = vk::PipelineStageFlags2::NONE;
-        s.visible = vk::AccessFlags2::NONE;
-        s.visible_stages = vk::PipelineStageFlags2::NONE;
-    } else {
-        s.readers |= ni.stage;
-        if src.is_some() {
-            if layout_change {
-                s.visible = ni.access;
-                s.visible_stages = ni.stage;
-            } else {
-                s.visible |= ni.access;
-                s.visible_stages |= ni.stage;
-            }
-        }
-    }
-    if let Some(l) = new_layout {
-        s.layout = l;
-    }
-    s.last = next;
-}
-
-/// A frame that ran: exported resources can be read back; the rest is dropped with it.
+/// A frame that ran: exported resources can be read back; when it is dropped, kept products and temporal
+/// resources go back to the [`Retained`] store and the rest is freed.
 pub struct Executed<'a> {
     resources: Vec<ResourceEntry<'a>>,
+    retained: Option<&'a mut Retained>,
+    requests: Vec<(&'static str, Request)>,
     pub timings: Vec<PassTiming>,
     /// Passes recorded, in order.
     pub ran: Vec<&'static str>,
@@ -404,53 +651,68 @@ pub struct Executed<'a> {
 impl Executed<'_> {
     pub fn read_image(&self, h: &Handle<Image>) -> Result<Vec<u8>> {
         let r = &self.resources[h.id];
-        let img = match &r.storage {
-            Storage::TransientImage(_, Some(i)) => i,
-            Storage::ImportedImage(p) => &p.res,
-            _ => anyhow::bail!("image `{}` was not produced (not exported?)", r.name),
-        };
-        let bytes = img.read_back(r.state.last)?;
-        if let Storage::ImportedImage(p) = &r.storage {
-            p.last.set(Access::TransferRead);
-        }
+        let img = r.storage.image().with_context(|| format!("image `{}` was not produced (not exported?)", r.name))?;
+        let bytes = img.read_back(r.state.get().last)?;
+        self.after_read_back(r);
         Ok(bytes)
     }
     pub fn read_buffer(&self, h: &Handle<Buffer>) -> Result<Vec<u8>> {
         let r = &self.resources[h.id];
-        let b = match &r.storage {
-            Storage::TransientBuffer(_, Some(b)) => b,
-            Storage::ImportedBuffer(p) => &p.res,
-            _ => anyhow::bail!("buffer `{}` was not produced (not exported?)", r.name),
-        };
-        let bytes = b.read_back(r.state.last)?;
-        if let Storage::ImportedBuffer(p) = &r.storage {
-            p.last.set(Access::TransferRead);
-        }
+        let b = r.storage.buffer().with_context(|| format!("buffer `{}` was not produced (not exported?)", r.name))?;
+        let bytes = b.read_back(r.state.get().last)?;
+        self.after_read_back(r);
         Ok(bytes)
     }
-    /// Move a transient image out of the frame, with its last access, so a later graph can import it.
-    pub fn take_image(&mut self, h: &Handle<Image>) -> Result<Persistent<Image>> {
-        let r = &mut self.resources[h.id];
-        match &mut r.storage {
-            Storage::TransientImage(_, slot @ Some(_)) => {
-                Ok(Persistent { res: slot.take().unwrap(), last: Cell::new(r.state.last) })
-            }
-            _ => anyhow::bail!("image `{}` is not a realised transient image", r.name),
-        }
-    }
-    /// Move a transient buffer out of the frame (see [`Executed::take_image`]).
-    pub fn take_buffer(&mut self, h: &Handle<Buffer>) -> Result<Persistent<Buffer>> {
-        let r = &mut self.resources[h.id];
-        match &mut r.storage {
-            Storage::TransientBuffer(_, slot @ Some(_)) => {
-                Ok(Persistent { res: slot.take().unwrap(), last: Cell::new(r.state.last) })
-            }
-            _ => anyhow::bail!("buffer `{}` is not a realised transient buffer", r.name),
+    /// A read-back leaves the resource in `TransferRead`, its readback's fence waited.
+    fn after_read_back(&self, r: &ResourceEntry) {
+        r.state.set(Tracked::after(Access::TransferRead, false));
+        match &r.storage {
+            Storage::ExternalBuffer(p) => p.last.set(Access::TransferRead),
+            Storage::ExternalImage(p) => p.last.set(Access::TransferRead),
+            _ => {}
         }
     }
 
     /// Total GPU time of the passes that ran, if timestamps are available.
     pub fn gpu_ms(&self) -> Option<f64> {
         self.timings.iter().map(|t| t.ms).sum()
+    }
+}
+
+impl Drop for Executed<'_> {
+    /// Hand kept products and temporal resources back to the store, with their last accesses; external
+    /// resources get their last access back too.
+    fn drop(&mut self) {
+        for r in &self.resources {
+            match &r.storage {
+                Storage::ExternalBuffer(p) => p.last.set(r.state.get().last),
+                Storage::ExternalImage(p) => p.last.set(r.state.get().last),
+                _ => {}
+            }
+        }
+        let Some(store) = self.retained.as_mut() else { return };
+        for (name, req) in std::mem::take(&mut self.requests) {
+            // A product is kept only whole: every resource realised (its passes ran) and not yet claimed.
+            if !req.handles.iter().all(|h| self.resources[h.id].storage.keepable()) {
+                continue;
+            }
+            let resources = req
+                .handles
+                .iter()
+                .map(|h| {
+                    let r = &mut self.resources[h.id];
+                    Kept { last: r.state.get().last, res: r.storage.take().expect("checked complete") }
+                })
+                .collect();
+            store.products.insert(name, Product { key: req.key, resources });
+        }
+        for r in &mut self.resources {
+            if let Home::Temporal(name, fingerprint) = r.home.clone() {
+                if let Some(res) = r.storage.take() {
+                    let kept = Kept { last: r.state.get().last, res };
+                    store.temporal.insert(name, TemporalSlot { fingerprint, kept });
+                }
+            }
+        }
     }
 }

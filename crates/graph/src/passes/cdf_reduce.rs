@@ -4,7 +4,8 @@
 //! `rows = 2 · lights · res`). Output: `cdf`, floats laid out as `glsl/shared/cdf.glsl` reads them:
 //! a 4-float header (total, rows, row length), the inclusive prefix over row totals (`rows` floats),
 //! then each row's inclusive prefix (`rows × row_length` floats). Dispatch: ⌈rows/64⌉ groups for the
-//! row prefixes (one invocation per row), then one invocation for the prefix over row totals.
+//! row prefixes (one invocation per row), then one invocation for the prefix over row totals, each dispatch serialized after the previous one
+//! by the graph ([`crate::graph::PassContext::serialize`]).
 //!
 //! **Why two levels (and not one flat float32 prefix).** A flat prefix over 2 × 1024² texels adds
 //! ~2·10⁶ terms into one float32 accumulator: late texels' masses fall below the accumulator's ulp and
@@ -20,7 +21,7 @@ use crate::graph::{Graph, Handle};
 use crate::shader_types::CdfPush;
 use crate::shaders;
 use anyhow::Result;
-use bounce_device::sync::{self, Access};
+use bounce_device::sync::Access;
 use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
 
 pub struct CdfReduce {
@@ -68,14 +69,18 @@ impl CdfReduce {
                     .storage_buffer(B_IMPORTANCE, ctx.buffer(&imp))
                     .storage_buffer(B_CDF_OUT, ctx.buffer(&out));
                 let push = |stage, section| CdfPush { stage, row_length, rows, section };
+                // Sections write disjoint ranges of `cdf`, but each dispatch binds the whole buffer, so
+                // the graph serializes them (synchronization validation sees whole-buffer writes).
                 for section in 0..sections {
+                    if section > 0 {
+                        ctx.serialize(&out);
+                    }
                     let p = push(CDF_ROWS, section);
                     self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [rows, 1, 1], [WG_1D, 1, 1]);
                 }
-                // The totals stage reads the row totals the rows stage wrote: a barrier inside the pass.
-                let raw = ctx.buffer(&out).raw;
-                sync::buffer_barrier(ctx.gpu, ctx.cmd, raw, Access::ComputeWrite, Access::ComputeWrite);
                 for section in 0..sections {
+                    // The totals stage reads the row totals the rows stage wrote.
+                    ctx.serialize(&out);
                     let p = push(CDF_TOTALS, section);
                     self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [1, 1, 1], [WG_1D, 1, 1]);
                 }

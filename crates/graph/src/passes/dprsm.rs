@@ -53,6 +53,7 @@ pub struct DprsmDepth {
     /// Distance / far per texel, `2 × lights` layers.
     pub depth: Handle<Image>,
 }
+crate::products!(DprsmDepth { depth });
 
 /// The reflective DPRSM: one VPL per non-empty texel. (Its depth attachment stays inside the pass.)
 #[derive(Clone, Copy, Debug)]
@@ -61,6 +62,7 @@ pub struct DprsmOut {
     pub normal: Handle<Image>,
     pub flux: Handle<Image>,
 }
+crate::products!(DprsmOut { position, normal, flux });
 
 impl Dprsm {
     /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).

@@ -23,7 +23,7 @@ use crate::passes::gbuffer::GBufferOut;
 use crate::shader_types::GatherPush;
 use crate::shaders;
 use anyhow::Result;
-use bounce_device::sync::{self, Access};
+use bounce_device::sync::Access;
 use bounce_device::{Binding, Buffer, ComputePipeline, Gpu, Image, Sampler};
 
 pub struct Gather {
@@ -212,7 +212,7 @@ impl Gather {
                 };
                 if first != push.first {
                     // The next chunk adds to what the previous one stored.
-                    sync::image_barrier(ctx.gpu, ctx.cmd, ctx.image(&o), Access::ComputeWrite, Access::ComputeWrite);
+                    ctx.serialize(&o);
                 }
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
                 first = last;

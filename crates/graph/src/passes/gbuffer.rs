@@ -29,6 +29,7 @@ pub struct GBufferOut {
     pub albedo: Handle<Image>,
     pub depth: Handle<Image>,
 }
+crate::products!(GBufferOut { position, normal, albedo, depth });
 
 impl GBuffer {
     /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).

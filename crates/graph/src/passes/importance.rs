@@ -16,7 +16,8 @@
 //!   thread order.
 //!
 //! In all of them 1/d² is clamped below one voxel cell (importance only: the estimator stays exact).
-//! Dispatch: res × res × layers per section (gbg: W × H for the rays, then res × res × layers).
+//! Dispatch: res × res × layers per section (gbg: `importance_clear` zeroes the scratch sums, then W × H
+//! for the rays, then res × res × layers), each dispatch serialized after the previous one by the graph.
 
 use super::FrameInputs;
 use crate::bindings::*;
@@ -27,7 +28,7 @@ use crate::passes::gbuffer::GBufferOut;
 use crate::shader_types::ImportancePush;
 use crate::shaders;
 use anyhow::Result;
-use bounce_device::sync::{self, Access};
+use bounce_device::sync::Access;
 use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, Gpu, Sampler};
 
 /// Which weights the method sections hold.
@@ -133,6 +134,18 @@ impl Importance {
                 g.create_buffer(BufferDesc::storage("gbg.counts", 4 * texels)),
             )
         });
+        if let Some((sums, counts)) = &mut scratch {
+            // The scatter adds into zeroed sums and counts.
+            let (hs, hc) = (*sums, *counts);
+            g.add_pass("importance_clear")
+                .overwrite(sums, Access::TransferWrite)
+                .overwrite(counts, Access::TransferWrite)
+                .record(move |ctx| unsafe {
+                    for b in [ctx.buffer(&hs), ctx.buffer(&hc)] {
+                        ctx.gpu.device.cmd_fill_buffer(ctx.cmd, b.raw, 0, bounce_device::vk::WHOLE_SIZE, 0);
+                    }
+                });
+        }
         let (gb, vpls, voxels, out) = (*gb, *vpls, *voxels, importance);
         let mut b = g
             .add_pass("importance")
@@ -146,7 +159,7 @@ impl Importance {
             b = b.read(&voxels, Access::ComputeRead);
         }
         if let Some((sums, counts)) = &mut scratch {
-            b = b.overwrite(sums, Access::ComputeWrite).overwrite(counts, Access::ComputeWrite);
+            b = b.write(sums, Access::ComputeWrite).write(counts, Access::ComputeWrite);
         }
         let scratch = scratch;
         b.overwrite(&mut importance, Access::ComputeWrite).record(move |ctx| {
@@ -181,6 +194,8 @@ impl Importance {
                 ImportanceKind::Gbg { .. } => None,
             };
             if let Some((mode, n)) = method {
+                // Sections are disjoint ranges of one whole-buffer binding: serialized (see cdf_reduce).
+                ctx.serialize(&out);
                 let pm = push(mode, 1);
                 self.pipeline.dispatch(
                     ctx.cmd,
@@ -192,17 +207,12 @@ impl Importance {
             }
             if let (ImportanceKind::Gbg { rays }, Some((sums, counts))) = (p.kind, &scratch) {
                 let (sb, cb) = (ctx.buffer(sums), ctx.buffer(counts));
-                unsafe {
-                    ctx.gpu.device.cmd_fill_buffer(ctx.cmd, sb.raw, 0, bounce_device::vk::WHOLE_SIZE, 0);
-                    ctx.gpu.device.cmd_fill_buffer(ctx.cmd, cb.raw, 0, bounce_device::vk::WHOLE_SIZE, 0);
-                }
-                for b in [sb, cb] {
-                    sync::buffer_barrier(ctx.gpu, ctx.cmd, b.raw, Access::TransferWrite, Access::ComputeWrite);
-                }
                 writes = writes
                     .storage_buffer(B_VOXELS, ctx.buffer(&voxels))
                     .storage_buffer(B_GBG_SUM, sb)
                     .storage_buffer(B_GBG_COUNT, cb);
+                // The gbg shader binds the importance buffer that the validity dispatch wrote.
+                ctx.serialize(&out);
                 let scatter = ImportancePush { samples: rays, ..push(IMP_GBG_SCATTER, 1) };
                 self.gbg.dispatch(
                     ctx.cmd,
@@ -211,9 +221,10 @@ impl Importance {
                     [f.width, f.height, 1],
                     [WG_2D, WG_2D, 1],
                 );
-                for b in [sb, cb] {
-                    sync::buffer_barrier(ctx.gpu, ctx.cmd, b.raw, Access::ComputeWrite, Access::ComputeWrite);
-                }
+                // The resolve reads the scattered sums and counts and writes section 1 after section 0.
+                ctx.serialize(sums);
+                ctx.serialize(counts);
+                ctx.serialize(&out);
                 let resolve = push(IMP_GBG_RESOLVE, 1);
                 self.gbg.dispatch(
                     ctx.cmd,

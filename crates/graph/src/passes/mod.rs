@@ -13,7 +13,42 @@ pub mod reference;
 pub mod voxelize;
 
 use crate::gpu_scene::GpuScene;
-use bounce_device::Buffer;
+use anyhow::{Context, Result};
+use bounce_device::{Buffer, Gpu};
+
+/// Every pass of bounce, with its pipelines: created once per scene, immutable afterwards.
+pub struct Passes {
+    pub gbuffer: gbuffer::GBuffer,
+    pub dprsm: dprsm::Dprsm,
+    pub direct: direct::Direct,
+    pub voxelize: voxelize::Voxelize,
+    pub importance: importance::Importance,
+    pub cdf_reduce: cdf_reduce::CdfReduce,
+    pub gather: gather::Gather,
+    /// The gather's recording with the MIS shaders.
+    pub mis: gather::Gather,
+    pub psm: psm::Psm,
+    pub reference: reference::Reference,
+}
+
+impl Passes {
+    /// `textured`: whether the scene has textures (untextured scenes get shader variants without
+    /// texture fetches).
+    pub fn new(gpu: &Gpu, textured: bool) -> Result<Passes> {
+        Ok(Passes {
+            gbuffer: gbuffer::GBuffer::new(gpu, textured).context("creating the gbuffer pass")?,
+            dprsm: dprsm::Dprsm::new(gpu, textured).context("creating the dprsm pass")?,
+            direct: direct::Direct::new(gpu).context("creating the direct pass")?,
+            voxelize: voxelize::Voxelize::new(gpu).context("creating the voxelize pass")?,
+            importance: importance::Importance::new(gpu).context("creating the importance pass")?,
+            cdf_reduce: cdf_reduce::CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,
+            gather: gather::Gather::new(gpu).context("creating the gather pass")?,
+            mis: mis::create(gpu).context("creating the mis pass")?,
+            psm: psm::Psm::new(gpu).context("creating the psm pass")?,
+            reference: reference::Reference::new(gpu, textured).context("creating the reference pass")?,
+        })
+    }
+}
 
 /// What every pass of a frame reads besides graph resources: the static scene and the frame uniforms.
 #[derive(Clone, Copy)]

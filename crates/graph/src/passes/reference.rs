@@ -13,7 +13,7 @@ use crate::graph::{Graph, Handle};
 use crate::shader_types::GatherPush;
 use crate::shaders;
 use anyhow::Result;
-use bounce_device::sync::{self, Access};
+use bounce_device::sync::Access;
 use bounce_device::{Binding, ComputePipeline, Gpu, Image, Sampler};
 
 pub struct Reference {
@@ -107,9 +107,8 @@ impl Reference {
                     ..push
                 };
                 if first != push.first {
-                    for h in [&hs, &hq] {
-                        sync::image_barrier(ctx.gpu, ctx.cmd, ctx.image(h), Access::ComputeWrite, Access::ComputeWrite);
-                    }
+                    ctx.serialize(&hs);
+                    ctx.serialize(&hq);
                 }
                 self.pipeline.dispatch(
                     ctx.cmd,

@@ -152,11 +152,10 @@ impl VoxelGridSpec {
     }
 }
 
-/// The occupancy buffer for `spec`: `words × 4` bytes, storage + transfer src/dst, device-local. Its
-/// contents are undefined until the `voxelize` passes ran.
-pub fn create_grid_buffer(gpu: &Gpu, spec: &VoxelGridSpec) -> Result<Buffer> {
+/// Whether this device can hold the grid of `spec` (bad input otherwise: lower --voxels).
+pub fn check_grid(gpu: &Gpu, spec: &VoxelGridSpec) -> Result<()> {
     spec.validate()?;
-    let bytes = spec.words() as u64 * 4;
+    let bytes = grid_desc(spec).size;
     let max_range = gpu.limits().max_storage_buffer_range as u64;
     if bytes > max_range {
         bail!(
@@ -167,7 +166,19 @@ pub fn create_grid_buffer(gpu: &Gpu, spec: &VoxelGridSpec) -> Result<Buffer> {
             spec.dims.z
         );
     }
-    Buffer::new(gpu, &BufferDesc::storage("voxels", bytes)).context("creating the voxel grid buffer")
+    Ok(())
+}
+
+/// The occupancy buffer for `spec`: `words × 4` bytes, storage + transfer src/dst, device-local. Its
+/// contents are undefined until the `voxelize` passes ran.
+pub fn grid_desc(spec: &VoxelGridSpec) -> BufferDesc {
+    BufferDesc::storage("voxels", spec.words() as u64 * 4)
+}
+
+/// A grid buffer for `spec` outside any graph (tests voxelize into one they keep).
+pub fn create_grid_buffer(gpu: &Gpu, spec: &VoxelGridSpec) -> Result<Buffer> {
+    check_grid(gpu, spec)?;
+    Buffer::new(gpu, &grid_desc(spec)).context("creating the voxel grid buffer")
 }
 
 pub struct Voxelize {
@@ -182,9 +193,11 @@ impl Voxelize {
         Ok(Voxelize { pipeline })
     }
 
-    /// Clear `grid` and voxelize the scene into it, with the grid of `f.uniforms` (see the module doc).
-    pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, grid: &mut Handle<Buffer>) {
-        self.add_scene(g, f.scene, f.uniforms, grid);
+    /// A new grid for `spec`, cleared and voxelized with the grid of `f.uniforms` (see the module doc).
+    pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, spec: &VoxelGridSpec) -> Handle<Buffer> {
+        let mut grid = g.create_buffer(grid_desc(spec));
+        self.add_scene(g, f.scene, f.uniforms, &mut grid);
+        grid
     }
 
     /// [`Voxelize::add`] from what it really reads: the grid depends on the scene and the uniforms' voxel
@@ -204,10 +217,14 @@ impl Voxelize {
             let buffer = ctx.buffer(&h);
             let (per_invocation, shares) = shares(ctx.gpu.loop_iteration_limit, buffer.size / 4 * 32);
             let writes = scene.writes(uniforms).storage_buffer(B_VOXELS, buffer);
-            // Batches of at most maxComputeWorkGroupCount[0] groups; no barrier between them (atomicOr).
+            // Batches of at most maxComputeWorkGroupCount[0] groups. atomicOr makes their order
+            // irrelevant, but they write one buffer, so the graph serializes them (one batch is usual).
             let batch = ctx.gpu.limits().max_compute_work_group_count[0].min(65535) * WG_1D;
             let mut first = 0;
             while first < scene.triangle_count {
+                if first > 0 {
+                    ctx.serialize(&h);
+                }
                 let n = batch.min(scene.triangle_count - first);
                 let push: Vec<u8> = [per_invocation, first].iter().flat_map(|v| v.to_ne_bytes()).collect();
                 self.pipeline.dispatch(ctx.cmd, &writes, &push, [n, shares, 1], [WG_1D, 1, 1]);

@@ -1,0 +1,13 @@
+//! A frame: its settings ([`settings`]), the keys under which its products are kept across frames
+//! ([`keys`]), the recipe ([`recipe::build_frame`]: start reading there), chunked submission
+//! ([`chunks`]) and the renderer that ties them together ([`renderer`]).
+
+pub mod chunks;
+pub mod keys;
+pub mod recipe;
+pub mod renderer;
+pub mod settings;
+
+pub use recipe::build_frame;
+pub use renderer::{FrameOutput, FrameState, RenderContext, Renderer};
+pub use settings::{Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, SettingsError, Visibility};

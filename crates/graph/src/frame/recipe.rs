@@ -1,0 +1,182 @@
+//! The frame recipe: [`build_frame`] is the one place that says what runs, in what order, on what data.
+//!
+//! ```text
+//!   voxelize ──────────────────────────────┐ (kept per grid)
+//!   dprsm (VPLs) ─────────────┬────────────┤ (kept per map settings: the lights are fixed)
+//!   dprsm_depth ──┐           │            │ (kept per shadow resolution)
+//!   gbuffer ──────┴─ direct ──┤            │ (kept per camera and size)
+//!                             ├ importance → cdf_reduce (kept per CDF key)
+//!                             └ [psm_select → psm] → gather | mis | reference → radiance (temporal)
+//! ```
+//!
+//! Every product above the last line is asked for with [`Graph::cached`] under its key
+//! ([`super::keys::Keys`]); the graph lends what it kept or records the passes, so the recipe reads the
+//! same whether a product is reused or made. Passes whose outputs the frame does not need are culled by
+//! the graph (`--component direct` records no VPL pass). The radiance is a temporal image, so the chunks
+//! of one frame (the tiles of `all`, the sample batches of `reference`) add into the same image.
+
+use super::keys::Keys;
+use super::settings::{Component, FaceMode, FrameSettings, Method, MisWeights};
+use crate::bindings::*;
+use crate::graph::{Graph, Handle};
+use crate::passes::cdf_reduce::CdfReduce;
+use crate::passes::gather::GatherInputs;
+use crate::passes::importance::ImportanceParams;
+use crate::passes::reference::ReferenceIo;
+use crate::passes::voxelize::VoxelGridSpec;
+use crate::passes::{FrameInputs, Passes};
+use crate::shader_types::GatherPush;
+use bounce_device::{vk, Buffer, Image, ImageDesc};
+use std::ops::Range;
+
+/// Importance and CDF: what `importance` → `cdf_reduce` make, kept together.
+#[derive(Clone, Copy, Debug)]
+pub struct Cdf {
+    pub importance: Handle<Buffer>,
+    pub cdf: Handle<Buffer>,
+}
+crate::products!(Cdf { importance, cdf });
+
+/// What a frame hands back to be read.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameOut {
+    /// The asked component's radiance.
+    pub radiance: Handle<Image>,
+    /// The reference's per-pixel sum of squares (its standard error).
+    pub second_moment: Option<Handle<Image>>,
+    /// The CDF the gather sampled (sampled methods).
+    pub cdf: Option<Handle<Buffer>>,
+}
+
+/// What the recipe reads besides the settings: the frame's keys, the importance parameters and grid.
+pub struct RecipeInputs<'a> {
+    pub f: FrameInputs<'a>,
+    pub keys: Keys,
+    pub importance: ImportanceParams,
+    pub grid: VoxelGridSpec,
+    /// The reference's samples per dispatch under the loop limit.
+    pub reference_per_dispatch: u32,
+}
+
+/// The frame recipe, for the part `chunk` of the frame's work: the VPL tile of `all`, the sample range
+/// of `reference`, everything (`0..1`) for the sampled methods.
+pub fn build_frame<'a>(
+    r: &'a Passes,
+    g: &mut Graph<'a>,
+    s: &FrameSettings,
+    i: &RecipeInputs<'a>,
+    chunk: Range<u32>,
+) -> FrameOut {
+    let (f, k) = (i.f, &i.keys);
+    let voxels = g.cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid));
+    let vpls = g.cached("vpls", &k.vpls, |g| r.dprsm.add(g, f));
+    let shadow = g.cached("shadow", &k.shadow, |g| r.dprsm.add_depth(g, f));
+    let gbuffer = g.cached("gbuffer", &k.gbuffer, |g| r.gbuffer.add(g, f));
+    let direct = g.cached("direct", &k.direct, |g| r.direct.add(g, f, &gbuffer, &shadow));
+    let combined = (s.component == Component::Combined).then_some(direct);
+    if s.component == Component::Direct {
+        return FrameOut { radiance: direct, second_moment: None, cdf: None };
+    }
+    let desc = |name| radiance_desc(name, f.width, f.height);
+    let mut out = g.temporal_image("radiance", desc(out_name(s.method)), &()).handle;
+    if s.method == Method::Reference {
+        let mut sq = g.temporal_image("radiance.sq", desc("reference.sq"), &()).handle;
+        let io = ReferenceIo { g_position: gbuffer.position, g_normal: gbuffer.normal, g_albedo: gbuffer.albedo, direct: combined };
+        let bvh = f.bvh.expect("the reference traces the BVH (the renderer builds it first)");
+        r.reference.add(g, f, bvh, io, &mut out, &mut sq, reference_push(s, chunk), i.reference_per_dispatch);
+        return FrameOut { radiance: out, second_moment: Some(sq), cdf: None };
+    }
+    let p = i.importance;
+    let rows = f.vpl_faces * f.scene.light_count * f.dprsm_res;
+    let cdf = g.cached("cdf", &k.cdf, |g| {
+        let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, p);
+        Cdf { importance: imp.importance, cdf: r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections) }
+    });
+    let mut inputs = GatherInputs::new(&gbuffer, &vpls, voxels, cdf.importance, cdf.cdf, combined);
+    let push = gather_push(s, f, p, chunk);
+    if s.visibility.shared_set() {
+        // One shared VPL set (and its shadow maps) for every pixel: passes/psm.rs. Under `mis` it is the
+        // CDF strategy's samples; the gathering rays stay per pixel.
+        inputs.psm = Some(r.psm.add(g, f, &vpls, cdf.importance, cdf.cdf, s.psm_res, push));
+    }
+    let pass = if s.method == Method::Mis { &r.mis } else { &r.gather };
+    pass.add(g, f, &inputs, &mut out, push);
+    FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) }
+}
+
+/// The radiance image's name (labels and validation messages).
+fn out_name(m: Method) -> &'static str {
+    if m == Method::Reference {
+        "reference.sum"
+    } else {
+        "gather.radiance"
+    }
+}
+
+pub fn radiance_desc(name: &str, w: u32, h: u32) -> ImageDesc {
+    ImageDesc::new(
+        name,
+        w,
+        h,
+        crate::passes::direct::RADIANCE_FORMAT,
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
+    )
+}
+
+/// Fold a 64-bit seed into the shader's 32-bit one.
+pub fn seed32(seed: u64) -> u32 {
+    (seed ^ (seed >> 32)) as u32
+}
+
+/// The gather's (and mis's) push constants: every VPL of the tile `chunk` for `all`, else `--vpls`
+/// samples per pixel (plus the gathering rays for mis).
+fn gather_push(s: &FrameSettings, f: FrameInputs, p: ImportanceParams, chunk: Range<u32>) -> GatherPush {
+    let d = f.scene.diagonal() * s.clamp;
+    let common = GatherPush {
+        seed: seed32(s.seed),
+        clamp_d2: d * d,
+        add_direct: (chunk.start == 0 && s.component == Component::Combined) as u32,
+        ..GatherPush::default()
+    };
+    if s.method == Method::All {
+        let all = GATHER_ALL;
+        return GatherPush { mode: all, samples: 1, first: chunk.start, last: chunk.end, accumulate: (chunk.start > 0) as u32, ..common };
+    }
+    let rows = f.vpl_faces * f.scene.light_count * f.dprsm_res;
+    let push = GatherPush {
+        mode: GATHER_SAMPLE,
+        samples: s.vpls,
+        first: 0,
+        last: s.vpls,
+        sections: p.kind.method_sections(),
+        defensive: if s.method == Method::Uniform { 0.0 } else { s.defensive },
+        face_mode: match s.face {
+            FaceMode::RussianRoulette => FACE_RR,
+            FaceMode::Uniform => FACE_UNIFORM,
+        },
+        cdf_len: CdfReduce::section_len(rows, f.dprsm_res) as u32,
+        rays: s.gather_rays,
+        ..common
+    };
+    match (s.method, s.mis_weights) {
+        (Method::Mis, w) => GatherPush {
+            mode: if w == MisWeights::Consistent { MIS_CONSISTENT } else { MIS_THESIS },
+            last: s.vpls + s.gather_rays,
+            ..push
+        },
+        _ => push,
+    }
+}
+
+/// The reference's push constants for the sample range `chunk` of `--spp`.
+fn reference_push(s: &FrameSettings, chunk: Range<u32>) -> GatherPush {
+    GatherPush {
+        samples: s.spp,
+        seed: seed32(s.seed),
+        first: chunk.start,
+        last: chunk.end,
+        accumulate: (chunk.start > 0) as u32,
+        add_direct: (chunk.start == 0 && s.component == Component::Combined) as u32,
+        ..GatherPush::default()
+    }
+}

@@ -1,0 +1,435 @@
+//! The renderer: an immutable [`RenderContext`] (device, uploaded scene, passes and pipelines, the BVH)
+//! and a `&mut` [`FrameState`] (the camera and what the graph keeps across frames). [`Renderer::render`]
+//! validates the settings once, then runs the frame recipe ([`super::recipe::build_frame`]) as one or
+//! more chunks ([`super::chunks`]): one for the sampled methods, a tile of VPLs each for `all`, a batch
+//! of samples each for `reference`. Static products are kept by the graph under their keys
+//! ([`super::keys`]), so a frame whose camera and settings did not change records only the gather.
+
+use super::chunks::{for_each_chunk, FrameLog};
+use super::keys::Keys;
+use super::recipe::{build_frame, seed32, RecipeInputs};
+use super::settings::{reject, Component, FrameSettings, LightMap, Method, SettingsError};
+use crate::bvh::GpuBvh;
+use crate::camera::Camera;
+use crate::gpu_scene::GpuScene;
+use crate::graph::{Graph, PassTiming, Retained};
+use crate::passes::cdf_reduce::CdfReduce;
+use crate::passes::importance::{ImportanceKind, ImportanceParams};
+use crate::passes::reference::Reference;
+use crate::passes::voxelize::{self, VoxelGridSpec};
+use crate::passes::{FrameInputs, Passes};
+use crate::scene::Scene;
+use crate::shader_types::{FrameUniforms, Vertex};
+use anyhow::{Context, Result};
+use bounce_device::{vk, Buffer, BufferDesc, Gpu, MemoryLocation};
+
+/// What does not change from frame to frame: the device, the uploaded scene, every pass's pipelines,
+/// and the scene's BVH (built on first use).
+pub struct RenderContext {
+    pub gpu: Gpu,
+    pub scene: GpuScene,
+    pub passes: Passes,
+    /// The largest intensity component of any light (for the gbg fixed-point scale).
+    max_intensity: f32,
+    /// The scene's triangles, kept for the BVH.
+    vertices: Vec<Vertex>,
+    bvh: Option<GpuBvh>,
+}
+
+/// What changes from frame to frame: the camera, and the resources the graph keeps across frames.
+pub struct FrameState {
+    pub camera: Camera,
+    pub retained: Retained,
+}
+
+/// Renders frames of one scene. Derefs to its [`RenderContext`] (the read-only part).
+pub struct Renderer {
+    ctx: RenderContext,
+    state: FrameState,
+}
+
+impl std::ops::Deref for Renderer {
+    type Target = RenderContext;
+    fn deref(&self) -> &RenderContext {
+        &self.ctx
+    }
+}
+
+/// A rendered frame, read back.
+pub struct FrameOutput {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA32F radiance, row-major, row 0 = top.
+    pub radiance: Vec<[f32; 4]>,
+    /// Per pass GPU times; passes recorded several times (tiles) appear once per recording.
+    pub timings: Vec<PassTiming>,
+    pub ran: Vec<&'static str>,
+    pub skipped: Vec<&'static str>,
+    /// Things the user should know about this frame (e.g. an all-zero importance).
+    pub warnings: Vec<String>,
+    /// The reference integrator's own Monte Carlo error: the RMS over pixels and channels of the standard
+    /// error of the mean (indirect component only).
+    pub stderr: Option<f64>,
+}
+
+impl FrameOutput {
+    pub fn gpu_ms(&self) -> Option<f64> {
+        self.timings.iter().map(|t| t.ms).sum()
+    }
+}
+
+impl Renderer {
+    pub fn new(gpu: &Gpu, scene: &Scene) -> Result<Self> {
+        let ctx = RenderContext {
+            gpu: gpu.clone(),
+            scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
+            passes: Passes::new(gpu, !scene.textures.is_empty())?,
+            max_intensity: scene.lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max),
+            vertices: scene.vertices.clone(),
+            bvh: None,
+        };
+        Ok(Renderer { ctx, state: FrameState { camera: scene.camera, retained: Retained::default() } })
+    }
+
+    pub fn camera(&self) -> Camera {
+        self.state.camera
+    }
+
+    /// Moves the camera (the viewer's fly camera). The next frame re-records what depends on it.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.state.camera = camera;
+    }
+
+    /// Forget every kept product: the next frame records every pass it needs. `bounce bench` does this
+    /// before each timed frame, so that every method pays for its full frame.
+    pub fn clear_frame_cache(&mut self) {
+        self.state.retained.clear();
+    }
+
+    /// Names of the products kept for the next frame (diagnostics and tests).
+    pub fn kept_products(&self) -> Vec<&'static str> {
+        self.state.retained.product_names()
+    }
+
+    /// The per-frame constants for `s` with the current camera.
+    pub fn uniforms(&self, s: &FrameSettings) -> FrameUniforms {
+        self.ctx.uniforms(s, &self.state.camera)
+    }
+
+    /// A uniform buffer for `s` with the current camera.
+    pub fn uniform_buffer(&self, s: &FrameSettings) -> Result<Buffer> {
+        self.ctx.uniform_buffer(s, &self.state.camera)
+    }
+
+    /// The BVH of the scene, built on first use.
+    pub fn bvh(&mut self) -> Result<&GpuBvh> {
+        if self.ctx.bvh.is_none() {
+            let cpu = crate::cpu_ref::Bvh::from_vertices(&self.ctx.vertices);
+            let flat = crate::bvh::FlatBvh::new(&cpu, &self.ctx.vertices);
+            self.ctx.bvh = Some(GpuBvh::upload(&self.ctx.gpu, &flat).context("uploading the BVH")?);
+        }
+        Ok(self.ctx.bvh.as_ref().expect("set above"))
+    }
+
+    /// Build, execute and read back one frame.
+    pub fn render(&mut self, s: &FrameSettings) -> Result<FrameOutput> {
+        self.render_with_progress(s, &mut |_, _| {})
+    }
+
+    /// [`Renderer::render`], calling `progress(done, total)` between the chunks of `all` and `reference`.
+    pub fn render_with_progress(
+        &mut self,
+        s: &FrameSettings,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<FrameOutput> {
+        self.check(s)?;
+        let reference = s.method == Method::Reference && s.component != Component::Direct;
+        if s.visibility.uses_bvh() || reference {
+            self.bvh()?;
+        }
+        let uniforms = self.uniform_buffer(s)?;
+        let (ctx, state) = (&self.ctx, &mut self.state);
+        let i = ctx.recipe_inputs(s, &state.camera, &uniforms);
+        let (total, per_chunk) = ctx.chunking(s, &i);
+        let mut log = FrameLog::default();
+        let mut read = None;
+        for_each_chunk(total, per_chunk, progress, |chunk, last| {
+            let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
+            let out = build_frame(&ctx.passes, &mut g, s, &i, chunk);
+            g.export(&out.radiance);
+            let done = g.execute()?;
+            log.add(&done);
+            if done.ran.contains(&"cdf_reduce") {
+                if let Some(cdf) = &out.cdf {
+                    log.warnings.extend(ctx.dead_cdf_warning(s, &done.read_buffer(cdf)?));
+                }
+            }
+            if last {
+                let sq = out.second_moment.map(|h| done.read_image(&h)).transpose()?;
+                read = Some((done.read_image(&out.radiance)?, sq));
+            }
+            Ok(())
+        })?;
+        state.retained.next_frame();
+        let (radiance, second) = read.expect("the last chunk reads the image");
+        let radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&radiance);
+        let stderr = second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
+        log.warnings.extend(rsm_warning(s));
+        Ok(FrameOutput {
+            width: s.width,
+            height: s.height,
+            radiance,
+            timings: log.timings,
+            ran: log.ran,
+            skipped: log.skipped,
+            warnings: log.warnings,
+            stderr,
+        })
+    }
+}
+
+/// The RMS over pixels and channels of the reference's standard error of the mean per pixel,
+/// sqrt((E[L²] − E[L]²) / (N − 1)), for the indirect component (a combined image's mean also holds the
+/// exact direct light, so none is given for it).
+fn reference_stderr(s: &FrameSettings, mean: &[[f32; 4]], second: &[[f32; 4]]) -> Option<f64> {
+    if s.component != Component::Indirect {
+        return None;
+    }
+    let n = s.spp.max(2) as f64;
+    let (mut se2, mut count) = (0.0f64, 0usize);
+    for (m, q) in mean.iter().zip(second) {
+        for c in 0..3 {
+            se2 += ((q[c] as f64 - (m[c] as f64).powi(2)).max(0.0)) / (n - 1.0);
+            count += 1;
+        }
+    }
+    (count > 0).then(|| (se2 / count as f64).sqrt())
+}
+
+/// What an `rsm` light map cannot see: said once per frame.
+fn rsm_warning(s: &FrameSettings) -> Option<String> {
+    let LightMap::Rsm { fov_deg } = s.light_map else { return None };
+    let omega = s.light_map.solid_angle();
+    let missing = 1.0 - omega / (4.0 * std::f64::consts::PI);
+    Some(format!(
+        "rsm ({fov_deg}° field of view): the map covers {omega:.3} sr around each light, so {:.1} % of each light's emitted flux (I · (4π − Ω) = {:.3} W per W/sr) reaches no VPL",
+        100.0 * missing,
+        4.0 * std::f64::consts::PI - omega
+    ))
+}
+
+impl RenderContext {
+    /// VPLs per gather dispatch under the device's loop iteration limit. Per VPL an invocation loops at
+    /// most: the march's steps (≤ dims.x + dims.y + dims.z + 3; its small loops are unrolled, one loop
+    /// iteration per cell) and the CDF's two binary searches (≤ 2 · 32), plus 64 for the rest;
+    /// another 64 are kept for the loops outside.
+    pub fn vpls_per_dispatch(&self, s: &FrameSettings) -> u32 {
+        let Some(limit) = self.gpu.loop_iteration_limit else { return u32::MAX };
+        let dims = self.voxel_spec(s).dims;
+        // Sampling adds loops over the CDF sections and, with uniform face choice, over the faces.
+        let sections = 1 + self.importance_params(s).kind.method_sections();
+        let faces = s.light_map.faces() * self.scene.light_count;
+        let march = match (s.visibility, self.bvh.as_ref()) {
+            (v, Some(b)) if v.uses_bvh() => b.max_iterations_per_ray(),
+            _ => dims.x + dims.y + dims.z + 3,
+        };
+        let per_vpl = march + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
+        // MIS: a CDF sample adds one march (its gathering indicator); a gathering ray marches once to
+        // its hit and then, per light, does a CDF sample's work (visibility march, probability look-up).
+        let per_vpl = if s.method == Method::Mis {
+            (per_vpl + march + 64).max(march + 64 + self.scene.light_count * per_vpl)
+        } else {
+            per_vpl
+        };
+        ((limit.saturating_sub(64)) / per_vpl).max(1)
+    }
+
+    /// What the recipe reads besides the settings, for settings `s` seen from `camera`.
+    fn recipe_inputs<'a>(&'a self, s: &FrameSettings, camera: &Camera, uniforms: &'a Buffer) -> RecipeInputs<'a> {
+        let importance = self.importance_params(s);
+        let grid = self.voxel_spec(s);
+        RecipeInputs {
+            f: self.frame_inputs(s, uniforms),
+            keys: Keys::new(s, camera, &grid, &importance),
+            importance,
+            grid,
+            reference_per_dispatch: self
+                .bvh
+                .as_ref()
+                .map_or(1, |b| Reference::per_dispatch(&self.gpu, b, self.scene.light_count)),
+        }
+    }
+
+    /// (units of work, units per chunk) of a frame: VPL slots in tiles of `--all-tile` for `all`, samples
+    /// for `reference` (enough per submission to keep the GPU busy, few enough for a live progress
+    /// bar), one unit for the rest.
+    fn chunking(&self, s: &FrameSettings, i: &RecipeInputs) -> (u32, u32) {
+        match (s.component, s.method) {
+            (Component::Direct, _) => (1, 1),
+            (_, Method::All) => (s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res, s.all_tile),
+            (_, Method::Reference) => (s.spp, i.reference_per_dispatch.saturating_mul(4).clamp(1, 64)),
+            _ => (1, 1),
+        }
+    }
+
+    /// A warning when every method section of a freshly built CDF is empty (the method then samples
+    /// uniformly). Only the section headers are needed, but a whole readback is cheap next to a frame
+    /// that ran the importance.
+    fn dead_cdf_warning(&self, s: &FrameSettings, bytes: &[u8]) -> Option<String> {
+        let sections = self.importance_params(s).kind.method_sections() as usize;
+        if sections == 0 {
+            return None;
+        }
+        let cdf: Vec<f32> = bytemuck::pod_collect_to_vec(bytes);
+        let len = CdfReduce::section_len(s.light_map.faces() * self.scene.light_count * s.dprsm_res, s.dprsm_res) as usize;
+        let live = (1..=sections).filter(|k| cdf.get(k * len).is_some_and(|t| *t > 0.0)).count();
+        (live == 0).then(|| format!("the {} importance is zero for every VPL; sampling uniformly instead", s.method.name()))
+    }
+
+    /// The importance pass's parameters for `s`.
+    pub fn importance_params(&self, s: &FrameSettings) -> ImportanceParams {
+        let cell = self.voxel_spec(s).cell;
+        let min_d = cell.max(s.clamp * self.scene.diagonal());
+        // gbg fixed point: a contribution of c_ref (the largest a VPL can give at distance min_d:
+        // albedo ≤ 1, the texel of largest solid angle 4·(2/res)², the brightest light) maps to 2³²;
+        // smaller ones keep ≥ 2³²·(min_d/d)² units, plenty for a weight.
+        let i_max = self.max_intensity.max(1e-30);
+        let c_ref = i_max * 4.0 * (2.0 / s.dprsm_res as f32).powi(2) / (std::f32::consts::PI.powi(2) * min_d * min_d);
+        ImportanceParams {
+            kind: match s.method {
+                Method::Uniform | Method::All | Method::Reference => ImportanceKind::Uniform,
+                Method::Global => ImportanceKind::Global,
+                Method::Stratified => ImportanceKind::Stratified,
+                Method::Local => ImportanceKind::Local { side: (s.regions as f64).sqrt().round() as u32 },
+                Method::Gbg | Method::Mis => ImportanceKind::Gbg { rays: s.gather_rays },
+            },
+            samples: s.cdf_samples,
+            seed: seed32(s.cdf_seed.unwrap_or(s.seed) ^ 0xC0FFEE),
+            min_d2: min_d * min_d,
+            fixed_scale: (4294967296.0 / c_ref as f64).min(f32::MAX as f64) as f32,
+        }
+    }
+
+    /// The voxel grid spec for `s` (fitted to the bounds of geometry and lights).
+    pub fn voxel_spec(&self, s: &FrameSettings) -> VoxelGridSpec {
+        voxelize::fit(self.scene.bounds_min, self.scene.bounds_max, s.voxels)
+    }
+
+    /// The per-frame constants for `s`.
+    pub fn uniforms(&self, s: &FrameSettings, camera: &Camera) -> FrameUniforms {
+        let diag = self.scene.diagonal();
+        let eye = camera.eye;
+        // Camera far plane: beyond the farthest corner of the bounds; near: a small fraction of it.
+        let (lo, hi) = (self.scene.bounds_min, self.scene.bounds_max);
+        let mut far_cam = 0.0f32;
+        for k in 0..8 {
+            let c = glam::Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            far_cam = far_cam.max((c - eye).length());
+        }
+        let far_cam = far_cam.max(diag) * 1.01;
+        let near = far_cam * 1e-5;
+        // Paraboloid far: no light-to-surface distance exceeds the diagonal of bounds that hold both.
+        let far_light = diag * 1.01;
+        let (voxel_origin, voxel_dims) = self.voxel_spec(s).uniforms_fields();
+        let vpl_slots = s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res;
+        FrameUniforms {
+            // near and far swapped: reverse Z (see passes/gbuffer.rs).
+            view_proj: camera.view_proj(s.width, s.height, far_cam, near).to_cols_array_2d(),
+            eye: [eye.x, eye.y, eye.z, 0.0],
+            scene_min: [lo.x, lo.y, lo.z, diag],
+            scene_max: [hi.x, hi.y, hi.z, far_light],
+            size: [s.width, s.height, self.scene.light_count, s.dprsm_res],
+            maps: [s.shadow_res, vpl_slots, s.psm_res, s.vpls],
+            light_map: [
+                match s.light_map {
+                    LightMap::Dprsm => crate::bindings::LIGHT_MAP_DPRSM,
+                    LightMap::Rsm { .. } => crate::bindings::LIGHT_MAP_RSM,
+                    LightMap::Cube => crate::bindings::LIGHT_MAP_CUBE,
+                },
+                s.light_map.faces(),
+                s.light_map.tan_half_fov().to_bits(),
+                0,
+            ],
+            shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
+            voxel_origin,
+            voxel_dims,
+        }
+    }
+
+    /// The per-frame inputs every pass reads, for settings `s` and their uniform buffer.
+    pub fn frame_inputs<'a>(&'a self, s: &FrameSettings, uniforms: &'a Buffer) -> FrameInputs<'a> {
+        let traced = s.visibility.uses_bvh() || (s.method == Method::Reference && s.component != Component::Direct);
+        FrameInputs {
+            bvh: if traced { self.bvh.as_ref() } else { None },
+            scene: &self.scene,
+            uniforms,
+            width: s.width,
+            height: s.height,
+            shadow_res: s.shadow_res,
+            dprsm_res: s.dprsm_res,
+            vpl_faces: s.light_map.faces(),
+            vpls_per_dispatch: self.vpls_per_dispatch(s),
+        }
+    }
+
+    /// A host-visible uniform buffer holding [`RenderContext::uniforms`] (written once, before recording).
+    pub fn uniform_buffer(&self, s: &FrameSettings, camera: &Camera) -> Result<Buffer> {
+        let mut uniforms = Buffer::new(
+            &self.gpu,
+            &BufferDesc {
+                name: "frame uniforms".into(),
+                size: std::mem::size_of::<FrameUniforms>() as u64,
+                usage: vk::BufferUsageFlags::UNIFORM_BUFFER,
+                location: MemoryLocation::CpuToGpu,
+            },
+        )?;
+        uniforms
+            .mapped_mut()
+            .context("uniform buffer is not host-visible")?
+            .copy_from_slice(bytemuck::bytes_of(&self.uniforms(s, camera)));
+        Ok(uniforms)
+    }
+
+    /// Memory the paraboloid depth maps take: 2 faces × lights × res² × 4 bytes.
+    pub fn shadow_map_bytes(&self, s: &FrameSettings) -> u64 {
+        2 * self.scene.light_count as u64 * (s.shadow_res as u64).pow(2) * 4
+    }
+
+    /// Memory the reflective DPRSM takes: 3 RGBA32F images + depth, plus importance and CDF.
+    pub fn dprsm_bytes(&self, s: &FrameSettings) -> u64 {
+        s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2) * (3 * 16 + 4 + 4 + 4)
+    }
+
+    /// Reject settings this device or scene cannot run (bad input, not a runtime failure).
+    pub fn check(&self, s: &FrameSettings) -> Result<(), SettingsError> {
+        s.validate(&self.gpu)?;
+        const MAX_MAP_BYTES: u64 = 2 << 30;
+        for (what, bytes, flag) in [
+            ("shadow maps", self.shadow_map_bytes(s), "--shadow-res"),
+            ("reflective DPRSM", self.dprsm_bytes(s), "--dprsm-res"),
+        ] {
+            if bytes > MAX_MAP_BYTES {
+                reject!(
+                    "the {what} would take {} MiB ({} lights); lower {flag} (limit {} MiB)",
+                    bytes >> 20,
+                    self.scene.light_count,
+                    MAX_MAP_BYTES >> 20
+                );
+            }
+        }
+        let max_range = self.gpu.limits().max_storage_buffer_range as u64;
+        let cdf_bytes = 4
+            * (s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2)
+                + s.light_map.faces() as u64 * self.scene.light_count as u64 * s.dprsm_res as u64
+                + 4);
+        if cdf_bytes > max_range {
+            reject!("the CDF would take {cdf_bytes} bytes, over the device limit maxStorageBufferRange ({max_range}); lower --dprsm-res");
+        }
+        voxelize::check_grid(&self.gpu, &self.voxel_spec(s)).map_err(|e| SettingsError(e.to_string()))?;
+        Ok(())
+    }
+}

@@ -1,0 +1,340 @@
+//! Frame settings: what a frame computes and how (component, method, visibility, light map, sizes and
+//! sampling parameters), their defaults, and their validation against the device's limits. Settings are
+//! validated once, before anything is recorded; an impossible setting is a [`SettingsError`] (bad input,
+//! one line naming the setting), never a failure deep in a pass.
+
+use crate::passes::psm;
+use bounce_device::Gpu;
+
+/// A setting this device or scene cannot run: bad input, with one line that names the setting.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct SettingsError(pub String);
+
+/// `return Err(SettingsError(format!(...)))`.
+macro_rules! reject {
+    ($($t:tt)*) => {
+        return Err(SettingsError(format!($($t)*)))
+    };
+}
+pub(crate) use reject;
+
+/// Which radiance the frame computes (the scene contract's components).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Component {
+    Direct,
+    Indirect,
+    Combined,
+}
+
+impl Component {
+    pub fn name(self) -> &'static str {
+        match self {
+            Component::Direct => "direct",
+            Component::Indirect => "indirect",
+            Component::Combined => "combined",
+        }
+    }
+}
+
+/// How the gather picks its VPLs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// N VPLs per pixel, uniformly among the non-empty DPRSM texels.
+    Uniform,
+    /// Every VPL (p_v = 1): the converged VPL estimate, in tiles.
+    All,
+    /// Ritschel et al. 2011: a CDF from S random gather points (unshadowed).
+    Global,
+    /// Thesis §7.3.2: the global CDF from gather points spread over 4 screen quarters.
+    Stratified,
+    /// Thesis §7.3.3: one CDF per screen region, all sampled by every pixel (a mixture: no seams).
+    Local,
+    /// Thesis §7.3.4: the gathering-based global CDF (cosine rays, per-texel averages, median holes).
+    Gbg,
+    /// Thesis §7.4: cosine gathering and gbg CDF sampling combined by the balance heuristic.
+    Mis,
+    /// The exact one-bounce integral (BVH path tracing, `spp` samples): the ground truth.
+    Reference,
+}
+
+/// How the VPL gather tests visibility.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Visibility {
+    /// Amanatides–Woo march through the voxel grid (the thesis).
+    Voxel,
+    /// Shadow rays against the triangles (BVH): separates the voxel error from the rest.
+    Exact,
+    /// Per-VPL paraboloid shadow maps (thesis ch. 6) for a shared set of `vpls` VPLs per frame
+    /// (`passes/psm.rs`).
+    Psm,
+    /// The shared set of `Psm` with exact shadow rays: the maps' own error, on identical VPLs.
+    PsmExact,
+}
+
+impl Visibility {
+    /// Whether the gather's shadow rays go through the BVH.
+    pub fn uses_bvh(self) -> bool {
+        matches!(self, Visibility::Exact | Visibility::PsmExact)
+    }
+    /// Whether the frame gathers a shared VPL set (`Psm`, `PsmExact`).
+    pub fn shared_set(self) -> bool {
+        matches!(self, Visibility::Psm | Visibility::PsmExact)
+    }
+}
+
+/// The VPL map at each light (thesis §6.3; `glsl/shared/lightmap.glsl`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightMap {
+    /// Two paraboloid faces (the thesis's dual paraboloid RSM): every direction.
+    Dprsm,
+    /// One perspective face of this field of view (degrees) looking at the centre of the scene's
+    /// bounds; what lies outside is never a VPL (the flux it misses is reported).
+    Rsm { fov_deg: f32 },
+    /// Six perspective faces of 90°: every direction, three times the texels of `Dprsm` per res².
+    Cube,
+}
+
+impl LightMap {
+    /// Faces per light.
+    pub fn faces(self) -> u32 {
+        match self {
+            LightMap::Dprsm => 2,
+            LightMap::Rsm { .. } => 1,
+            LightMap::Cube => 6,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            LightMap::Dprsm => "dprsm",
+            LightMap::Rsm { .. } => "rsm",
+            LightMap::Cube => "cube",
+        }
+    }
+    /// tan(fov/2) of a perspective face.
+    pub(crate) fn tan_half_fov(self) -> f32 {
+        match self {
+            LightMap::Rsm { fov_deg } => (fov_deg.to_radians() / 2.0).tan(),
+            _ => 1.0,
+        }
+    }
+    /// The solid angle the faces cover around each light: 4π, or the RSM's square pyramid,
+    /// 4 asin(sin²(fov/2)) (Ω of a square pyramid of half-angle α is 4 asin(sin² α)).
+    pub fn solid_angle(self) -> f64 {
+        match self {
+            LightMap::Rsm { fov_deg } => {
+                let a = (fov_deg as f64).to_radians() / 2.0;
+                4.0 * (a.sin() * a.sin()).asin()
+            }
+            _ => 4.0 * std::f64::consts::PI,
+        }
+    }
+}
+
+/// Which MIS weights (`Method::Mis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MisWeights {
+    /// Both densities in solid angle: unbiased combination.
+    Consistent,
+    /// The thesis's literal weights (eqs. 7.10–7.11: cos θ sin θ/π against a discrete pdf).
+    Thesis,
+}
+
+impl Method {
+    /// Every method, in declaration order.
+    pub const ALL: [Method; 8] = [
+        Method::Uniform,
+        Method::All,
+        Method::Global,
+        Method::Stratified,
+        Method::Local,
+        Method::Gbg,
+        Method::Mis,
+        Method::Reference,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Uniform => "uniform",
+            Method::All => "all",
+            Method::Global => "global",
+            Method::Stratified => "stratified",
+            Method::Local => "local",
+            Method::Gbg => "gbg",
+            Method::Mis => "mis",
+            Method::Reference => "reference",
+        }
+    }
+}
+
+/// How a CDF method chooses the paraboloid face of a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceMode {
+    /// Russian roulette by each face's total importance (thesis alg. 9). Equivalent to sampling the
+    /// method's CDF over both faces at once.
+    RussianRoulette,
+    /// Every face with importance equally likely (the thesis's 0.5 baseline, alg. 4).
+    Uniform,
+}
+
+#[derive(Clone, Debug)]
+pub struct FrameSettings {
+    pub width: u32,
+    pub height: u32,
+    pub component: Component,
+    pub method: Method,
+    /// VPLs per pixel (sampled methods).
+    pub vpls: u32,
+    pub seed: u64,
+    /// The seed of the importance's gather points and rays (global, stratified, local, gbg, mis);
+    /// `None`: derived from `seed`. The viewer fixes it so that progressive frames, which differ in
+    /// `seed`, keep one CDF (each frame is unbiased given any CDF, so their mean is too).
+    pub cdf_seed: Option<u64>,
+    /// Resolution of each per-VPL paraboloid shadow map (`Visibility::Psm`).
+    pub psm_res: u32,
+    /// The VPL map at each light (`--light-map`).
+    pub light_map: LightMap,
+    /// Reflective DPRSM resolution per face (the VPLs: 2 × lights × res²).
+    pub dprsm_res: u32,
+    /// Voxels along the longest side of the scene bounds.
+    pub voxels: u32,
+    /// 1/d² clamp: minimum distance, as a fraction of the scene diagonal (0: off).
+    pub clamp: f32,
+    /// VPLs per tile of the exhaustive (`all`) gather: one submission each.
+    pub all_tile: u32,
+    /// Gather points per CDF (global, stratified, local).
+    pub cdf_samples: u32,
+    /// Screen regions of `local` (a perfect square: side × side).
+    pub regions: u32,
+    /// Cosine rays per gather point (gbg).
+    pub gather_rays: u32,
+    /// Share of samples drawn uniformly among the VPLs by the CDF methods (defensive sampling).
+    pub defensive: f32,
+    pub face: FaceMode,
+    pub mis_weights: MisWeights,
+    /// Samples per pixel of the reference integrator.
+    pub spp: u32,
+    pub visibility: Visibility,
+    /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
+    /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
+    /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
+    pub shadow_res: u32,
+    /// Constant shadow bias, as a fraction of the scene diagonal.
+    pub shadow_bias: f32,
+    /// Slope shadow bias, in texels.
+    pub shadow_slope_bias: f32,
+}
+
+impl Default for FrameSettings {
+    fn default() -> Self {
+        FrameSettings {
+            width: 256,
+            height: 256,
+            component: Component::Direct,
+            method: Method::Uniform,
+            vpls: 64,
+            seed: 1,
+            cdf_seed: None,
+            psm_res: 256,
+            light_map: LightMap::Dprsm,
+            dprsm_res: 512,
+            voxels: 128,
+            clamp: 0.0,
+            all_tile: 4096,
+            cdf_samples: 64,
+            regions: 4,
+            gather_rays: 4,
+            defensive: 0.1,
+            face: FaceMode::RussianRoulette,
+            mis_weights: MisWeights::Consistent,
+            spp: 4096,
+            visibility: Visibility::Voxel,
+            shadow_res: 2048,
+            shadow_bias: 1e-5,
+            shadow_slope_bias: 1.5,
+        }
+    }
+}
+
+impl FrameSettings {
+    /// Reject impossible settings with a message naming the setting and the device limit.
+    pub fn validate(&self, gpu: &Gpu) -> Result<(), SettingsError> {
+        let max = gpu.limits().max_image_dimension2_d;
+        for (what, v) in [
+            ("width", self.width),
+            ("height", self.height),
+            ("shadow map resolution", self.shadow_res),
+            ("DPRSM resolution", self.dprsm_res),
+        ] {
+            if v == 0 {
+                reject!("{what} must be at least 1");
+            }
+            if v > max {
+                reject!("{what} {v} exceeds the device limit maxImageDimension2D ({max})");
+            }
+        }
+        if self.vpls == 0 {
+            reject!("the VPL count must be at least 1");
+        }
+        if let LightMap::Rsm { fov_deg } = self.light_map {
+            if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0) {
+                reject!("--rsm-fov must be in (0, 180) degrees (got {fov_deg})");
+            }
+        }
+        if self.visibility.shared_set() {
+            if self.method == Method::All && self.component != Component::Direct {
+                reject!("--visibility psm needs a sampled method (`all` would need a shadow map per VPL slot)");
+            }
+            if self.psm_res == 0 || self.psm_res > max {
+                reject!("--psm-res must be between 1 and maxImageDimension2D ({max}) (got {})", self.psm_res);
+            }
+            let layers = gpu.limits().max_image_array_layers;
+            if self.vpls > layers {
+                reject!(
+                    "--visibility psm renders one map per VPL: {} VPLs exceed maxImageArrayLayers ({layers})",
+                    self.vpls
+                );
+            }
+            let bytes = psm::Psm::bytes(self.vpls, self.psm_res);
+            if bytes > psm::MAX_PSM_BYTES {
+                reject!(
+                    "{} shadow maps of {}² take {} MiB, over the {} MiB bound: lower --vpls or --psm-res",
+                    self.vpls,
+                    self.psm_res,
+                    bytes >> 20,
+                    psm::MAX_PSM_BYTES >> 20
+                );
+            }
+        }
+        if self.spp == 0 {
+            reject!("--spp must be at least 1");
+        }
+        if !(1..=1024).contains(&self.voxels) {
+            reject!("voxels must be between 1 and 1024 (got {})", self.voxels);
+        }
+        if self.all_tile == 0 {
+            reject!("the tile size must be at least 1");
+        }
+        if !(1..=4096).contains(&self.cdf_samples) {
+            reject!("--cdf-samples must be between 1 and 4096 (got {})", self.cdf_samples);
+        }
+        let side = (self.regions as f64).sqrt().round() as u32;
+        if self.regions == 0 || side * side != self.regions || side > 8 {
+            reject!("--regions must be a perfect square from 1 to 64 (got {})", self.regions);
+        }
+        if !(1..=256).contains(&self.gather_rays) {
+            reject!("--gather-rays must be between 1 and 256 (got {})", self.gather_rays);
+        }
+        if !(self.defensive.is_finite() && (0.0..=1.0).contains(&self.defensive)) {
+            reject!("--defensive must be in [0, 1] (got {})", self.defensive);
+        }
+        if !(self.clamp.is_finite() && (0.0..1.0).contains(&self.clamp)) {
+            reject!("the clamp must be a fraction of the scene diagonal in [0, 1) (got {})", self.clamp);
+        }
+        let ok = |v: f32| v.is_finite() && v >= 0.0;
+        if !ok(self.shadow_bias) || !ok(self.shadow_slope_bias) {
+            reject!("shadow biases must be finite and non-negative");
+        }
+        Ok(())
+    }
+}
