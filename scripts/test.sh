@@ -5,6 +5,10 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 source "$here/scripts/setup.sh"
 cd "$here"
+# Shape before behaviour: formatting, lints, and the structure rules of ARCHITECTURE.md.
+cargo fmt --all --check
+cargo clippy -q --workspace --all-targets -- -D warnings
+python3 scripts/check-structure.py
 cargo build -q --workspace --all-targets
 cargo run -q -p bounce -- info | head -n 3
 # The default scene at 128² with validation: must finish and name every pass it ran.

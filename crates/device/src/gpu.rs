@@ -231,6 +231,127 @@ fn create_instance(
     })
 }
 
+/// The validation messenger: warnings and errors go to `log` (through the user-data pointer).
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    log: &Arc<ValidationLog>,
+) -> Result<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
+    let du = ext::debug_utils::Instance::new(entry, instance);
+    let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(Arc::as_ptr(log) as *mut c_void);
+    let m = unsafe { du.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
+    Ok((du, m))
+}
+
+/// The chosen physical device and what bounce reads of it.
+struct Picked {
+    physical: vk::PhysicalDevice,
+    properties: vk::PhysicalDeviceProperties,
+    queue_family: u32,
+    timestamp_valid_bits: u32,
+    loop_iteration_limit: Option<u32>,
+}
+
+/// The device `opts` (or `BOUNCE_DEVICE`) names, else the most suitable one: discrete, integrated,
+/// virtual, then CPU; a device that lacks what bounce needs is an error naming what is missing.
+fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
+    let pds = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
+    if pds.is_empty() {
+        return Err(Error::NoDevice(String::new()));
+    }
+    let wanted = opts.device.clone().or_else(|| std::env::var("BOUNCE_DEVICE").ok()).filter(|s| !s.is_empty());
+    let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> =
+        pds.iter().map(|&pd| (pd, unsafe { instance.get_physical_device_properties(pd) })).collect();
+    let (physical, properties) = if let Some(w) = &wanted {
+        let wl = w.to_lowercase();
+        *named.iter().find(|(_, p)| device_name(p).to_lowercase().contains(&wl)).ok_or_else(|| {
+            Error::NoMatchingDevice {
+                wanted: w.clone(),
+                available: named.iter().map(|(_, p)| device_name(p)).collect::<Vec<_>>().join(", "),
+            }
+        })?
+    } else {
+        let rank = |t: vk::PhysicalDeviceType| match t {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+            vk::PhysicalDeviceType::CPU => 3,
+            _ => 4,
+        };
+        // Prefer suitable devices, then by kind.
+        let mut c = named.clone();
+        c.sort_by_key(|(pd, p)| (check_suitable(instance, *pd).is_err(), rank(p.device_type)));
+        c[0]
+    };
+    if let Err(what) = check_suitable(instance, physical) {
+        return Err(Error::MissingFeature {
+            device: device_name(&properties),
+            what,
+            hint: "; update the driver (for lavapipe: `mesa-vulkan-drivers` from Debian 12 or newer)".into(),
+        });
+    }
+    let qfs = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+    let queue_family = qfs
+        .iter()
+        .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+        .expect("check_suitable found a graphics+compute queue") as u32;
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
+    Ok(Picked {
+        physical,
+        properties,
+        queue_family,
+        timestamp_valid_bits: qfs[queue_family as usize].timestamp_valid_bits,
+        loop_iteration_limit: (driver.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(65535),
+    })
+}
+
+/// The logical device with the features and extensions bounce uses (and the swapchain's if asked).
+fn create_device(instance: &ash::Instance, picked: &Picked, opts: &GpuOptions) -> Result<ash::Device> {
+    let prio = [1.0f32];
+    let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(picked.queue_family).queue_priorities(&prio)];
+    let mut dev_exts = vec![khr::push_descriptor::NAME.as_ptr()];
+    if opts.swapchain {
+        let exts = unsafe { instance.enumerate_device_extension_properties(picked.physical) }.unwrap_or_default();
+        if !exts.iter().any(|e| e.extension_name_as_c_str() == Ok(khr::swapchain::NAME)) {
+            return Err(Error::MissingFeature {
+                device: device_name(&picked.properties),
+                what: "the extension VK_KHR_swapchain (presenting to a window)".into(),
+                hint: String::new(),
+            });
+        }
+        dev_exts.push(khr::swapchain::NAME.as_ptr());
+    }
+    let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
+        .dynamic_rendering(true)
+        .synchronization2(true)
+        .shader_demote_to_helper_invocation(true)
+        // Relaxed interface matching: spirv-opt removes fragment inputs a shader never reads (the
+        // depth-only dprsm fragment shader), which is legal with maintenance4 (mandatory in 1.3).
+        .maintenance4(true);
+    // u64 atomics: the gbg importance sums fixed-point contributions (order-independent results).
+    let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
+    let base = vk::PhysicalDeviceFeatures::default()
+        .shader_int64(true)
+        .geometry_shader(true)
+        .fragment_stores_and_atomics(true)
+        .vertex_pipeline_stores_and_atomics(true);
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v13).push_next(&mut v12);
+    let dinfo =
+        vk::DeviceCreateInfo::default().queue_create_infos(&qinfo).enabled_extension_names(&dev_exts).push_next(&mut f2);
+    unsafe { instance.create_device(picked.physical, &dinfo, None) }
+        .map_err(|result| Error::Vk { call: "vkCreateDevice", result })
+}
+
 impl Gpu {
     /// Every device the loader sees, with what bounce needs and whether each has it.
     pub fn enumerate() -> Result<Vec<DeviceInfo>> {
@@ -298,130 +419,39 @@ impl Gpu {
             .unwrap_or_default()
             .iter()
             .any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
-        let messenger = if opts.validation && has_debug_utils {
-            let du = ext::debug_utils::Instance::new(&entry, &instance);
-            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-                )
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                )
-                .pfn_user_callback(Some(debug_callback))
-                .user_data(Arc::as_ptr(&validation) as *mut c_void);
-            let m = unsafe { du.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
-            Some((du, m))
-        } else {
-            None
+        let messenger = match opts.validation && has_debug_utils {
+            true => Some(create_messenger(&entry, &instance, &validation)?),
+            false => None,
         };
-        let destroy_messenger = |m: &Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
-            if let Some((du, m)) = m {
+        // From here on, a failure must destroy the messenger too.
+        let made = pick_device(&instance, opts).and_then(|picked| {
+            let device = create_device(&instance, &picked, opts)?;
+            let parts = (entry, instance.clone(), device, picked, validation);
+            Self::with_device(parts, has_debug_utils, messenger.clone())
+        });
+        if made.is_err() {
+            if let Some((du, m)) = &messenger {
                 unsafe { du.destroy_debug_utils_messenger(*m, None) };
             }
-        };
+        }
+        made
+    }
 
-        let pds = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
-        if pds.is_empty() {
-            destroy_messenger(&messenger);
-            return Err(Error::NoDevice(String::new()));
-        }
-        let wanted = opts.device.clone().or_else(|| std::env::var("BOUNCE_DEVICE").ok()).filter(|s| !s.is_empty());
-        let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> =
-            pds.iter().map(|&pd| (pd, unsafe { instance.get_physical_device_properties(pd) })).collect();
-        let pick = if let Some(w) = &wanted {
-            let wl = w.to_lowercase();
-            match named.iter().find(|(_, p)| device_name(p).to_lowercase().contains(&wl)) {
-                Some(x) => *x,
-                None => {
-                    destroy_messenger(&messenger);
-                    return Err(Error::NoMatchingDevice {
-                        wanted: w.clone(),
-                        available: named.iter().map(|(_, p)| device_name(p)).collect::<Vec<_>>().join(", "),
-                    });
-                }
-            }
-        } else {
-            let rank = |t: vk::PhysicalDeviceType| match t {
-                vk::PhysicalDeviceType::DISCRETE_GPU => 0,
-                vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
-                vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
-                vk::PhysicalDeviceType::CPU => 3,
-                _ => 4,
-            };
-            // Prefer suitable devices, then by kind.
-            let mut c = named.clone();
-            c.sort_by_key(|(pd, p)| (check_suitable(&instance, *pd).is_err(), rank(p.device_type)));
-            c[0]
+    /// The allocator, the command pool and the handle, around a created device.
+    fn with_device(
+        (entry, instance, device, picked, validation): (ash::Entry, ash::Instance, ash::Device, Picked, Arc<ValidationLog>),
+        has_debug_utils: bool,
+        messenger: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    ) -> Result<Gpu> {
+        let fail = |e: Error| {
+            unsafe { device.destroy_device(None) };
+            e
         };
-        let (physical, properties) = pick;
-        let name = device_name(&properties);
-        if let Err(what) = check_suitable(&instance, physical) {
-            destroy_messenger(&messenger);
-            return Err(Error::MissingFeature {
-                device: name,
-                what,
-                hint: "; update the driver (for lavapipe: `mesa-vulkan-drivers` from Debian 12 or newer)".into(),
-            });
-        }
-        let qfs = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-        let queue_family = qfs
-            .iter()
-            .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
-            .expect("check_suitable found a graphics+compute queue") as u32;
-        let timestamp_valid_bits = qfs[queue_family as usize].timestamp_valid_bits;
-        let mut driver = vk::PhysicalDeviceDriverProperties::default();
-        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
-        unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
-        let loop_iteration_limit = (driver.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(65535);
-
-        let prio = [1.0f32];
-        let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
-        let mut dev_exts = vec![khr::push_descriptor::NAME.as_ptr()];
-        if opts.swapchain {
-            let exts = unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
-            if !exts.iter().any(|e| e.extension_name_as_c_str() == Ok(khr::swapchain::NAME)) {
-                destroy_messenger(&messenger);
-                return Err(Error::MissingFeature {
-                    device: name,
-                    what: "the extension VK_KHR_swapchain (presenting to a window)".into(),
-                    hint: String::new(),
-                });
-            }
-            dev_exts.push(khr::swapchain::NAME.as_ptr());
-        }
-        let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true)
-            .shader_demote_to_helper_invocation(true)
-            // Relaxed interface matching: spirv-opt removes fragment inputs a shader never reads (the
-            // depth-only dprsm fragment shader), which is legal with maintenance4 (mandatory in 1.3).
-            .maintenance4(true);
-        // u64 atomics: the gbg importance sums fixed-point contributions (order-independent results).
-        let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
-        let base = vk::PhysicalDeviceFeatures::default()
-            .shader_int64(true)
-            .geometry_shader(true)
-            .fragment_stores_and_atomics(true)
-            .vertex_pipeline_stores_and_atomics(true);
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v13).push_next(&mut v12);
-        let dinfo = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&qinfo)
-            .enabled_extension_names(&dev_exts)
-            .push_next(&mut f2);
-        let device = match unsafe { instance.create_device(physical, &dinfo, None) } {
-            Ok(d) => d,
-            Err(result) => {
-                destroy_messenger(&messenger);
-                return Err(Error::Vk { call: "vkCreateDevice", result });
-            }
-        };
-        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let queue = unsafe { device.get_device_queue(picked.queue_family, 0) };
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
-            physical_device: physical,
+            physical_device: picked.physical,
             debug_settings: {
                 let mut d = gpu_allocator::AllocatorDebugSettings::default();
                 d.log_leaks_on_shutdown = cfg!(debug_assertions);
@@ -430,24 +460,30 @@ impl Gpu {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|source| Error::Alloc { name: "allocator".into(), source })?;
+        .map_err(|source| fail(Error::Alloc { name: "allocator".into(), source }))?;
         let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(queue_family)
+            .queue_family_index(picked.queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER | vk::CommandPoolCreateFlags::TRANSIENT);
-        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        let command_pool = match unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool") {
+            Ok(p) => p,
+            Err(e) => {
+                drop(allocator);
+                return Err(fail(e));
+            }
+        };
         let push_descriptor = khr::push_descriptor::Device::new(&instance, &device);
         let debug_utils = has_debug_utils.then(|| ext::debug_utils::Device::new(&instance, &device));
         Ok(Gpu(Arc::new(Shared {
             entry,
             instance,
-            physical,
+            physical: picked.physical,
             device,
             queue,
-            queue_family,
-            properties,
-            name,
-            timestamp_valid_bits,
-            loop_iteration_limit,
+            queue_family: picked.queue_family,
+            name: device_name(&picked.properties),
+            properties: picked.properties,
+            timestamp_valid_bits: picked.timestamp_valid_bits,
+            loop_iteration_limit: picked.loop_iteration_limit,
             push_descriptor,
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),

@@ -209,7 +209,7 @@ pub fn plan(s: &Tracked, next: Access, image_depth: Option<bool>) -> (Option<Bar
     let barrier = src.map(|src| Barrier {
         src,
         dst: next,
-        old_layout: s.layout,
+        old_layout: if image_depth.is_some() { s.layout } else { vk::ImageLayout::UNDEFINED },
         new_layout: new_layout.unwrap_or(vk::ImageLayout::UNDEFINED),
     });
     (barrier, t)

@@ -5,7 +5,7 @@
 //!   dprsm (VPLs) ─────────────┬────────────┤ (kept per map settings: the lights are fixed)
 //!   dprsm_depth ──┐           │            │ (kept per shadow resolution)
 //!   gbuffer ──────┴─ direct ──┤            │ (kept per camera and size)
-//!                             ├ importance → cdf_reduce (kept per CDF key)
+//!                             ├ importance → cdf_reduce (kept per CDF key; `uniform`'s in its own slot)
 //!                             └ [psm_select → psm] → gather | mis | reference → radiance (temporal)
 //! ```
 //!
@@ -21,7 +21,7 @@ use crate::bindings::*;
 use crate::graph::{Graph, Handle};
 use crate::passes::cdf_reduce::CdfReduce;
 use crate::passes::gather::GatherInputs;
-use crate::passes::importance::ImportanceParams;
+use crate::passes::importance::{ImportanceKind, ImportanceParams};
 use crate::passes::reference::ReferenceIo;
 use crate::passes::voxelize::VoxelGridSpec;
 use crate::passes::{FrameInputs, Passes};
@@ -88,7 +88,10 @@ pub fn build_frame<'a>(
     }
     let p = i.importance;
     let rows = f.vpl_faces * f.scene.light_count * f.dprsm_res;
-    let cdf = g.cached("cdf", &k.cdf, |g| {
+    // `uniform`'s CDF (the VPLs' validity) depends on the maps alone: it has its own slot, so switching
+    // to a method's CDF and back does not redo it.
+    let slot = if p.kind == ImportanceKind::Uniform { "validity_cdf" } else { "cdf" };
+    let cdf = g.cached(slot, &k.cdf, |g| {
         let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, p);
         Cdf { importance: imp.importance, cdf: r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections) }
     });

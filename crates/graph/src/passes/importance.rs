@@ -22,14 +22,14 @@
 use super::FrameInputs;
 use crate::bindings::*;
 use crate::gpu_scene::scene_bindings;
-use crate::graph::{Graph, Handle};
+use crate::graph::{Graph, Handle, PassContext};
 use crate::passes::dprsm::DprsmOut;
 use crate::passes::gbuffer::GBufferOut;
 use crate::shader_types::ImportancePush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, Gpu, Sampler};
+use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Sampler};
 
 /// Which weights the method sections hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -128,113 +128,99 @@ impl Importance {
         let sections = 1 + p.kind.method_sections();
         let mut importance = g.create_buffer(BufferDesc::storage("importance", 4 * texels * sections as u64));
         let gbg = matches!(p.kind, ImportanceKind::Gbg { .. });
-        let mut scratch = gbg.then(|| {
-            (
-                g.create_buffer(BufferDesc::storage("gbg.sums", 8 * texels)),
-                g.create_buffer(BufferDesc::storage("gbg.counts", 4 * texels)),
-            )
-        });
-        if let Some((sums, counts)) = &mut scratch {
-            // The scatter adds into zeroed sums and counts.
-            let (hs, hc) = (*sums, *counts);
-            g.add_pass("importance_clear")
-                .overwrite(sums, Access::TransferWrite)
-                .overwrite(counts, Access::TransferWrite)
-                .record(move |ctx| unsafe {
-                    for b in [ctx.buffer(&hs), ctx.buffer(&hc)] {
-                        ctx.gpu.device.cmd_fill_buffer(ctx.cmd, b.raw, 0, bounce_device::vk::WHOLE_SIZE, 0);
-                    }
-                });
+        let mut scratch = gbg.then(|| Self::add_clear(g, texels));
+        let io = Io { gb: *gb, vpls: *vpls, voxels: *voxels, out: importance, scratch };
+        let mut b = g.add_pass("importance");
+        for h in [&gb.position, &gb.normal, &gb.albedo, &vpls.position, &vpls.normal, &vpls.flux] {
+            b = b.read(h, Access::ComputeRead);
         }
-        let (gb, vpls, voxels, out) = (*gb, *vpls, *voxels, importance);
-        let mut b = g
-            .add_pass("importance")
-            .read(&gb.position, Access::ComputeRead)
-            .read(&gb.normal, Access::ComputeRead)
-            .read(&gb.albedo, Access::ComputeRead)
-            .read(&vpls.position, Access::ComputeRead)
-            .read(&vpls.normal, Access::ComputeRead)
-            .read(&vpls.flux, Access::ComputeRead);
         if gbg {
-            b = b.read(&voxels, Access::ComputeRead);
+            b = b.read(voxels, Access::ComputeRead);
         }
         if let Some((sums, counts)) = &mut scratch {
             b = b.write(sums, Access::ComputeWrite).write(counts, Access::ComputeWrite);
         }
-        let scratch = scratch;
-        b.overwrite(&mut importance, Access::ComputeWrite).record(move |ctx| {
-            let s = self.sampler.raw;
-            let writes =
-                super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&gb.position, &gb.normal, &gb.albedo], s);
-            let mut writes = super::vpl_writes(writes, ctx, [&vpls.position, &vpls.normal, &vpls.flux], s)
-                .storage_buffer(B_IMPORTANCE, ctx.buffer(&out));
-            let layers = f.vpl_faces * f.scene.light_count;
-            let res = f.dprsm_res;
-            let push = |mode, section| ImportancePush {
-                mode,
-                samples: p.samples,
-                seed: p.seed,
-                regions: match p.kind {
-                    ImportanceKind::Local { side } => side,
-                    _ => 1,
-                },
-                min_d2: p.min_d2,
-                fixed_scale: p.fixed_scale,
-                section,
-                pad: 0,
-            };
-            // Section 0: validity.
-            let p0 = push(IMP_UNIFORM, 0);
-            self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p0), [res, res, layers], [WG_2D, WG_2D, 1]);
-            let method = match p.kind {
-                ImportanceKind::Uniform => None,
-                ImportanceKind::Global => Some((IMP_GLOBAL, 1)),
-                ImportanceKind::Stratified => Some((IMP_STRATIFIED, 1)),
-                ImportanceKind::Local { side } => Some((IMP_LOCAL, side * side)),
-                ImportanceKind::Gbg { .. } => None,
-            };
-            if let Some((mode, n)) = method {
-                // Sections are disjoint ranges of one whole-buffer binding: serialized (see cdf_reduce).
-                ctx.serialize(&out);
-                let pm = push(mode, 1);
-                self.pipeline.dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&pm),
-                    [res, res, layers * n],
-                    [WG_2D, WG_2D, 1],
-                );
-            }
-            if let (ImportanceKind::Gbg { rays }, Some((sums, counts))) = (p.kind, &scratch) {
-                let (sb, cb) = (ctx.buffer(sums), ctx.buffer(counts));
-                writes = writes
-                    .storage_buffer(B_VOXELS, ctx.buffer(&voxels))
-                    .storage_buffer(B_GBG_SUM, sb)
-                    .storage_buffer(B_GBG_COUNT, cb);
-                // The gbg shader binds the importance buffer that the validity dispatch wrote.
-                ctx.serialize(&out);
-                let scatter = ImportancePush { samples: rays, ..push(IMP_GBG_SCATTER, 1) };
-                self.gbg.dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&scatter),
-                    [f.width, f.height, 1],
-                    [WG_2D, WG_2D, 1],
-                );
-                // The resolve reads the scattered sums and counts and writes section 1 after section 0.
-                ctx.serialize(sums);
-                ctx.serialize(counts);
-                ctx.serialize(&out);
-                let resolve = push(IMP_GBG_RESOLVE, 1);
-                self.gbg.dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&resolve),
-                    [res, res, layers],
-                    [WG_2D, WG_2D, 1],
-                );
-            }
-        });
+        b.overwrite(&mut importance, Access::ComputeWrite).record(move |ctx| self.record(ctx, f, p, io));
         ImportanceOut { importance, sections }
     }
+
+    /// gbg's scratch sums and counts, zeroed by `importance_clear` (the scatter adds into them).
+    fn add_clear(g: &mut Graph, texels: u64) -> (Handle<Buffer>, Handle<Buffer>) {
+        let mut sums = g.create_buffer(BufferDesc::storage("gbg.sums", 8 * texels));
+        let mut counts = g.create_buffer(BufferDesc::storage("gbg.counts", 4 * texels));
+        let (hs, hc) = (sums, counts);
+        g.add_pass("importance_clear")
+            .overwrite(&mut sums, Access::TransferWrite)
+            .overwrite(&mut counts, Access::TransferWrite)
+            .record(move |ctx| unsafe {
+                for b in [ctx.buffer(&hs), ctx.buffer(&hc)] {
+                    ctx.gpu.device.cmd_fill_buffer(ctx.cmd, b.raw, 0, bounce_device::vk::WHOLE_SIZE, 0);
+                }
+            });
+        (sums, counts)
+    }
+
+    /// The dispatches: validity (section 0), then the method's sections, or gbg's scatter and resolve.
+    /// Sections are disjoint ranges of one whole-buffer binding; each dispatch is serialized after the
+    /// previous one through the graph (as in `cdf_reduce`).
+    fn record(&self, ctx: &PassContext, f: FrameInputs, p: ImportanceParams, io: Io) {
+        let s = self.sampler.raw;
+        let (gb, vpls, out) = (io.gb, io.vpls, io.out);
+        let writes = super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&gb.position, &gb.normal, &gb.albedo], s);
+        let mut writes = super::vpl_writes(writes, ctx, [&vpls.position, &vpls.normal, &vpls.flux], s)
+            .storage_buffer(B_IMPORTANCE, ctx.buffer(&out));
+        let layers = f.vpl_faces * f.scene.light_count;
+        let res = f.dprsm_res;
+        let push = |mode, section| ImportancePush {
+            mode,
+            samples: p.samples,
+            seed: p.seed,
+            regions: match p.kind {
+                ImportanceKind::Local { side } => side,
+                _ => 1,
+            },
+            min_d2: p.min_d2,
+            fixed_scale: p.fixed_scale,
+            section,
+            pad: 0,
+        };
+        let dispatch = |pipeline: &ComputePipeline, writes: &DescriptorWrites, push: ImportancePush, size| {
+            pipeline.dispatch(ctx.cmd, writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
+        };
+        dispatch(&self.pipeline, &writes, push(IMP_UNIFORM, 0), [res, res, layers]);
+        let method = match p.kind {
+            ImportanceKind::Uniform | ImportanceKind::Gbg { .. } => None,
+            ImportanceKind::Global => Some((IMP_GLOBAL, 1)),
+            ImportanceKind::Stratified => Some((IMP_STRATIFIED, 1)),
+            ImportanceKind::Local { side } => Some((IMP_LOCAL, side * side)),
+        };
+        if let Some((mode, n)) = method {
+            ctx.serialize(&out);
+            dispatch(&self.pipeline, &writes, push(mode, 1), [res, res, layers * n]);
+        }
+        if let (ImportanceKind::Gbg { rays }, Some((sums, counts))) = (p.kind, &io.scratch) {
+            writes = writes
+                .storage_buffer(B_VOXELS, ctx.buffer(&io.voxels))
+                .storage_buffer(B_GBG_SUM, ctx.buffer(sums))
+                .storage_buffer(B_GBG_COUNT, ctx.buffer(counts));
+            ctx.serialize(&out);
+            let scatter = ImportancePush { samples: rays, ..push(IMP_GBG_SCATTER, 1) };
+            dispatch(&self.gbg, &writes, scatter, [f.width, f.height, 1]);
+            // The resolve reads the scattered sums and counts and writes section 1.
+            ctx.serialize(sums);
+            ctx.serialize(counts);
+            ctx.serialize(&out);
+            dispatch(&self.gbg, &writes, push(IMP_GBG_RESOLVE, 1), [res, res, layers]);
+        }
+    }
+}
+
+/// The importance pass's resources, as its recording sees them.
+#[derive(Clone, Copy)]
+struct Io {
+    gb: GBufferOut,
+    vpls: DprsmOut,
+    voxels: Handle<Buffer>,
+    out: Handle<Buffer>,
+    scratch: Option<(Handle<Buffer>, Handle<Buffer>)>,
 }
