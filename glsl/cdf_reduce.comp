@@ -10,8 +10,6 @@ layout(push_constant) uniform Push { CdfPush pc; };
 layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
 layout(std430, set = 0, binding = B_CDF_OUT) buffer Cdf { float cdf[]; };
 
-const uint CDF_HEADER = 4u;
-
 void main() {
     uint rows = pc.rows, len = pc.row_length;
     // Section s: importance at s·rows·len, its CDF at s·(header + rows + rows·len).

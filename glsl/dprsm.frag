@@ -6,7 +6,7 @@
 #include "shared/watertight.glsl"
 
 // The map resolution per face: the shadow map and the reflective map share these shaders.
-layout(push_constant) uniform Push { uint map_res; uint light_map; };
+layout(push_constant) uniform Push { ParaboloidPush pc; };
 
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;
@@ -15,7 +15,7 @@ layout(location = 3) flat in uint i_tri;
 layout(location = 4) flat in uint i_instance; // unused here; declared so the interface matches dprsm.geom
 
 void main() {
-    vec2 uv = gl_FragCoord.xy / float(map_res) * 2.0 - 1.0;
+    vec2 uv = gl_FragCoord.xy / float(pc.map_res) * 2.0 - 1.0;
     if (dot(uv, uv) > 1.0) discard; // outside this face's hemisphere: the other face covers it
     // Watertight (shared/watertight.glsl), so a texel ray through an edge two triangles share hits one
     // of them: with Möller–Trumbore a few texel rays slipped out of a closed box around the light.

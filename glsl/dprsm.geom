@@ -3,16 +3,14 @@
 // shader then intersects each texel's ray with the triangle. See crates/graph/src/passes/dprsm.rs.
 #include "shared/scene.glsl"
 
-// The map resolution per face: the shadow map and the reflective map share these shaders. light_map:
-// 1 for the reflective map, whose faces follow `--light-map` (shared/lightmap.glsl); 0 for the
-// paraboloid shadow maps (the direct light's, and the per-VPL maps of psm.geom).
-layout(push_constant) uniform Push { uint map_res; uint light_map; };
+// The shadow maps and the reflective map share these shaders; pc.light_map tells them apart.
+layout(push_constant) uniform Push { ParaboloidPush pc; };
 
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 4) out;
 
 #ifdef PSM_VIEW
-// psm.geom: the viewpoints are the frame's shared VPLs (psm.comp).
+// dprsm.psm.geom: the viewpoints are the frame's shared VPLs (psm.comp).
 layout(std430, set = 0, binding = B_PSM_VIEWS) readonly buffer PsmViews { PsmView psm_views[]; };
 #include "shared/psm.glsl"
 #endif
@@ -97,7 +95,7 @@ void emit_perspective(vec3 p[3], uint inst) {
         hi = vec2(1.0);
     } else {
         for (int k = 0; k < n; k++) include_uv(lm_project(poly[k]), lo, hi);
-        float margin = 1.0 / float(map_res);
+        float margin = 1.0 / float(pc.map_res);
         lo = max(lo - margin, vec2(-1.0));
         hi = min(hi + margin, vec2(1.0));
     }
@@ -114,12 +112,12 @@ void main() {
     for (int k = 0; k < 3; k++) p[k] = psm_to_local(i_world[k] - view.position_v.xyz, view.normal_p.xyz);
     bool perspective = false;
 #else
-    bool perspective = light_map != 0u && lm_kind() != LIGHT_MAP_DPRSM;
-    uint faces = light_map != 0u ? lm_faces() : 2u;
+    bool perspective = pc.light_map != 0u && lm_kind() != LIGHT_MAP_DPRSM;
+    uint faces = pc.light_map != 0u ? lm_faces() : 2u;
     uint face = inst % faces, li = inst / faces;
     vec3 light = lights[li].position.xyz;
     for (int k = 0; k < 3; k++) {
-        p[k] = light_map != 0u ? lm_to_local(i_world[k] - light, li, face) : to_face(i_world[k] - light, face);
+        p[k] = pc.light_map != 0u ? lm_to_local(i_world[k] - light, li, face) : to_face(i_world[k] - light, face);
     }
 #endif
     if (perspective) {
@@ -159,7 +157,7 @@ void main() {
             include_arc(a, b, lo, hi);
         }
         // Half a texel of margin against rounding; the fragment test is exact anyway.
-        float margin = 1.0 / float(map_res);
+        float margin = 1.0 / float(pc.map_res);
         lo = max(lo - margin, vec2(-1.0));
         hi = min(hi + margin, vec2(1.0));
     }

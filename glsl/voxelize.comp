@@ -10,13 +10,7 @@
 
 layout(local_size_x = WG_1D) in;
 
-// cells_per_invocation: candidate cells one invocation tests at most: u32 max where the driver has no loop
-// limit (one invocation per triangle), else a triangle's cells are split over gl_GlobalInvocationID.y (see
-// voxelize.rs). first_triangle: the triangle of invocation x = 0 (large scenes take several dispatches).
-layout(push_constant) uniform Push {
-    uint cells_per_invocation;
-    uint first_triangle;
-} pc;
+layout(push_constant) uniform Push { VoxelizePush pc; };
 
 // Whether the projections p0..p2 of the (cell-centred) triangle onto an axis miss the box's projection
 // [-r, r]. Sound for any axis, even an inaccurate one: separated projections prove disjointness.

@@ -1,12 +1,78 @@
-//! Compiles every shader under `glsl/` (`*.vert`, `*.geom`, `*.frag`, `*.comp`, also in `glsl/test/`) to
-//! SPIR-V with shaderc (glslang) into OUT_DIR, and writes `shaders.rs` (one `pub const` of SPIR-V bytes per
-//! file) and `bindings.rs` (every `#define NAME <integer>` of `glsl/shared/bindings.glsl` as a Rust
-//! `pub const NAME: u32`). A GLSL error fails `cargo build` with file:line. A file whose first line is
-//! `// variant: <base file> <MACRO>...` is compiled as the base shader with those macros defined (one
-//! source, several SPIR-V variants, e.g. `gather.exact.comp`).
+//! Compiles every shader of the [`SHADERS`] table to SPIR-V with shaderc (glslang) into OUT_DIR, and writes
+//! `shaders.rs` (one `pub const` of SPIR-V bytes per table row) and `bindings.rs` (the numbers of
+//! `glsl/shared/bindings.glsl` as Rust constants; see [`bindings_rs`]). A GLSL error fails `cargo build`
+//! with file:line.
+//!
+//! **Names.** A row's name is the source's file name, or, for a variant, `<stem>.<variant>.<stage>` where
+//! the source is `<stem>.<stage>`: a dot before the stage extension means "variant of that stem" and
+//! nothing else (build.rs checks it). The Rust constant is the name upper-cased with dots as underscores
+//! (`gather.exact.comp` → `GATHER_EXACT_COMP`). Every `*.{vert,geom,frag,comp}` under `glsl/` and
+//! `glsl/test/` must be the source of a row, so no file is silently left uncompiled.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// One compiled shader: its name (see the module doc; a folder before it is dropped), its source file under
+/// `glsl/`, and the macros defined for it, in this order (Granite's `register_variant`).
+struct Shader {
+    name: &'static str,
+    source: &'static str,
+    defines: &'static [&'static str],
+}
+
+impl Shader {
+    /// The name without its folder (`test/layout_echo.comp` → `layout_echo.comp`).
+    fn name(&self) -> &'static str {
+        self.name.rsplit('/').next().unwrap()
+    }
+}
+
+/// A shader compiled from `source` as it is.
+const fn file(source: &'static str) -> Shader {
+    Shader { name: source, source, defines: &[] }
+}
+
+/// `name`, a variant of `source` with `defines`.
+const fn variant(name: &'static str, source: &'static str, defines: &'static [&'static str]) -> Shader {
+    Shader { name, source, defines }
+}
+
+/// Every shader bounce compiles, grouped by pass.
+const SHADERS: &[Shader] = &[
+    file("gbuffer.vert"),
+    file("gbuffer.frag"),
+    // The paraboloid maps: the direct light's shadow maps (dprsm.frag), the reflective map that makes the
+    // VPLs (dprsm_reflective.frag), and psm's per-VPL shadow maps (dprsm.psm.geom: the VPL as viewpoint).
+    file("dprsm.vert"),
+    file("dprsm.geom"),
+    file("dprsm.frag"),
+    file("dprsm_reflective.frag"),
+    variant("dprsm.psm.geom", "dprsm.geom", &["PSM_VIEW"]),
+    file("direct.comp"),
+    file("voxelize.comp"),
+    file("importance.comp"),
+    file("importance_gbg.comp"),
+    file("cdf_reduce.comp"),
+    file("psm.comp"),
+    // gather and mis, each with its visibility variants: `--visibility exact` (shadow rays against the BVH
+    // instead of the voxel march), `psm` (the frame's shared VPL set and its shadow maps) and `psm-exact`
+    // (the shared set with exact shadow rays: the reference for the maps' own visibility error).
+    file("gather.comp"),
+    variant("gather.exact.comp", "gather.comp", &["EXACT_VISIBILITY"]),
+    variant("gather.psm.comp", "gather.comp", &["PSM_VISIBILITY"]),
+    variant("gather.psm_exact.comp", "gather.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
+    file("mis.comp"),
+    variant("mis.exact.comp", "mis.comp", &["EXACT_VISIBILITY"]),
+    variant("mis.psm.comp", "mis.comp", &["PSM_VISIBILITY"]),
+    variant("mis.psm_exact.comp", "mis.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
+    file("reference.comp"),
+    // Kernels used only by the tests.
+    file("test/bvh_trace.comp"),
+    file("test/cdf_sample.comp"),
+    file("test/layout_echo.comp"),
+    file("test/voxel_march.comp"),
+    file("test/voxel_rcp.comp"),
+];
 
 fn main() {
     // The manifest dir at run time, not env!() at the script's compile time: a build cache shared by
@@ -15,23 +81,45 @@ fn main() {
     let glsl = Path::new(&manifest).join("../../glsl").canonicalize().expect("glsl/ exists");
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     println!("cargo:rerun-if-changed={}", glsl.display());
+    check_table(&glsl);
+    compile_all(&glsl, &out);
+    let header = std::fs::read_to_string(glsl.join("shared/bindings.glsl")).expect("glsl/shared/bindings.glsl");
+    let b = bindings_rs(&header).unwrap_or_else(|e| panic!("glsl/shared/bindings.glsl: {e}"));
+    std::fs::write(out.join("bindings.rs"), b).unwrap();
+}
 
-    let mut files = vec![];
-    for dir in [glsl.clone(), glsl.join("test")] {
-        let Ok(rd) = std::fs::read_dir(&dir) else { continue };
-        for e in rd.flatten() {
+/// Panics unless every row follows the naming rule (module doc), names are unique, and every stage file
+/// under `glsl/` and `glsl/test/` is some row's source. Also registers every GLSL file for reruns.
+fn check_table(glsl: &Path) {
+    let mut names = std::collections::HashSet::new();
+    for s in SHADERS {
+        assert!(names.insert(s.name()), "SHADERS: `{}` twice", s.name);
+        let file = s.source.rsplit('/').next().unwrap();
+        let (stem, stage) = file.split_once('.').expect("a source has a stage extension");
+        let plain = s.name == s.source && s.defines.is_empty() && !stage.contains('.');
+        let variant = s.name().strip_prefix(&format!("{stem}.")).and_then(|r| r.strip_suffix(&format!(".{stage}")));
+        let variant_ok = variant.is_some_and(|v| !v.is_empty() && !v.contains('.'));
+        assert!(
+            plain || (variant_ok && !s.defines.is_empty()),
+            "SHADERS: `{}` from `{}`: a dot in a name means `<stem>.<variant>.<stage>` of `<stem>.<stage>`",
+            s.name,
+            s.source
+        );
+    }
+    for dir in [glsl.to_path_buf(), glsl.join("test"), glsl.join("shared")] {
+        for e in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())).flatten() {
             let p = e.path();
             println!("cargo:rerun-if-changed={}", p.display());
             if matches!(p.extension().and_then(|x| x.to_str()), Some("vert" | "geom" | "frag" | "comp")) {
-                files.push(p);
+                let rel = p.strip_prefix(glsl).unwrap().to_str().unwrap().replace('\\', "/");
+                assert!(SHADERS.iter().any(|s| s.source == rel), "glsl/{rel} is in no row of build.rs's SHADERS");
             }
         }
     }
-    for e in std::fs::read_dir(glsl.join("shared")).expect("glsl/shared").flatten() {
-        println!("cargo:rerun-if-changed={}", e.path().display());
-    }
-    files.sort();
+}
 
+/// Compiles every row into `out/<name>.spv` and writes `out/shaders.rs`; panics with every error.
+fn compile_all(glsl: &Path, out: &Path) {
     let compiler = shaderc::Compiler::new().expect("shaderc compiler");
     let mut options = shaderc::CompileOptions::new().expect("shaderc options");
     options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
@@ -42,7 +130,7 @@ fn main() {
     if std::env::var("PROFILE").as_deref() != Ok("release") {
         options.set_generate_debug_info();
     }
-    let root = glsl.clone();
+    let root = glsl.to_path_buf();
     options.set_include_callback(move |name, _ty, from, _depth| {
         let base = Path::new(from).parent().unwrap_or(&root).to_path_buf();
         let candidates = [base.join(name), root.join(name)];
@@ -54,42 +142,38 @@ fn main() {
         Err(format!("cannot find include `{name}` (from {from})"))
     });
 
-    let mut rs = String::from("// Generated by build.rs from glsl/: SPIR-V per shader file.\n");
+    let mut rs = String::from("// Generated by build.rs from its SHADERS table: SPIR-V per shader.\n");
     let mut errors = vec![];
-    for f in &files {
-        let kind = match f.extension().unwrap().to_str().unwrap() {
+    for s in SHADERS {
+        let kind = match s.source.rsplit('.').next().unwrap() {
             "vert" => shaderc::ShaderKind::Vertex,
             "geom" => shaderc::ShaderKind::Geometry,
             "frag" => shaderc::ShaderKind::Fragment,
             _ => shaderc::ShaderKind::Compute,
         };
-        let mut src = std::fs::read_to_string(f).unwrap();
-        let rel = f.strip_prefix(glsl.parent().unwrap()).unwrap_or(f).display().to_string();
+        let path = glsl.join(s.source);
+        let src = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let mut opts = options.clone();
-        let mut source_path = f.clone();
-        if let Some(rest) = src.lines().next().and_then(|l| l.strip_prefix("// variant:")) {
-            let mut words = rest.split_whitespace();
-            let base = f.with_file_name(words.next().expect("variant: base file"));
-            for m in words {
-                opts.add_macro_definition(m, None);
-            }
-            src = std::fs::read_to_string(&base)
-                .unwrap_or_else(|e| panic!("{}: variant base {}: {e}", f.display(), base.display()));
-            source_path = base;
+        for m in s.defines {
+            opts.add_macro_definition(m, None);
         }
-        match compiler.compile_into_spirv(&src, kind, &source_path.display().to_string(), "main", Some(&opts)) {
+        match compiler.compile_into_spirv(&src, kind, &path.display().to_string(), "main", Some(&opts)) {
             Ok(a) => {
-                let stem = f.file_name().unwrap().to_str().unwrap().replace('.', "_").to_uppercase();
-                let spv = out.join(format!("{}.spv", f.file_name().unwrap().to_str().unwrap()));
+                let spv = out.join(format!("{}.spv", s.name()));
                 std::fs::write(&spv, a.as_binary_u8()).unwrap();
+                let what = match s.defines {
+                    [] => format!("`glsl/{}`", s.source),
+                    d => format!("`glsl/{}` with {}", s.source, d.join(", ")),
+                };
+                let konst = s.name().replace('.', "_").to_uppercase();
                 writeln!(
                     rs,
-                    "/// SPIR-V of `{rel}`.\npub const {stem}: &[u8] = include_bytes!({:?});",
+                    "/// SPIR-V of {what}.\npub const {konst}: &[u8] = include_bytes!({:?});",
                     spv.display().to_string()
                 )
                 .unwrap();
             }
-            Err(e) => errors.push(e.to_string()),
+            Err(e) => errors.push(format!("{}: {e}", s.name)),
         }
     }
     if !errors.is_empty() {
@@ -101,18 +185,96 @@ fn main() {
         panic!("GLSL compilation failed:\n{}", errors.join("\n"));
     }
     std::fs::write(out.join("shaders.rs"), rs).unwrap();
+}
 
-    let header = std::fs::read_to_string(glsl.join("shared/bindings.glsl")).expect("glsl/shared/bindings.glsl");
+/// The Rust constants of bindings.glsl, one per line of these forms (the header says why each exists):
+///   `#define NAME <integer>` (decimal, or 0x hex; optional `u`) and `const uint NAME = <integer>u;` → u32,
+///   `const float NAME = <expression>;` → f32, the expression copied as it is: float literals, names
+///   defined above, `+ - * /` and parentheses, which GLSL and Rust both fold to the same f32.
+/// A `#define` with a value or a `const` line of any other form is an error, so nothing is skipped. The
+/// comment lines right above a constant become its doc comment.
+fn bindings_rs(header: &str) -> Result<String, String> {
     let mut b = String::from("// Generated by build.rs from glsl/shared/bindings.glsl.\n");
-    for line in header.lines() {
-        let mut it = line.split_whitespace();
-        if it.next() == Some("#define") {
-            if let (Some(name), Some(value)) = (it.next(), it.next()) {
-                if let Ok(v) = value.parse::<u32>() {
-                    writeln!(b, "pub const {name}: u32 = {v};").unwrap();
-                }
-            }
+    let mut defined: Vec<String> = vec![];
+    let mut doc = String::new();
+    let integer = |v: &str| -> Option<u32> {
+        let v = v.strip_suffix('u').unwrap_or(v);
+        match v.strip_prefix("0x").or_else(|| v.strip_prefix("0X")) {
+            Some(hex) => u32::from_str_radix(hex, 16).ok(),
+            None => v.parse().ok(),
         }
+    };
+    for (i, line) in header.lines().enumerate() {
+        let line = line.trim();
+        if let Some(comment) = line.strip_prefix("//") {
+            if !comment.starts_with(" ----") {
+                writeln!(doc, "///{comment}").unwrap();
+            }
+            continue;
+        }
+        let bad = || format!("line {}: `{line}` is not one of the forms build.rs reads", i + 1);
+        let (name, rust) = if let Some(rest) = line.strip_prefix("#define") {
+            let mut it = rest.split_whitespace();
+            let (Some(name), value) = (it.next(), it.next()) else { return Err(bad()) };
+            let Some(value) = value else {
+                doc.clear();
+                continue; // the include guard
+            };
+            if it.next().is_some() {
+                return Err(bad());
+            }
+            (name, format!("u32 = {}", integer(value).ok_or_else(bad)?))
+        } else if let Some(rest) = line.strip_prefix("const ") {
+            let (decl, expr) = rest.strip_suffix(';').and_then(|r| r.split_once('=')).ok_or_else(bad)?;
+            let (ty, name) = decl.trim().split_once(' ').ok_or_else(bad)?;
+            let expr = expr.trim();
+            match ty {
+                "uint" if expr.ends_with('u') => (name.trim(), format!("u32 = {}", integer(expr).ok_or_else(bad)?)),
+                "float" if float_expression(expr, &defined) => (name.trim(), format!("f32 = {expr}")),
+                _ => return Err(bad()),
+            }
+        } else {
+            doc.clear();
+            continue;
+        };
+        writeln!(b, "{}pub const {name}: {rust};", std::mem::take(&mut doc)).unwrap();
+        defined.push(name.to_string());
     }
-    std::fs::write(out.join("bindings.rs"), b).unwrap();
+    Ok(b)
+}
+
+/// Whether `expr` holds only float literals (digits with a `.` or an exponent), names in `defined`, `+ - * /`,
+/// parentheses and spaces: an expression that means the same f32 in GLSL and in Rust.
+fn float_expression(expr: &str, defined: &[String]) -> bool {
+    let mut rest = expr;
+    while let Some(c) = rest.chars().next() {
+        let token_len = if c.is_ascii_digit() {
+            let mantissa = rest.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(rest.len());
+            let mut end = mantissa;
+            if rest[end..].starts_with('e') {
+                end += 1;
+                end += rest[end..].starts_with('-') as usize;
+                let digits = rest[end..].find(|c: char| !c.is_ascii_digit()).unwrap_or(rest.len() - end);
+                if digits == 0 {
+                    return false;
+                }
+                end += digits;
+            } else if !rest[..mantissa].contains('.') {
+                return false; // an integer: not a float in Rust
+            }
+            end
+        } else if c.is_ascii_alphabetic() || c == '_' {
+            let end = rest.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(rest.len());
+            if !defined.iter().any(|d| d == &rest[..end]) {
+                return false;
+            }
+            end
+        } else if " +-*/()".contains(c) {
+            1
+        } else {
+            return false;
+        };
+        rest = &rest[token_len..];
+    }
+    true
 }

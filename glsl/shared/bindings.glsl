@@ -1,11 +1,23 @@
-// Binding indices and constants: the single source of truth. build.rs turns every `#define NAME <int>`
-// in this file into `pub const NAME: u32` in Rust (crate bounce_graph::bindings).
+// Binding numbers and the numbers GLSL and Rust share: the single source of truth, grouped by pass.
+// build.rs turns each of these forms into a Rust constant of crate bounce_graph::bindings:
+//   #define NAME <integer>          (decimal, or 0x hex; an optional u suffix)  →  pub const NAME: u32
+//   const uint NAME = <integer>u;                                              →  pub const NAME: u32
+//   const float NAME = <expression>;  (float literals, earlier names, + − × / and parentheses)  →  f32
+// and fails the build on any other `#define NAME value` or `const` line, so nothing is left out silently.
+// Structs shared with Rust live in types.glsl.
 #ifndef BOUNCE_BINDINGS_GLSL
 #define BOUNCE_BINDINGS_GLSL
 
+// ---- Every pass ----------------------------------------------------------------------------------------
+// Workgroup sizes: 2D passes run WG_2D × WG_2D groups over pixels or texels, 1D passes WG_1D.
+#define WG_2D 8
+#define WG_1D 64
 #define MAX_LIGHTS 16
+// Specialisation constant ids. SPEC_TEXTURED: the scene has textures (false: albedo_at reads no
+// texture, so an untextured scene runs the shader variant without texture fetches).
+#define SPEC_TEXTURED 0
 
-// Scene data, shared by every pass that reads the mesh (gbuffer, dprsm, direct).
+// ---- Scene data: every pass that reads the mesh (gbuffer, dprsm, direct, voxelize, ...) ---------------
 #define B_FRAME 0
 #define B_VERTICES 1
 #define B_TRI_MATERIAL 2
@@ -14,18 +26,55 @@
 #define B_TEXELS 5
 #define B_LIGHTS 6
 
-// direct: inputs and output
+// ---- dprsm: the VPL map at each light (`--light-map`, shared/lightmap.glsl) ------------------------------
+#define LIGHT_MAP_DPRSM 0
+#define LIGHT_MAP_RSM 1
+#define LIGHT_MAP_CUBE 2
+
+// ---- direct: inputs and output -------------------------------------------------------------------------
 #define B_DIRECT_GPOSITION 7
 #define B_DIRECT_GNORMAL 8
 #define B_DIRECT_GALBEDO 9
 #define B_DIRECT_SHADOW 10
 #define B_DIRECT_OUT 11
 
-// voxelize / voxel march: the occupancy bits (bit c % 32 of word c / 32 for cell
-// c = x + dims.x * (y + dims.y * z)).
+// ---- voxelize, and the voxel march of shared/voxel.glsl (crates/graph/src/cpu_voxel.rs mirrors it) -------
+// The occupancy bits (bit c % 32 of word c / 32 for cell c = x + dims.x * (y + dims.y * z)).
 #define B_VOXELS 12
+// Conservative margin, in cells: a cell counts as touched when a triangle comes within VOXEL_EPS of its box
+// (2^-13 ≈ 1.2e-4 cell, a power of two so that 0.5 + VOXEL_EPS is exact in both languages). It absorbs the
+// rounding of the grid coordinates (~1e-7 cell), so a surface exactly on a cell face marks both cells.
+const float VOXEL_EPS = 1.0 / 8192.0;
+// The endpoint offset of the march, in cells (see shared/voxel.glsl).
+const float VOXEL_OFFSET_CELLS = 2.0;
+// Direction components smaller than this (grid units, 2^-30) count as parallel to that axis's planes.
+const float VOXEL_MIN_DIR = 1.0 / 1073741824.0;
+// An exit parameter that is never reached (an axis the segment does not move along).
+const float VOXEL_NEVER = 3.0e38;
 
-// dprsm (reflective): nothing extra; gather: inputs and outputs
+// ---- importance: its output is cdf_reduce's input -------------------------------------------------------
+#define B_IMPORTANCE 21
+// gbg's fixed-point sums and counts.
+#define B_GBG_SUM 24
+#define B_GBG_COUNT 25
+// ImportancePush.mode
+#define IMP_UNIFORM 0
+#define IMP_GLOBAL 1
+#define IMP_STRATIFIED 2
+#define IMP_LOCAL 3
+#define IMP_GBG_SCATTER 4
+#define IMP_GBG_RESOLVE 5
+
+// ---- cdf_reduce: importance in (B_IMPORTANCE), CDF out ----------------------------------------------------
+#define B_CDF_OUT 22
+// CdfPush.stage
+#define CDF_ROWS 0
+#define CDF_TOTALS 1
+// Floats before a CDF section's prefixes: the total, the rows (uint bits), the row length (uint bits) and
+// one unused (shared/cdf.glsl; crates/graph/src/cpu_cdf.rs).
+const uint CDF_HEADER = 4u;
+
+// ---- gather and mis (importance and psm bind the VPLs and the CDF at the same numbers) ------------------
 #define B_GATHER_GPOSITION 13
 #define B_GATHER_GNORMAL 14
 #define B_GATHER_GALBEDO 15
@@ -34,53 +83,37 @@
 #define B_VPL_FLUX 18
 #define B_CDF 19
 #define B_GATHER_OUT 20
-
-// cdf_reduce: importance in, CDF out
-#define B_IMPORTANCE 21
-#define B_CDF_OUT 22
 #define B_GATHER_DIRECT 23
-
-// importance modes
-#define IMP_UNIFORM 0
-#define IMP_GLOBAL 1
-#define IMP_STRATIFIED 2
-#define IMP_LOCAL 3
-#define IMP_GBG_SCATTER 4
-#define IMP_GBG_RESOLVE 5
-#define B_REF_SQ 28
-
-// The BVH (crates/graph/src/bvh.rs, glsl/shared/bvh.glsl): node and triangle buffers, and the traversal's
-// bounds (loop iterations per trace, stack depth).
-#define B_BVH_NODES 26
-#define B_BVH_TRIS 27
-#define BVH_MAX_STEPS 16384
-#define BVH_STACK_SIZE 64
-#define B_GBG_SUM 24
-#define B_GBG_COUNT 25
-
-// psm (per-VPL paraboloid shadow maps, `--visibility psm`): the frame's shared VPL set and their maps.
-#define B_PSM_VIEWS 29
-#define B_PSM_DEPTH 30
-#define FACE_RR 0
-#define FACE_UNIFORM 1
-
+// GatherPush.mode
 #define GATHER_SAMPLE 0
 #define GATHER_ALL 1
 #define MIS_CONSISTENT 2
 #define MIS_THESIS 3
-#define CDF_ROWS 0
-#define CDF_TOTALS 1
+// GatherPush.face_mode
+#define FACE_RR 0
+#define FACE_UNIFORM 1
 
-// The VPL map at each light (`--light-map`, shared/lightmap.glsl).
-#define LIGHT_MAP_DPRSM 0
-#define LIGHT_MAP_RSM 1
-#define LIGHT_MAP_CUBE 2
+// ---- The BVH (crates/graph/src/bvh.rs, shared/bvh.glsl): reference and the exact-visibility variants -----
+// Node and triangle buffers, and the traversal's bounds (loop iterations per trace, stack depth).
+#define B_BVH_NODES 26
+#define B_BVH_TRIS 27
+#define BVH_MAX_STEPS 16384
+#define BVH_STACK_SIZE 64
+// bvh_tri of "no hit".
+#define BVH_NO_TRI 0xFFFFFFFFu
+// Relative end epsilon of bvh_occluded: the f32 rounding of the CPU reference's cpu_ref::SHADOW_EPS.
+const float BVH_SHADOW_EPS = 1e-4;
 
-// Specialisation constant ids. SPEC_TEXTURED: the scene has textures (false: albedo_at reads no
-// texture, so an untextured scene runs the shader variant without texture fetches).
-#define SPEC_TEXTURED 0
+// ---- reference: the exact one-bounce integrator --------------------------------------------------------
+#define B_REF_SQ 28
 
-#define WG_2D 8
-#define WG_1D 64
+// ---- psm (per-VPL paraboloid shadow maps, `--visibility psm`): the frame's shared VPL set and its maps ----
+#define B_PSM_VIEWS 29
+#define B_PSM_DEPTH 30
+
+// ---- Test kernels (glsl/test/): their input and output buffers. Test pipelines bind nothing else at
+// these numbers, so they may repeat B_REF_SQ's and B_PSM_VIEWS's. --------------------------------------------
+#define B_TEST_IN 28
+#define B_TEST_OUT 29
 
 #endif

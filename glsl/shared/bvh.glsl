@@ -53,15 +53,11 @@
 #ifndef BOUNCE_BVH_GLSL
 #define BOUNCE_BVH_GLSL
 
-// Binding numbers and bounds: glsl/shared/bindings.glsl (the single source, also for Rust).
+// Binding numbers, bounds and epsilons: glsl/shared/bindings.glsl (the single source, also for Rust).
 #include "bindings.glsl"
 #include "watertight.glsl"
 
-// bvh_tri of "no hit" (bvh.rs: NO_TRI).
-#define BVH_NO_TRI 0xFFFFFFFFu
-
-// Relative end epsilon of bvh_occluded (cpu_ref::SHADOW_EPS).
-const float BVH_SHADOW_EPS = 1e-4;
+// BVH_NO_TRI (bvh_tri of "no hit") and BVH_SHADOW_EPS (bvh_occluded's relative end epsilon): bindings.glsl.
 // 1 + 2^-20: growth of a box's far distance (and of the culling distance) against rounding.
 const float BVH_BOX_GROW = 1.0 + 1.0 / 1048576.0;
 // Direction components smaller than this in magnitude are replaced by ±this in the box test's reciprocal, so

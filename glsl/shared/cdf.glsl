@@ -4,11 +4,11 @@
 //   layout(std430, binding = B_CDF) readonly buffer Cdf { float cdf[]; };
 #ifndef BOUNCE_CDF_GLSL
 #define BOUNCE_CDF_GLSL
+#include "bindings.glsl"
 #include "common.glsl"
 
-// Layout of the cdf buffer: a header, then one inclusive prefix per row (over row totals), then the
-// inclusive prefix within each row.
-const uint CDF_HEADER = 4u; // [0] total, [1] rows (uint bits), [2] row length (uint bits), [3] unused
+// Layout of the cdf buffer: a header (CDF_HEADER floats, bindings.glsl), then one inclusive prefix per row
+// (over row totals), then the inclusive prefix within each row.
 
 // A section's CDF starts at `cb` (= section · cdf_len) and its importance at `ib` (= section · texels).
 float cdf_total_at(uint cb) { return cdf[cb]; }

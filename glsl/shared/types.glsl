@@ -89,4 +89,20 @@ struct CdfPush {
     uint section;     // which section: importance at section·rows·row_length, CDF at section·cdf_len
 };
 
+
+// voxelize push constants.
+struct VoxelizePush {
+    uint cells_per_invocation; // candidate cells one invocation tests at most: u32 max where the driver has
+                               // no loop limit (one invocation per triangle), else a triangle's cells are
+                               // split over gl_GlobalInvocationID.y (see voxelize.rs)
+    uint first_triangle;       // the triangle of invocation x = 0 (large scenes take several dispatches)
+};
+
+// Push constants of the paraboloid maps' shaders (dprsm.vert/geom/frag, dprsm_reflective.frag; psm's maps).
+struct ParaboloidPush {
+    uint map_res;     // the map resolution per face
+    uint light_map;   // 1: the reflective map, whose faces follow `--light-map` (shared/lightmap.glsl);
+                      // 0: the paraboloid shadow maps (the direct light's, and psm's per-VPL maps)
+};
+
 #endif

@@ -43,17 +43,8 @@
 #endif
 layout(std430, set = 0, binding = B_VOXELS) VOXEL_BITS_ACCESS buffer Voxels { uint voxel_bits[]; };
 
-// Conservative margin, in cells: a cell counts as touched when a triangle comes within VOXEL_EPS of its box
-// (2^-13 ≈ 1.2e-4 cell, a power of two so that 0.5 + VOXEL_EPS is exact in both languages). It absorbs the
-// rounding of the grid coordinates (~1e-7 cell), so a surface exactly on a cell face marks both cells.
-const float VOXEL_EPS = 1.0 / 8192.0;
+// VOXEL_EPS, VOXEL_OFFSET_CELLS, VOXEL_MIN_DIR and VOXEL_NEVER: bindings.glsl (shared with Rust).
 const float VOXEL_HALF = 0.5 + VOXEL_EPS;
-// The endpoint offset of the march, in cells (see the header).
-const float VOXEL_OFFSET_CELLS = 2.0;
-// Direction components smaller than this (grid units, 2^-30) count as parallel to that axis's planes.
-const float VOXEL_MIN_DIR = 1.0 / 1073741824.0;
-// An exit parameter that is never reached (an axis the segment does not move along).
-const float VOXEL_NEVER = 3.0e38;
 
 // 1/c for |c| in [2^-100, 2^100], relative error below 2^-23 (exact for powers of two), the same bits on every
 // device (see the header): the classic integer first guess (≤ 12 % off) and four Newton steps in

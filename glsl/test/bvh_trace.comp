@@ -1,12 +1,12 @@
 #version 460
 // Test kernel: the BVH traversal of glsl/shared/bvh.glsl, one invocation per query, exactly as a pass calls it.
 // tests/tests/bvh.rs compares the results with the CPU reference (crates/graph/src/cpu_ref.rs). Bindings: the
-// BVH at B_BVH_NODES / B_BVH_TRIS, the queries at 28 and the results at 29 (test-only numbers, as in
-// voxel_march.comp). Each invocation makes three traces (closest, occluded, and the any-hit trace behind
-// occluded again for its triangle), so it loops at most 3 · BVH_MAX_STEPS + 3 = 49155 < 65535 times.
+// BVH at B_BVH_NODES / B_BVH_TRIS, the queries at B_TEST_IN and the results at B_TEST_OUT. Each invocation
+// makes three traces (closest, occluded, and the any-hit trace behind occluded again for its triangle), so it
+// loops at most 3 · BVH_MAX_STEPS + 3 = 49155 < 65535 times.
 #include "../shared/bvh.glsl"
 
-layout(local_size_x = 64) in;
+layout(local_size_x = WG_1D) in;
 
 struct Query {
     vec4 o; // xyz: ray origin, w: tmax
@@ -27,8 +27,8 @@ struct Result {
     uint exhausted; // bit 0: bvh_closest gave up, bit 1: bvh_occluded did
 };
 
-layout(std430, set = 0, binding = 28) readonly buffer Queries { Query queries[]; };
-layout(std430, set = 0, binding = 29) writeonly buffer Results { Result results[]; };
+layout(std430, set = 0, binding = B_TEST_IN) readonly buffer Queries { Query queries[]; };
+layout(std430, set = 0, binding = B_TEST_OUT) writeonly buffer Results { Result results[]; };
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -7,9 +7,9 @@
 //   1: cdf_sample_rows(cb, ib, u, r0, r1)          → (texel, bits of cdf_prob_rows(cb, texel, r0, r1))
 //   2: texel i = invocation, no u                  → (i, bits of cdf_prob_rows(cb, i, r0, r1))
 // One invocation per u (or texel): a draw is two binary searches, ⌈log2 rows⌉ + ⌈log2 row_length⌉
-// iterations, far below llvmpipe's loop limit. Test-only bindings: the u values at 28, the results at
-// 29 (outside bindings.glsl's range). A dispatch covers [first, first + count), so a large batch can be
-// split over several dispatches.
+// iterations, far below llvmpipe's loop limit. Test-only bindings: the u values at B_TEST_IN, the results
+// at B_TEST_OUT. A dispatch covers [first, first + count), so a large batch can be split over several
+// dispatches.
 #include "../shared/bindings.glsl"
 
 layout(local_size_x = WG_1D) in;
@@ -26,8 +26,8 @@ layout(push_constant) uniform Push {
 
 layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
 layout(std430, set = 0, binding = B_CDF) readonly buffer Cdf { float cdf[]; };
-layout(std430, set = 0, binding = 28) readonly buffer Us { float us[]; };
-layout(std430, set = 0, binding = 29) writeonly buffer Results { uvec2 results[]; };
+layout(std430, set = 0, binding = B_TEST_IN) readonly buffer Us { float us[]; };
+layout(std430, set = 0, binding = B_TEST_OUT) writeonly buffer Results { uvec2 results[]; };
 
 #include "../shared/cdf.glsl"
 

@@ -6,7 +6,20 @@
 #include "../shared/types.glsl"
 
 layout(local_size_x = 1) in;
-layout(std430, set = 0, binding = 0) readonly buffer In { Vertex v; Material m; TextureInfo t; Light l; FrameUniforms f; };
+layout(std430, set = 0, binding = 0) readonly buffer In {
+    Vertex v;
+    Material m;
+    TextureInfo t;
+    Light l;
+    FrameUniforms f;
+    // The push constant structs (push constant blocks are laid out as std430, like this buffer).
+    GatherPush gp;
+    PsmView pv;
+    ImportancePush ip;
+    CdfPush cp;
+    VoxelizePush vp;
+    ParaboloidPush pp;
+};
 layout(std430, set = 0, binding = 1) writeonly buffer Out { uint words[]; };
 
 uint k = 0u;
@@ -30,4 +43,14 @@ void main() {
     put4(f.voxel_origin);
     put4u(f.voxel_dims);
     put4u(f.light_map);
+    put4u(uvec4(gp.mode, gp.samples, gp.seed, gp.first));
+    put4u(uvec4(gp.last, gp.accumulate, gp.add_direct, floatBitsToUint(gp.clamp_d2)));
+    put4u(uvec4(gp.sections, floatBitsToUint(gp.defensive), gp.face_mode, gp.cdf_len));
+    put4u(uvec4(gp.rays, gp.pad0, gp.pad1, gp.pad2));
+    put4(pv.position_v);
+    put4(pv.normal_p);
+    put4u(uvec4(ip.mode, ip.samples, ip.seed, ip.regions));
+    put4u(uvec4(floatBitsToUint(ip.min_d2), floatBitsToUint(ip.fixed_scale), ip.section, ip.pad));
+    put4u(uvec4(cp.stage, cp.row_length, cp.rows, cp.section));
+    put4u(uvec4(vp.cells_per_invocation, vp.first_triangle, pp.map_res, pp.light_map));
 }

@@ -2,7 +2,7 @@
 // Test kernel: voxel_visibility (glsl/shared/voxel.glsl) for a batch of segment pairs, exactly as a gather
 // shader calls it. One invocation per pair; tests/tests/voxelize.rs compares the results with the CPU march
 // (crates/graph/src/cpu_voxel.rs). Bindings: the scene's frame uniforms and B_VOXELS as in a real pass, the
-// pairs at 28 and the results at 29 (test-only numbers, outside bindings.glsl's range).
+// pairs at B_TEST_IN and the results at B_TEST_OUT (test-only numbers).
 #include "../shared/scene.glsl"
 #include "../shared/voxel.glsl"
 
@@ -14,8 +14,8 @@ struct Pair {
     vec4 y;
     vec4 ny;
 };
-layout(std430, set = 0, binding = 28) readonly buffer Pairs { Pair pairs[]; };
-layout(std430, set = 0, binding = 29) writeonly buffer Results { float visibility[]; };
+layout(std430, set = 0, binding = B_TEST_IN) readonly buffer Pairs { Pair pairs[]; };
+layout(std430, set = 0, binding = B_TEST_OUT) writeonly buffer Results { float visibility[]; };
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -40,8 +40,8 @@ use glam::{DVec3, Vec3};
 use std::time::Instant;
 
 /// Test-only bindings of `glsl/test/bvh_trace.comp`.
-const T_IN: u32 = 28;
-const T_OUT: u32 = 29;
+const T_IN: u32 = bounce_graph::bindings::B_TEST_IN;
+const T_OUT: u32 = bounce_graph::bindings::B_TEST_OUT;
 
 /// Barycentric distance from an edge below which f32 and f64 may disagree (the grazing rule).
 const EDGE: f64 = 1e-4;
@@ -163,7 +163,7 @@ fn gpu_trace(gpu: &Gpu, bvh: &GpuBvh, queries: &[Query]) -> (Vec<Res>, f64) {
     let start = Instant::now();
     gpu.submit(|cmd| {
         let w = bvh.writes(DescriptorWrites::new()).storage_buffer(T_IN, &inb).storage_buffer(T_OUT, &outb);
-        p.dispatch(cmd, &w, &[], [queries.len() as u32, 1, 1], [64, 1, 1]);
+        p.dispatch(cmd, &w, &[], [queries.len() as u32, 1, 1], [bounce_graph::bindings::WG_1D, 1, 1]);
     })
     .unwrap();
     let secs = start.elapsed().as_secs_f64();

@@ -37,8 +37,8 @@ use bounce_tests::TestGpu;
 use std::time::Instant;
 
 /// Test-only bindings of `glsl/test/cdf_sample.comp`.
-const T_US: u32 = 28;
-const T_RESULTS: u32 = 29;
+const T_US: u32 = bounce_graph::bindings::B_TEST_IN;
+const T_RESULTS: u32 = bounce_graph::bindings::B_TEST_OUT;
 /// The largest float below 1: the most `rand01` returns.
 const U_MAX: f32 = 1.0 - 1.0 / 16777216.0;
 /// Draws per dispatch of `cdf_sample.comp` (a large batch is split over several dispatches).

@@ -1,5 +1,5 @@
-//! Layout echo: the GPU reads every shared struct at GLSL's offsets and writes its scalars in declaration
-//! order; they must equal the Rust mirror's fields in order.
+//! Layout echo: the GPU reads every shared struct (the push constant structs included) at GLSL's offsets
+//! and writes its scalars in declaration order; they must equal the Rust mirror's fields in order.
 
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites};
 use bounce_graph::shader_types::*;
@@ -33,12 +33,48 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     f.voxel_origin = [next(), next(), next(), next()];
     f.voxel_dims = [3001, 3002, 3003, 3004];
     f.light_map = [3501, 3502, 3503, 3504];
+    let gp = GatherPush {
+        mode: 4001,
+        samples: 4002,
+        seed: 4003,
+        first: 4004,
+        last: 4005,
+        accumulate: 4006,
+        add_direct: 4007,
+        clamp_d2: next(),
+        sections: 4009,
+        defensive: next(),
+        face_mode: 4011,
+        cdf_len: 4012,
+        rays: 4013,
+        pad: [4014, 4015, 4016],
+    };
+    let pv = PsmView { position_v: [next(), next(), next(), next()], normal_p: [next(), next(), next(), next()] };
+    let ip = ImportancePush {
+        mode: 5001,
+        samples: 5002,
+        seed: 5003,
+        regions: 5004,
+        min_d2: next(),
+        fixed_scale: next(),
+        section: 5007,
+        pad: 5008,
+    };
+    let cp = CdfPush { stage: 6001, row_length: 6002, rows: 6003, section: 6004 };
+    let vp = VoxelizePush { cells_per_invocation: 7001, first_triangle: 7002 };
+    let pp = ParaboloidPush { map_res: 8001, light_map: 8002 };
     let mut input = vec![];
     input.extend_from_slice(bytemuck::bytes_of(&v));
     input.extend_from_slice(bytemuck::bytes_of(&m));
     input.extend_from_slice(bytemuck::bytes_of(&t));
     input.extend_from_slice(bytemuck::bytes_of(&l));
     input.extend_from_slice(bytemuck::bytes_of(&f));
+    input.extend_from_slice(bytemuck::bytes_of(&gp));
+    input.extend_from_slice(bytemuck::bytes_of(&pv));
+    input.extend_from_slice(bytemuck::bytes_of(&ip));
+    input.extend_from_slice(bytemuck::bytes_of(&cp));
+    input.extend_from_slice(bytemuck::bytes_of(&vp));
+    input.extend_from_slice(bytemuck::bytes_of(&pp));
 
     let inb = Buffer::with_data(&gpu, "echo in", vk::BufferUsageFlags::STORAGE_BUFFER, &input).unwrap();
     let outb = Buffer::new(&gpu, &BufferDesc::storage("echo out", input.len() as u64)).unwrap();

@@ -29,8 +29,8 @@ use glam::{DVec3, IVec3, UVec3, Vec3};
 use std::collections::HashSet;
 
 /// Test-only bindings of `glsl/test/voxel_march.comp` and `voxel_rcp.comp`.
-const T_IN: u32 = 28;
-const T_OUT: u32 = 29;
+const T_IN: u32 = bounce_graph::bindings::B_TEST_IN;
+const T_OUT: u32 = bounce_graph::bindings::B_TEST_OUT;
 
 fn scene_of(tris: &[[Vec3; 3]]) -> Scene {
     let camera = Camera { eye: Vec3::new(0.0, 0.0, 10.0), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0 };
@@ -427,7 +427,7 @@ fn gpu_march(gpu: &Gpu, spec: &VoxelGridSpec, bits: &[u32], pairs: &[[Vec3; 4]])
             .storage_buffer(B_VOXELS, &grid)
             .storage_buffer(T_IN, &inb)
             .storage_buffer(T_OUT, &outb);
-        p.dispatch(cmd, &w, &[], [pairs.len() as u32, 1, 1], [64, 1, 1]);
+        p.dispatch(cmd, &w, &[], [pairs.len() as u32, 1, 1], [bounce_graph::bindings::WG_1D, 1, 1]);
     })
     .unwrap();
     bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap())
@@ -709,7 +709,7 @@ fn gpu_reciprocal_has_the_cpu_bits_and_is_accurate() {
     let outb = Buffer::new(&gpu, &BufferDesc::storage("rcp out", 4 * inputs.len() as u64)).unwrap();
     gpu.submit(|cmd| {
         let w = DescriptorWrites::new().storage_buffer(T_IN, &inb).storage_buffer(T_OUT, &outb);
-        p.dispatch(cmd, &w, &[], [inputs.len() as u32, 1, 1], [64, 1, 1]);
+        p.dispatch(cmd, &w, &[], [inputs.len() as u32, 1, 1], [bounce_graph::bindings::WG_1D, 1, 1]);
     })
     .unwrap();
     let got: Vec<f32> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());

@@ -15,18 +15,14 @@
 //! 2.5 ulp off. That is why the arithmetic below is written component by component instead of with
 //! glam's `dot`/`cross`.
 
-use crate::passes::voxelize::{VoxelGridSpec, VOXEL_EPS};
+use crate::bindings::{VOXEL_EPS, VOXEL_NEVER};
+pub use crate::bindings::{VOXEL_MIN_DIR, VOXEL_OFFSET_CELLS};
+use crate::passes::voxelize::VoxelGridSpec;
 use crate::scene::Scene;
 use glam::{IVec3, Vec3};
 
 /// Half size of a grown cell in grid units: ½ + ε (exact: ε is a power of two).
 pub const VOXEL_HALF: f32 = 0.5 + VOXEL_EPS;
-/// The march's endpoint offset along each normal, in cells.
-pub const VOXEL_OFFSET_CELLS: f32 = 2.0;
-/// Direction components (grid units) below this (2⁻³⁰) count as parallel to that axis's planes.
-pub const VOXEL_MIN_DIR: f32 = 1.0 / 1_073_741_824.0;
-/// The exit parameter of an axis the segment does not move along (`VOXEL_NEVER`).
-const VOXEL_NEVER: f32 = 3.0e38;
 
 type V = [f32; 3];
 

@@ -146,3 +146,27 @@ pub struct CdfPush {
     pub section: u32,
 }
 const _: () = assert!(size_of::<CdfPush>() == 16);
+
+/// voxelize push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct VoxelizePush {
+    /// Candidate cells one invocation tests at most (`u32::MAX`: no loop limit, one invocation per triangle).
+    pub cells_per_invocation: u32,
+    /// The triangle of invocation x = 0 of this dispatch.
+    pub first_triangle: u32,
+}
+const _: () = assert!(size_of::<VoxelizePush>() == 8);
+const _: () = assert!(offset_of!(VoxelizePush, first_triangle) == 4);
+
+/// Push constants of the paraboloid maps' shaders (dprsm's and psm's).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct ParaboloidPush {
+    /// The map resolution per face.
+    pub map_res: u32,
+    /// 1: the reflective map, whose faces follow `--light-map`; 0: the paraboloid shadow maps.
+    pub light_map: u32,
+}
+const _: () = assert!(size_of::<ParaboloidPush>() == 8);
+const _: () = assert!(offset_of!(ParaboloidPush, light_map) == 4);

@@ -2,7 +2,7 @@
 //!
 //! Input: `importance` (`rows × row_length` floats; a row is one texel row of one DPRSM face, so
 //! `rows = 2 · lights · res`). Output: `cdf`, floats laid out as `glsl/shared/cdf.glsl` reads them:
-//! a 4-float header (total, rows, row length), the inclusive prefix over row totals (`rows` floats),
+//! a `CDF_HEADER`-float header (total, rows, row length), the inclusive prefix over row totals (`rows` floats),
 //! then each row's inclusive prefix (`rows × row_length` floats). Dispatch: ⌈rows/64⌉ groups for the
 //! row prefixes (one invocation per row), then one invocation for the prefix over row totals, each dispatch serialized after the previous one
 //! by the graph ([`crate::graph::PassContext::serialize`]).
@@ -28,9 +28,6 @@ pub struct CdfReduce {
     pipeline: ComputePipeline,
 }
 
-/// Floats in the CDF header.
-pub const CDF_HEADER: u64 = 4;
-
 impl CdfReduce {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         let bindings = [Binding::storage_buffer(B_IMPORTANCE), Binding::storage_buffer(B_CDF_OUT)];
@@ -47,7 +44,7 @@ impl CdfReduce {
 
     /// Floats per CDF section.
     pub fn section_len(rows: u32, row_length: u32) -> u64 {
-        CDF_HEADER + rows as u64 + rows as u64 * row_length as u64
+        CDF_HEADER as u64 + rows as u64 + rows as u64 * row_length as u64
     }
 
     /// The CDF of every section of `importance` (`sections` arrays of `rows × row_length` weights, one

@@ -34,6 +34,7 @@
 use super::FrameInputs;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
+use crate::shader_types::ParaboloidPush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
@@ -80,7 +81,7 @@ impl Dprsm {
                     depth_format: Some(DPRSM_DEPTH_FORMAT),
                     depth_compare: vk::CompareOp::LESS,
                     bindings: &scene_bindings(),
-                    push_constant_size: 8,
+                    push_constant_size: std::mem::size_of::<ParaboloidPush>() as u32,
                     spec: &spec,
                 },
             )?)
@@ -210,7 +211,7 @@ pub(crate) fn record_paraboloid(
     unsafe {
         d.cmd_begin_rendering(ctx.cmd, &info);
         if f.scene.triangle_count > 0 {
-            let push = [res, light_map as u32];
+            let push = ParaboloidPush { map_res: res, light_map: light_map as u32 };
             pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&push));
             d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
         }

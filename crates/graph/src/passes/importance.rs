@@ -101,7 +101,7 @@ impl Importance {
         ]);
         let gbg = ComputePipeline::new(
             gpu,
-            "importance.gbg",
+            "importance_gbg",
             &crate::spirv(shaders::IMPORTANCE_GBG_COMP),
             &bindings,
             push,

@@ -2,8 +2,8 @@
 //!
 //! A shadow map per (pixel, sample) is impossible, so the frame draws one shared set of N VPLs
 //! (`psm.comp`: sample k from the method's CDF mixture with a stream of (seed, k) only; N = `--vpls`),
-//! renders one paraboloid depth map per VPL (`psm.geom`, the light maps' exact geometry shader with the
-//! VPL as viewpoint and its normal as the axis; `dprsm.frag`), and every pixel gathers those N VPLs:
+//! renders one paraboloid depth map per VPL (`dprsm.psm.geom`: the light maps' exact geometry shader
+//! with the VPL as viewpoint and its normal as the axis; `dprsm.frag`), and every pixel gathers those N VPLs:
 //!
 //!   L(x) = 1/N Σ_k albedo(x)/π · Φ_k (cos θ_k/π) cos θ_x / d² · V_psm(x, k) / p_k,
 //!
@@ -26,7 +26,7 @@ use crate::bindings::*;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
 use crate::passes::dprsm::DprsmOut;
-use crate::shader_types::{GatherPush, PsmView};
+use crate::shader_types::{GatherPush, ParaboloidPush, PsmView};
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
@@ -70,13 +70,13 @@ impl Psm {
             &GraphicsPipelineDesc {
                 name: "psm",
                 vertex: &crate::spirv(shaders::DPRSM_VERT),
-                geometry: Some(&crate::spirv(shaders::PSM_GEOM)),
+                geometry: Some(&crate::spirv(shaders::DPRSM_PSM_GEOM)),
                 fragment: &crate::spirv(shaders::DPRSM_FRAG),
                 color_formats: &[],
                 depth_format: Some(super::dprsm::DPRSM_DEPTH_FORMAT),
                 depth_compare: vk::CompareOp::LESS,
                 bindings: &map_bindings,
-                push_constant_size: 8,
+                push_constant_size: std::mem::size_of::<ParaboloidPush>() as u32,
                 spec: &[],
             },
         )?;

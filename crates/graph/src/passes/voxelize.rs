@@ -34,14 +34,15 @@ use super::FrameInputs;
 use crate::bindings::*;
 use crate::gpu_scene::{scene_bindings, GpuScene};
 use crate::graph::{Graph, Handle};
+use crate::shader_types::VoxelizePush;
 use crate::shaders;
 use anyhow::{bail, Context, Result};
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, Gpu};
 use glam::{UVec3, Vec3};
 
-/// Conservative margin of the voxelization, in cells (2⁻¹³; `VOXEL_EPS` in `glsl/shared/voxel.glsl`).
-pub const VOXEL_EPS: f32 = 1.0 / 8192.0;
+/// Conservative margin of the voxelization, in cells (2⁻¹³; from `glsl/shared/bindings.glsl`).
+pub use crate::bindings::VOXEL_EPS;
 /// Default cells along the longest side of the scene (`--voxels`).
 pub const DEFAULT_VOXELS: u32 = 128;
 /// Most cells along the longest side that [`fit`] makes (1024³ bits = 128 MiB).
@@ -189,7 +190,9 @@ impl Voxelize {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         let mut bindings = scene_bindings();
         bindings.push(Binding::storage_buffer(B_VOXELS));
-        let pipeline = ComputePipeline::new(gpu, "voxelize", &crate::spirv(shaders::VOXELIZE_COMP), &bindings, 8, &[])?;
+        let push = std::mem::size_of::<VoxelizePush>() as u32;
+        let pipeline =
+            ComputePipeline::new(gpu, "voxelize", &crate::spirv(shaders::VOXELIZE_COMP), &bindings, push, &[])?;
         Ok(Voxelize { pipeline })
     }
 
@@ -226,8 +229,8 @@ impl Voxelize {
                     ctx.serialize(&h);
                 }
                 let n = batch.min(scene.triangle_count - first);
-                let push: Vec<u8> = [per_invocation, first].iter().flat_map(|v| v.to_ne_bytes()).collect();
-                self.pipeline.dispatch(ctx.cmd, &writes, &push, [n, shares, 1], [WG_1D, 1, 1]);
+                let push = VoxelizePush { cells_per_invocation: per_invocation, first_triangle: first };
+                self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [n, shares, 1], [WG_1D, 1, 1]);
                 first += n;
             }
         });

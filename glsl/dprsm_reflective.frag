@@ -9,7 +9,7 @@
 #include "shared/watertight.glsl"
 
 // The map resolution per face: the shadow map and the reflective map share these shaders.
-layout(push_constant) uniform Push { uint map_res; uint light_map; };
+layout(push_constant) uniform Push { ParaboloidPush pc; };
 
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;
@@ -22,7 +22,7 @@ layout(location = 1) out vec4 o_normal;   // xyz unit normal facing the light, w
 layout(location = 2) out vec4 o_flux;     // rgb reflected flux (W), w = Δω (sr)
 
 void main() {
-    float res = float(map_res);
+    float res = float(pc.map_res);
     vec2 uv = gl_FragCoord.xy / res * 2.0 - 1.0;
     if (!lm_covers(uv)) discard;
     vec3 dir = lm_direction(uv);
