@@ -404,7 +404,8 @@ impl Gpu {
         let exts: Vec<*const std::ffi::c_char> = opts.instance_extensions.iter().map(|e| e.as_ptr()).collect();
         let instance = create_instance(&entry, opts.validation, &exts)?;
         // From here on, a failure must destroy what exists: wrap the rest.
-        match Self::with_instance(entry, instance.clone(), opts) {
+        // `entry` outlives the instance: dropping the last Entry unloads the Vulkan loader.
+        match Self::with_instance(entry.clone(), instance.clone(), opts) {
             Ok(g) => Ok(g),
             Err(e) => {
                 unsafe { instance.destroy_instance(None) };
