@@ -1,4 +1,4 @@
-//! The `bounce` binary: see the `bounce` library crate (`src/lib.rs`) for the commands.
+//! The `bounce` binary: `bounce::run` (`src/lib.rs`) on the process's arguments, stdout and stderr.
 
 fn main() {
     let code = bounce::run(std::env::args_os().collect(), &mut std::io::stdout(), &mut std::io::stderr());

@@ -1,5 +1,7 @@
-//! Image files: linear float32 RGB EXR with metadata, tone-mapped PNG. Both are written to a temporary
-//! file next to the target and renamed into place, so a failure never leaves a half-written output.
+//! Image files and what is computed on their pixels: linear float32 RGB EXR with metadata (written
+//! and read), tone-mapped PNG, the Reinhard 2002 tone mapping, and FLIP (nv-flip) on a pair tone-mapped
+//! alike. Every file is written to a temporary file next to the target and renamed into place, so a
+//! failure never leaves a half-written output.
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
@@ -102,7 +104,7 @@ fn lum(p: &[f32; 3]) -> f32 {
 }
 
 /// The operator's image-dependent parameters: the scale a / L̄_w and L_white (None for a black image).
-pub fn reinhard_params(img: &RgbImage) -> Option<(f64, f64)> {
+fn reinhard_params(img: &RgbImage) -> Option<(f64, f64)> {
     let finite: Vec<f32> = img.pixels.iter().map(lum).filter(|l| l.is_finite() && *l >= 0.0).collect();
     if finite.is_empty() {
         return None;
@@ -115,7 +117,7 @@ pub fn reinhard_params(img: &RgbImage) -> Option<(f64, f64)> {
 }
 
 /// Reinhard's operator with given parameters (so two images can be mapped alike for comparison).
-pub fn tonemap_reinhard_with(img: &RgbImage, key: f64, l_white: f64) -> Vec<[f32; 3]> {
+fn tonemap_reinhard_with(img: &RgbImage, key: f64, l_white: f64) -> Vec<[f32; 3]> {
     img.pixels
         .iter()
         .map(|p| {
@@ -138,7 +140,7 @@ pub fn linear_to_srgb8(c: f32) -> u8 {
 }
 
 /// sRGB 8-bit bytes of a tone-mapped image.
-pub fn srgb8(mapped: &[[f32; 3]]) -> Vec<u8> {
+fn srgb8(mapped: &[[f32; 3]]) -> Vec<u8> {
     mapped.iter().flat_map(|p| p.map(linear_to_srgb8)).collect()
 }
 
@@ -169,10 +171,5 @@ pub fn write_png_bytes(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> 
 
 /// Tone-map (Reinhard 2002) and write an sRGB PNG.
 pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
-    let mapped = tonemap_reinhard(img);
-    let bytes: Vec<u8> = mapped.iter().flat_map(|p| p.map(linear_to_srgb8)).collect();
-    let buf = image::RgbImage::from_raw(img.width, img.height, bytes).context("PNG buffer size")?;
-    write_atomic(path, |tmp| {
-        buf.save_with_format(tmp, image::ImageFormat::Png).with_context(|| format!("writing {}", path.display()))
-    })
+    write_png_bytes(path, img.width, img.height, srgb8(&tonemap_reinhard(img)))
 }

@@ -13,14 +13,16 @@
 //!
 //! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
 //! for scripts and tests (under Xvfb on lavapipe). The mean of those N frames is the mean of
-//! `bounce render --seed S+k --cdf-seed S` for k < N with the same settings: the frames share one CDF
-//! (drawn with seed S), so the importance and CDF passes run only when the camera or a setting changes.
+//! `bounce render --seed S+k --cdf-seed C` for k < N with the same settings, C being `--cdf-seed`
+//! (default: S): the frames share one CDF, so the importance and CDF passes run only when the camera
+//! or a setting changes. The frame flags are `render`'s, with cheaper defaults (`cli::ViewArgs`).
 //!
 //! Presenting goes through host memory (read back, tone map, copy into the swapchain image): one copy
 //! of a W × H image per frame, small next to a lavapipe frame; a GPU tone-map pass would remove it.
 
+use crate::cli::{ViewArgs, VIEW_FALLBACK_SIZE};
+use crate::error::{self, bad};
 use crate::output::{self, RgbImage};
-use crate::{bad, gpu_error, method_of, ComponentArg, MethodArg, VisibilityArg};
 use anyhow::{Context, Result};
 use bounce_device::{Gpu, GpuOptions, Presented, Swapchain};
 use bounce_graph::camera::Camera;
@@ -39,101 +41,31 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-#[derive(clap::Args, Debug)]
-pub struct ViewArgs {
-    /// The scene file (TOML).
-    pub scene: PathBuf,
-    /// Window width in pixels (default: the scene's [render] width, else 384).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Window height in pixels (default: the scene's [render] height, else 384).
-    #[arg(long)]
-    pub height: Option<u32>,
-    #[arg(long, value_enum, default_value = "combined")]
-    pub component: ComponentArg,
-    /// The sampling method (M cycles through the sampled ones).
-    #[arg(long, value_enum, default_value = "uniform")]
-    pub method: MethodArg,
-    /// VPLs per pixel per frame (+/− double and halve it).
-    #[arg(long, default_value_t = 16)]
-    pub vpls: u32,
-    /// Reflective DPRSM resolution per face.
-    #[arg(long, default_value_t = 256)]
-    pub dprsm_res: u32,
-    /// Resolution per face of the direct light's shadow map.
-    #[arg(long, default_value_t = 1024)]
-    pub shadow_res: u32,
-    /// Voxels along the longest side of the scene.
-    #[arg(long, default_value_t = 128)]
-    pub voxels: u32,
-    #[arg(long, value_enum, default_value = "voxel")]
-    pub visibility: VisibilityArg,
-    /// Clamp 1/d² below this fraction of the scene diagonal (0: off).
-    #[arg(long, default_value_t = 0.0)]
-    pub clamp: f32,
-    /// Seed of the first frame; frame k uses seed + k.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Render this many frames, write --screenshot and exit.
-    #[arg(long)]
-    pub frames: Option<u32>,
-    /// Where --frames writes its screenshot (PNG; the linear mean goes next to it as EXR).
-    #[arg(long)]
-    pub screenshot: Option<PathBuf>,
-    /// Present without waiting for vertical sync (immediate or mailbox, where the surface has one).
-    #[arg(long)]
-    pub no_vsync: bool,
-    /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Enable the Vulkan validation layers; fail if they report anything.
-    #[arg(long)]
-    pub validation: bool,
-}
-
 /// The sampled methods M cycles through.
 const CYCLE: [Method; 6] =
     [Method::Uniform, Method::Global, Method::Stratified, Method::Local, Method::Gbg, Method::Mis];
 
-pub fn view(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     if a.frames == Some(0) {
         return Err(bad(anyhow::anyhow!("--frames must be at least 1")));
     }
     if a.frames.is_some() != a.screenshot.is_some() {
         return Err(bad(anyhow::anyhow!("--frames and --screenshot go together")));
     }
-    if !(1..=4096).contains(&a.vpls) {
-        return Err(bad(anyhow::anyhow!("--vpls must be between 1 and 4096 (got {})", a.vpls)));
+    if !(1..=4096).contains(&a.picture.vpls) {
+        return Err(bad(anyhow::anyhow!("--vpls must be between 1 and 4096 (got {})", a.picture.vpls)));
     }
-    let scene = Scene::load(&a.scene).map_err(bad)?;
-    writeln!(err, "{}", scene.summary())?;
+    let scene = super::load_scene(&a.scene, err)?;
     // Without a display winit cannot start; say what to do instead of its own message alone.
     let event_loop = EventLoop::new().map_err(|e| {
         bad(anyhow::anyhow!(
             "no display to open a window on ({e}); run it in a desktop session, under `xvfb-run`, or use `bounce render`"
         ))
     })?;
-    let width = a.width.or(scene.render_width).unwrap_or(384);
-    let height = a.height.or(scene.render_height).unwrap_or(384);
     let settings = FrameSettings {
-        width,
-        height,
-        component: match a.component {
-            ComponentArg::Direct => Component::Direct,
-            ComponentArg::Indirect => Component::Indirect,
-            ComponentArg::Combined => Component::Combined,
-        },
-        method: method_of(a.method),
-        vpls: a.vpls,
-        dprsm_res: a.dprsm_res,
-        shadow_res: a.shadow_res,
-        voxels: a.voxels,
-        visibility: crate::visibility_of(a.visibility),
-        clamp: a.clamp,
-        seed: a.seed,
         // One CDF for all progressive frames: the importance is redone only when the camera moves.
-        cdf_seed: Some(a.seed),
-        ..FrameSettings::default()
+        cdf_seed: Some(a.frame.cdf_seed.unwrap_or(a.picture.seed)),
+        ..a.picture.settings(&a.frame, &scene, VIEW_FALLBACK_SIZE)
     };
     if matches!(settings.method, Method::All) {
         return Err(bad(anyhow::anyhow!("`all` is not progressive; view a sampled method or use `bounce render`")));
@@ -251,23 +183,18 @@ impl Viewer<'_> {
             .map_err(|r| bad(anyhow::anyhow!("this window system has no Vulkan surface support ({r:?})")))?;
         // ash-window gives 'static extension names (its own constants).
         let exts = exts.iter().map(|&p| unsafe { std::ffi::CStr::from_ptr(p) }).collect();
-        let gpu = Gpu::new(&GpuOptions {
-            validation: self.args.validation,
-            device: self.args.device.clone(),
-            instance_extensions: exts,
-            swapchain: true,
-        })
-        .map_err(gpu_error)?;
-        self.settings.validate(&gpu).map_err(bad)?;
+        let gpu = Gpu::new(&GpuOptions { instance_extensions: exts, swapchain: true, ..self.args.frame.gpu_options() })
+            .map_err(error::device)?;
+        self.settings.validate(&gpu)?;
         let surface = unsafe { ash_window::create_surface(&gpu.entry, &gpu.instance, display, handle, None) }
             .map_err(|r| anyhow::anyhow!("vkCreate*SurfaceKHR failed: {r:?}"))?;
         let size = window.inner_size();
         let swapchain =
-            Swapchain::new(&gpu, surface, size.width, size.height, !self.args.no_vsync).map_err(gpu_error)?;
+            Swapchain::new(&gpu, surface, size.width, size.height, !self.args.no_vsync).map_err(error::device)?;
         self.settings.width = swapchain.extent.width;
         self.settings.height = swapchain.extent.height;
         let renderer = Renderer::new(&gpu, self.scene)?;
-        renderer.check(&self.settings).map_err(bad)?;
+        renderer.check(&self.settings)?;
         let fly = Fly::new(&self.scene.camera, self.scene.diagonal());
         let n = (self.settings.width * self.settings.height) as usize;
         Ok(State {
@@ -324,7 +251,7 @@ impl Viewer<'_> {
             .iter()
             .flat_map(|p| [p[0], p[1], p[2]].map(output::linear_to_srgb8).into_iter().chain([255]))
             .collect();
-        if st.swapchain.present_rgba8(s.width, s.height, &rgba).map_err(gpu_error)? == Presented::OutOfDate {
+        if st.swapchain.present_rgba8(s.width, s.height, &rgba).map_err(error::device)? == Presented::OutOfDate {
             let size = st.window.inner_size();
             self.resize(size.width, size.height)?;
         }
@@ -384,7 +311,7 @@ impl Viewer<'_> {
         if st.minimized {
             return Ok(());
         }
-        st.swapchain.recreate(width, height).map_err(gpu_error)?;
+        st.swapchain.recreate(width, height).map_err(error::device)?;
         self.settings.width = st.swapchain.extent.width;
         self.settings.height = st.swapchain.extent.height;
         st.sum = vec![[0.0; 3]; (self.settings.width * self.settings.height) as usize];
@@ -523,11 +450,8 @@ impl ApplicationHandler for Viewer<'_> {
 
     fn exiting(&mut self, _el: &ActiveEventLoop) {
         if let Some(st) = &self.state {
-            if self.args.validation {
-                let msgs = st.gpu.validation().messages();
-                if !msgs.is_empty() && self.error.is_none() {
-                    self.error = Some(anyhow::anyhow!("{} validation message(s); first: {}", msgs.len(), msgs[0]));
-                }
+            if let Err(e) = super::check_validation(&st.gpu, self.args.frame.validation) {
+                self.error.get_or_insert(e);
             }
         }
         // Drop the swapchain, surface and device while the window (and its display) still exist.

@@ -1,0 +1,422 @@
+//! The command line's schema (clap): the commands, their arguments, and how the arguments become the
+//! graph's `FrameSettings` and the device's `GpuOptions`.
+//!
+//! `render`, `view` and `bench` share one flattened [`FrameArgs`]; `render` and `view` also share
+//! [`PictureArgs`] (what one picture is: size, component, method, VPLs, seed), which `bench` sweeps
+//! instead. A command that wants other defaults than `render` sets them with `mut_arg`, next to its
+//! arguments, so `--help` shows each command its own defaults.
+//!
+//! The choice flags (`--method`, `--visibility`, …) parse straight into the graph's enums through one
+//! table per flag ([`Choices`]): name on the command line, graph value, `--help` line.
+
+use bounce_device::GpuOptions;
+use bounce_graph::frame::{Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, Visibility};
+use bounce_graph::scene::Scene;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::ffi::OsStr;
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "bounce",
+    version,
+    about = "One-bounce global illumination from point lights with virtual point lights, on Vulkan."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to a linear float32 EXR (and optionally a tone-mapped PNG).
+    Render(RenderArgs),
+    /// List the Vulkan devices with the features and limits bounce uses.
+    Info,
+    /// Error metrics of a test image against a reference image (both EXR).
+    Compare(CompareArgs),
+    /// Run time against error for methods × VPL counts: bench.csv, bench.md, time_vs_error.png.
+    Bench(BenchArgs),
+    /// Interactive viewer: fly camera, progressive accumulation, screenshots (needs a display).
+    View(ViewArgs),
+}
+
+/// A choice flag's values: (name on the command line, the graph's value, its `--help` line).
+#[derive(Clone, Copy)]
+pub struct Choices<T: 'static>(&'static [(&'static str, T, &'static str)]);
+
+impl<T: Clone + Send + Sync + 'static> TypedValueParser for Choices<T> {
+    type Value = T;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<T, clap::Error> {
+        // clap's own parser, so an unknown value reads exactly like any other clap error.
+        let names = PossibleValuesParser::new(self.0.iter().map(|(name, ..)| PossibleValue::new(*name)));
+        let name = names.parse_ref(cmd, arg, value)?;
+        let (_, value, _) = self.0.iter().find(|(n, ..)| *n == name).expect("clap accepted one of the listed names");
+        Ok(value.clone())
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(self.0.iter().map(|(name, _, help)| PossibleValue::new(*name).help(*help))))
+    }
+}
+
+pub const COMPONENTS: Choices<Component> = Choices(&[
+    ("direct", Component::Direct, "Direct light from the point lights (paraboloid shadow maps)"),
+    ("indirect", Component::Indirect, "One bounce of indirect light, gathered from the VPLs"),
+    ("combined", Component::Combined, "Direct plus indirect"),
+]);
+
+pub const METHODS: Choices<Method> = Choices(&[
+    ("uniform", Method::Uniform, "N VPLs per pixel, uniformly among the non-empty DPRSM texels"),
+    ("all", Method::All, "Every VPL (the converged VPL estimate; slow, tiled, with a progress bar)"),
+    ("global", Method::Global, "Ritschel et al. 2011: a CDF from --cdf-samples random gather points"),
+    (
+        "stratified",
+        Method::Stratified,
+        "The global CDF with its gather points spread over the 4 screen quarters (thesis §7.3.2)",
+    ),
+    ("local", Method::Local, "One CDF per screen region (--regions), every pixel sampling all of them (thesis §7.3.3)"),
+    ("gbg", Method::Gbg, "The gathering-based global CDF: --gather-rays cosine rays per pixel (thesis §7.3.4)"),
+    (
+        "mis",
+        Method::Mis,
+        "Cosine gathering (--gather-rays) and gbg CDF sampling (--vpls) by the balance heuristic (§7.4)",
+    ),
+    (
+        "reference",
+        Method::Reference,
+        "The exact one-bounce integral: GPU path tracing against the triangles (BVH), --spp samples",
+    ),
+]);
+
+pub const VISIBILITIES: Choices<Visibility> = Choices(&[
+    ("voxel", Visibility::Voxel, "Amanatides–Woo march through the voxel grid (the thesis's ch. 7)"),
+    ("exact", Visibility::Exact, "Exact shadow rays against the triangles (BVH)"),
+    (
+        "psm",
+        Visibility::Psm,
+        "Per-VPL paraboloid shadow maps (thesis ch. 6) for one shared set of --vpls VPLs per frame",
+    ),
+    ("psm-exact", Visibility::PsmExact, "The shared set of `psm` with exact shadow rays (the maps' own error)"),
+]);
+
+/// `rsm`'s field of view here is a placeholder: [`FrameArgs::settings`] puts `--rsm-fov` in.
+pub const LIGHT_MAPS: Choices<LightMap> = Choices(&[
+    ("dprsm", LightMap::Dprsm, "Dual paraboloid RSM: two faces, every direction (the thesis's choice)"),
+    (
+        "rsm",
+        LightMap::Rsm { fov_deg: 90.0 },
+        "One perspective RSM of --rsm-fov looking at the scene's centre (misses what lies outside)",
+    ),
+    ("cube", LightMap::Cube, "Cube-map RSM: six 90° faces"),
+]);
+
+pub const MIS_WEIGHTS: Choices<MisWeights> = Choices(&[
+    ("consistent", MisWeights::Consistent, "Both densities in solid angle (unbiased)"),
+    ("thesis", MisWeights::Thesis, "The thesis's literal weights (mixed measures; for comparison)"),
+]);
+
+pub const FACES: Choices<FaceMode> = Choices(&[
+    ("rr", FaceMode::RussianRoulette, "Russian roulette by each face's total importance (thesis alg. 9)"),
+    ("uniform", FaceMode::Uniform, "Every face with importance equally likely (thesis alg. 4)"),
+]);
+
+/// What one picture is: its size, component, method, VPL count and seed (`render` and `view`; `bench`
+/// sweeps method, VPLs and seed itself).
+#[derive(Args, Debug)]
+pub struct PictureArgs {
+    /// Image width (default: the scene's [render] width, else 256).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: the scene's [render] height, else 256).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Which radiance to render.
+    #[arg(long, value_parser = COMPONENTS, default_value = "combined")]
+    pub component: Component,
+    /// How the gather picks VPLs.
+    #[arg(long, value_parser = METHODS, default_value = "uniform")]
+    pub method: Method,
+    /// VPLs per pixel (sampled methods).
+    #[arg(long, default_value_t = 64)]
+    pub vpls: u32,
+    /// Random seed (same seed, same image).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl PictureArgs {
+    /// The settings of this picture: the size from the flags, else the scene's `[render]` size, else
+    /// `fallback_size`; everything else from `frame`.
+    pub fn settings(&self, frame: &FrameArgs, scene: &Scene, fallback_size: u32) -> FrameSettings {
+        let width = self.width.or(scene.render_width).unwrap_or(fallback_size);
+        let height = self.height.or(scene.render_height).unwrap_or(fallback_size);
+        FrameSettings {
+            component: self.component,
+            method: self.method,
+            vpls: self.vpls,
+            seed: self.seed,
+            ..frame.settings(width, height)
+        }
+    }
+}
+
+/// The frame settings and device flags of every command that renders (`render`, `view`, `bench`).
+#[derive(Args, Debug)]
+pub struct FrameArgs {
+    /// Reflective DPRSM resolution per face (VPLs: 2 × lights × res²).
+    #[arg(long, default_value_t = 512)]
+    pub dprsm_res: u32,
+    /// Resolution per face of the paraboloid depth map used for direct-light shadows.
+    #[arg(long, default_value_t = 2048)]
+    pub shadow_res: u32,
+    /// Voxels along the longest side of the scene (cubic cells).
+    #[arg(long, default_value_t = 128)]
+    pub voxels: u32,
+    /// Clamp 1/d² below this distance, as a fraction of the scene diagonal (0: off, unbiased).
+    #[arg(long, default_value_t = 0.0)]
+    pub clamp: f32,
+    /// Gather points per CDF (global, stratified, local).
+    #[arg(long, default_value_t = 64)]
+    pub cdf_samples: u32,
+    /// Screen regions of `local` (a perfect square).
+    #[arg(long, default_value_t = 4)]
+    pub regions: u32,
+    /// Cosine rays per gather point (gbg).
+    #[arg(long, default_value_t = 4)]
+    pub gather_rays: u32,
+    /// Share of samples drawn uniformly among all VPLs by the CDF methods (keeps every VPL's pdf > 0).
+    #[arg(long, default_value_t = 0.1)]
+    pub defensive: f32,
+    /// How CDF methods choose the paraboloid face.
+    #[arg(long, value_parser = FACES, default_value = "rr")]
+    pub face: FaceMode,
+    /// MIS weights (--method mis).
+    #[arg(long, value_parser = MIS_WEIGHTS, default_value = "consistent")]
+    pub mis_weights: MisWeights,
+    /// Samples per pixel of --method reference (4096: its own noise is ≈ relMSE 0.002 on the default scene).
+    #[arg(long, default_value_t = 4096)]
+    pub spp: u32,
+    /// Visibility of the VPL gather.
+    #[arg(long, value_parser = VISIBILITIES, default_value = "voxel")]
+    pub visibility: Visibility,
+    /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
+    #[arg(long, default_value_t = 256)]
+    pub psm_res: u32,
+    /// The VPL map at each light (its faces are --dprsm-res² each).
+    #[arg(long, value_parser = LIGHT_MAPS, default_value = "dprsm")]
+    pub light_map: LightMap,
+    /// Field of view of --light-map rsm, degrees.
+    #[arg(long, default_value_t = 90.0)]
+    pub rsm_fov: f32,
+    /// Seed of the importance's gather points and rays (default: --seed). `bounce view` keeps it fixed
+    /// across its progressive frames.
+    #[arg(long)]
+    pub cdf_seed: Option<u64>,
+    /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layers; fail if they report anything.
+    #[arg(long)]
+    pub validation: bool,
+}
+
+impl FrameArgs {
+    /// The frame settings these flags give a `width` × `height` image; what they do not set (component,
+    /// method, VPLs, seed, the graph's internal knobs) keeps `FrameSettings::default()`.
+    pub fn settings(&self, width: u32, height: u32) -> FrameSettings {
+        FrameSettings {
+            width,
+            height,
+            spp: self.spp,
+            visibility: self.visibility,
+            psm_res: self.psm_res,
+            light_map: match self.light_map {
+                LightMap::Rsm { .. } => LightMap::Rsm { fov_deg: self.rsm_fov },
+                other => other,
+            },
+            mis_weights: self.mis_weights,
+            cdf_samples: self.cdf_samples,
+            regions: self.regions,
+            gather_rays: self.gather_rays,
+            defensive: self.defensive,
+            face: self.face,
+            cdf_seed: self.cdf_seed,
+            dprsm_res: self.dprsm_res,
+            shadow_res: self.shadow_res,
+            voxels: self.voxels,
+            clamp: self.clamp,
+            ..FrameSettings::default()
+        }
+    }
+
+    /// The device to open: `--device`, `--validation`, no window.
+    pub fn gpu_options(&self) -> GpuOptions {
+        GpuOptions { validation: self.validation, device: self.device.clone(), ..GpuOptions::default() }
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Output EXR (linear float32 RGB).
+    #[arg(long, default_value = "out.exr")]
+    pub out: PathBuf,
+    /// Also write a tone-mapped (Reinhard 2002) sRGB PNG.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub picture: PictureArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// Print a per-pass GPU time table.
+    #[arg(long)]
+    pub timings: bool,
+}
+
+/// `view` renders a frame per redraw, so it starts from a smaller window and cheaper maps than
+/// `render`; the rest of its flags mean what they mean for `render`.
+#[derive(Args, Debug)]
+#[command(mut_arg("width", |a| a.help("Window width in pixels (default: the scene's [render] width, else 384)")))]
+#[command(mut_arg("height", |a| a.help("Window height in pixels (default: the scene's [render] height, else 384)")))]
+#[command(mut_arg("vpls", |a| a.default_value("16").help("VPLs per pixel per frame (+/− double and halve it)")))]
+#[command(mut_arg("method", |a| a.help("The sampling method (M cycles through the sampled ones)")))]
+#[command(mut_arg("seed", |a| a.help("Seed of the first frame; frame k uses seed + k")))]
+#[command(mut_arg("dprsm_res", |a| a.default_value("256")))]
+#[command(mut_arg("shadow_res", |a| a.default_value("1024")))]
+pub struct ViewArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    #[command(flatten)]
+    pub picture: PictureArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// Render this many frames, write --screenshot and exit.
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Where --frames writes its screenshot (PNG; the linear mean goes next to it as EXR).
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Present without waiting for vertical sync (immediate or mailbox, where the surface has one).
+    #[arg(long)]
+    pub no_vsync: bool,
+}
+
+/// The window size of `view` when neither the flags nor the scene give one.
+pub const VIEW_FALLBACK_SIZE: u32 = 384;
+/// The image size of `render` when neither the flags nor the scene give one.
+pub const RENDER_FALLBACK_SIZE: u32 = 256;
+
+/// `bench` renders many frames, so its maps default to a smaller resolution than `render`'s.
+#[derive(Args, Debug)]
+#[command(mut_arg("dprsm_res", |a| a.default_value("128")))]
+pub struct BenchArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Output folder (also caches the reference image).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Methods to sweep, comma-separated.
+    #[arg(long, value_parser = METHODS, value_delimiter = ',', default_value = "uniform,global,stratified,local,gbg,mis")]
+    pub methods: Vec<Method>,
+    /// VPL counts per pixel, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "16,64,256")]
+    pub vpls: Vec<u32>,
+    /// Frames (seeds 1..=K) per method and VPL count; medians are reported.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    /// Image width.
+    #[arg(long, default_value_t = 128)]
+    pub width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 128)]
+    pub height: u32,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// What errors are measured against: the path-traced ground truth (`path`, --method reference) or
+    /// the exhaustive VPL sum on the same VPL set (`all`: selection error alone).
+    #[arg(long, value_enum, default_value = "path")]
+    pub reference: ReferenceArg,
+    /// Samples per pixel of the path-traced reference.
+    #[arg(long, default_value_t = 4096)]
+    pub reference_spp: u32,
+}
+
+/// What `bench` measures errors against (`commands::bench::Reference` adds the sample count).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReferenceArg {
+    /// The path-traced one-bounce ground truth (--method reference, --reference-spp samples).
+    Path,
+    /// The exhaustive VPL sum on the same VPL set (--method all): the selection error alone.
+    All,
+}
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// The image to measure (EXR).
+    pub test: PathBuf,
+    /// The image it is measured against (EXR).
+    pub reference: PathBuf,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the FLIP error map (magma colours) to this PNG.
+    #[arg(long)]
+    pub heatmap: Option<PathBuf>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    fn parse(args: &[&str]) -> Command {
+        Cli::try_parse_from(["bounce"].iter().chain(args)).expect("valid arguments").command
+    }
+
+    #[test]
+    fn the_schema_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn every_choice_parses_to_its_graph_value() {
+        for (name, value, _) in METHODS.0 {
+            let Command::Render(a) = parse(&["render", "s.toml", "--method", name]) else { panic!() };
+            assert_eq!(a.picture.method, *value);
+        }
+        for (name, value, _) in VISIBILITIES.0 {
+            let Command::Render(a) = parse(&["render", "s.toml", "--visibility", name]) else { panic!() };
+            assert_eq!(a.frame.visibility, *value);
+        }
+        let Command::Render(a) = parse(&["render", "s.toml", "--light-map", "rsm", "--rsm-fov", "60"]) else {
+            panic!()
+        };
+        assert_eq!(a.frame.settings(8, 8).light_map, LightMap::Rsm { fov_deg: 60.0 });
+        let Command::Bench(a) = parse(&["bench", "s.toml", "--out", "o", "--methods", "gbg,mis"]) else { panic!() };
+        assert_eq!(a.methods, [Method::Gbg, Method::Mis]);
+        assert!(Cli::try_parse_from(["bounce", "render", "s.toml", "--face", "sideways"]).is_err());
+    }
+
+    #[test]
+    fn each_command_keeps_its_own_defaults() {
+        let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
+        assert_eq!((r.picture.vpls, r.frame.dprsm_res, r.frame.shadow_res), (64, 512, 2048));
+        let Command::View(v) = parse(&["view", "s.toml"]) else { panic!() };
+        assert_eq!((v.picture.vpls, v.frame.dprsm_res, v.frame.shadow_res), (16, 256, 1024));
+        let Command::Bench(b) = parse(&["bench", "s.toml", "--out", "o"]) else { panic!() };
+        assert_eq!((b.width, b.height, b.frame.dprsm_res, b.frame.shadow_res), (128, 128, 128, 2048));
+    }
+
+    /// The flags' defaults are the graph's defaults, so a command that sets nothing renders what
+    /// `FrameSettings::default()` describes (size and the per-command defaults aside).
+    #[test]
+    fn frame_flag_defaults_are_the_graph_defaults() {
+        let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
+        let (ours, graph) = (r.frame.settings(256, 256), FrameSettings::default());
+        assert_eq!(format!("{ours:?}"), format!("{graph:?}"));
+    }
+}

@@ -1,0 +1,354 @@
+//! `bounce bench`: run time against error for every method and VPL count.
+//!
+//! For each method × VPL count it renders `--repeats` full frames (seeds 1..=K; the renderer's frame
+//! cache is cleared before each) of the indirect component and records, per frame, the GPU time (sum
+//! of pass timestamps) and each pass's time, the wall time of `Renderer::render`, and the error
+//! against a reference image. The reference (`--reference`) is the path-traced ground truth or the
+//! exhaustive VPL sum (`--method all`) on the same VPL set, rendered once and cached in the output
+//! folder under a name keyed by the scene and the settings that change it. It writes:
+//! - `bench.csv`: one row per frame (method, VPLs, seed, GPU ms, wall ms, RMSE, relMSE, mean ratio,
+//!   p99 |error|, FLIP, then one column per pass);
+//! - `bench.md`: the medians over repeats, shaped like the thesis's Tables 7.1 and 7.2 (methods in rows,
+//!   VPL counts in columns, time and error per cell) and a per-pass time table (Fig. 7.19's breakdown);
+//! - `time_vs_error.png`: median relMSE against median GPU time, log–log, one line per method (points at
+//!   the VPL counts), so equal-time comparisons read off a vertical line.
+
+use crate::cli::{BenchArgs, ReferenceArg};
+use crate::error::{self, bad};
+use crate::metrics::Metrics;
+use crate::output::{self, RgbImage};
+use anyhow::{Context, Result};
+use bounce_device::Gpu;
+use bounce_graph::frame::{Component, FrameSettings, LightMap, Method, Renderer, Visibility};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    let scene = super::load_scene(&a.scene, err)?;
+    if a.methods.is_empty() || a.vpls.is_empty() || a.repeats == 0 {
+        return Err(bad(anyhow::anyhow!("--methods, --vpls and --repeats must not be empty or zero")));
+    }
+    if a.methods.contains(&Method::All) {
+        return Err(bad(anyhow::anyhow!("`all` is the reference of `bounce bench`, not a method to sweep")));
+    }
+    let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
+    let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
+    let mut renderer = Renderer::new(&gpu, &scene)?;
+    let plan = BenchPlan {
+        methods: a.methods.clone(),
+        vpls: a.vpls.clone(),
+        repeats: a.repeats,
+        base,
+        reference: match a.reference {
+            ReferenceArg::Path => Reference::Path { spp: a.reference_spp },
+            ReferenceArg::All => Reference::All,
+        },
+    };
+    // Every frame the sweep will render, checked before the first one renders.
+    for &method in &plan.methods {
+        for &vpls in &plan.vpls {
+            renderer.check(&FrameSettings { method, vpls, ..plan.base.clone() })?;
+        }
+    }
+    renderer.check(&plan.reference.settings(&plan.base))?;
+    let samples = sweep(&mut renderer, &plan, &a.scene, &a.out, err)?;
+    super::check_validation(&gpu, a.frame.validation)?;
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    write_outputs(&a.out, &plan, &samples, &gpu.name, &command)?;
+    writeln!(out, "{}", std::fs::read_to_string(a.out.join("bench.md")).unwrap_or_default())?;
+    writeln!(err, "wrote {}/bench.csv, bench.md, time_vs_error.png", a.out.display())?;
+    Ok(())
+}
+
+/// One measured frame.
+#[derive(Clone, Debug)]
+struct Sample {
+    method: Method,
+    vpls: u32,
+    seed: u64,
+    gpu_ms: f64,
+    wall_ms: f64,
+    passes: BTreeMap<&'static str, f64>,
+    metrics: Metrics,
+}
+
+/// What the errors are measured against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Reference {
+    /// The path-traced one-bounce ground truth (`--method reference`) at `spp` samples per pixel.
+    Path { spp: u32 },
+    /// The exhaustive VPL sum on the same VPL set: isolates the selection error.
+    All,
+}
+
+/// What `bench` sweeps, over which base settings, against which reference.
+struct BenchPlan {
+    methods: Vec<Method>,
+    vpls: Vec<u32>,
+    repeats: u32,
+    base: FrameSettings,
+    reference: Reference,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+impl Reference {
+    /// The settings of the reference frame over the plan's base settings.
+    fn settings(self, base: &FrameSettings) -> FrameSettings {
+        let (method, spp) = match self {
+            Reference::Path { spp } => (Method::Reference, spp),
+            Reference::All => (Method::All, base.spp),
+        };
+        FrameSettings { method, spp, component: Component::Indirect, ..base.clone() }
+    }
+
+    /// How the progress line and the cache file name it.
+    fn kind(self) -> String {
+        match self {
+            Reference::Path { spp } => format!("path{spp}"),
+            Reference::All => "all".to_string(),
+        }
+    }
+
+    /// Its cache file's name: keyed by the scene and every setting the reference image depends on.
+    /// The exhaustive sum also depends on the VPL map and the visibility; they appear in the name only
+    /// when not the defaults, so the caches of earlier runs keep their names.
+    fn file_name(self, base: &FrameSettings, scene: &Path) -> String {
+        let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let parent =
+            scene.parent().and_then(|p| p.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let mut kind = self.kind();
+        if self == Reference::All {
+            match base.light_map {
+                LightMap::Dprsm => {}
+                LightMap::Rsm { fov_deg } => kind += &format!("-rsm{fov_deg}"),
+                other => kind += &format!("-{}", other.name()),
+            }
+            if base.visibility != Visibility::Voxel {
+                kind += &format!("-{:?}", base.visibility).to_lowercase();
+            }
+        }
+        let b = base;
+        format!(
+            "reference-{kind}-{parent}-{stem}-{}x{}-dprsm{}-vox{}-clamp{}.exr",
+            b.width, b.height, b.dprsm_res, b.voxels, b.clamp
+        )
+    }
+}
+
+/// The cached reference for the plan's settings, rendering it when absent.
+fn reference(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<RgbImage> {
+    let b = &plan.base;
+    let name = plan.reference.file_name(b, scene);
+    let path = dir.join(name);
+    if path.exists() {
+        let (img, _) = output::read_exr(&path)?;
+        if (img.width, img.height) == (b.width, b.height) {
+            writeln!(err, "reference: {} (cached)", path.display())?;
+            return Ok(img);
+        }
+    }
+    let s = plan.reference.settings(b);
+    writeln!(err, "reference: rendering {} into {}", plan.reference.kind(), path.display())?;
+    let bar = indicatif::ProgressBar::new(0);
+    let f = r.render_with_progress(&s, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    bar.finish_and_clear();
+    let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+    output::write_exr(&path, &img, &[("component", "indirect".into()), ("method", s.method.name().into())])?;
+    Ok(img)
+}
+
+/// Renders and measures every frame of the plan.
+fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<Sample>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let reference = reference(r, plan, scene, dir, err)?;
+    let total = (plan.methods.len() * plan.vpls.len()) as u64 * plan.repeats as u64;
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("bench {bar:40} {pos}/{len} frames ({msg}), eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    // One untimed frame first: it builds what every later frame reuses (the voxel grid) and warms the
+    // driver's shader caches, so the first timed frame is not charged for them.
+    r.render(&FrameSettings { method: plan.methods[0], vpls: 1, component: Component::Indirect, ..plan.base.clone() })?;
+    let mut samples = vec![];
+    for &method in &plan.methods {
+        for &vpls in &plan.vpls {
+            for seed in 1..=plan.repeats as u64 {
+                bar.set_message(format!("{} {vpls}", method.name()));
+                let s = FrameSettings { method, vpls, seed, component: Component::Indirect, ..plan.base.clone() };
+                // Full frames for every method (a seed-independent CDF would otherwise be reused).
+                r.clear_frame_cache();
+                let t0 = Instant::now();
+                let f = r.render(&s)?;
+                let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
+                let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+                let mut passes = BTreeMap::new();
+                for t in &f.timings {
+                    *passes.entry(t.name).or_insert(0.0) += t.ms.unwrap_or(f64::NAN);
+                }
+                samples.push(Sample {
+                    method,
+                    vpls,
+                    seed,
+                    gpu_ms: f.gpu_ms().unwrap_or(f64::NAN),
+                    wall_ms,
+                    passes,
+                    metrics: Metrics::with_flip(&img, &reference),
+                });
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    Ok(samples)
+}
+
+/// Write bench.csv, bench.md and time_vs_error.png (each through a temporary file).
+fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &str, command: &str) -> Result<()> {
+    let pass_names: Vec<&str> = {
+        let mut v: Vec<&str> = samples.iter().flat_map(|s| s.passes.keys().copied()).collect();
+        v.sort();
+        v.dedup();
+        v
+    };
+    output::write_text(&dir.join("bench.csv"), &csv(samples, &pass_names))?;
+    let md = error_table(plan, samples, device, command) + &pass_table(plan, samples, &pass_names);
+    output::write_text(&dir.join("bench.md"), &md)?;
+    let series: Vec<(String, Vec<(f64, f64)>)> = plan
+        .methods
+        .iter()
+        .map(|&m| {
+            let points = plan.vpls.iter().map(|&n| cell(samples, m, n)).map(|(ms, rel_mse, _)| (ms, rel_mse));
+            (m.name().to_string(), points.collect())
+        })
+        .collect();
+    let b = &plan.base;
+    crate::plot::time_vs_error(
+        &dir.join("time_vs_error.png"),
+        &series,
+        &format!("{}×{}, {}", b.width, b.height, device),
+    )
+}
+
+/// One row per frame, one column per pass.
+fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
+    let mut csv = String::from("method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs,flip");
+    for p in pass_names {
+        csv.push_str(&format!(",pass_{p}_ms"));
+    }
+    csv.push('\n');
+    for s in samples {
+        csv.push_str(&format!(
+            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e},{:.6}",
+            s.method.name(),
+            s.vpls,
+            s.seed,
+            s.gpu_ms,
+            s.wall_ms,
+            s.metrics.rmse,
+            s.metrics.rel_mse,
+            s.metrics.mean_ratio,
+            s.metrics.p99_abs,
+            s.metrics.flip.unwrap_or(f64::NAN)
+        ));
+        for p in pass_names {
+            csv.push_str(&format!(",{:.4}", s.passes.get(p).copied().unwrap_or(0.0)));
+        }
+        csv.push('\n');
+    }
+    csv
+}
+
+/// The medians of one method at one VPL count: (GPU ms, relMSE, FLIP).
+fn cell(samples: &[Sample], m: Method, n: u32) -> (f64, f64, f64) {
+    let sel: Vec<&Sample> = samples.iter().filter(|s| s.method == m && s.vpls == n).collect();
+    (
+        median(sel.iter().map(|s| s.gpu_ms).collect()),
+        median(sel.iter().map(|s| s.metrics.rel_mse).collect()),
+        median(sel.iter().map(|s| s.metrics.flip.unwrap_or(f64::NAN)).collect()),
+    )
+}
+
+/// bench.md's heading and its first table: methods in rows, VPL counts in columns.
+fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str) -> String {
+    let b = &plan.base;
+    let mut md = format!(
+        "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {} repeat(s) \
+         (seeds 1..={}); medians over repeats. Reference: {}. GPU time: the sum of the frame's pass timestamps.\n\n## GPU time (ms), relMSE and mean FLIP against the reference\n\n| method |",
+        b.width,
+        b.height,
+        b.dprsm_res,
+        b.voxels,
+        b.clamp,
+        plan.repeats,
+        plan.repeats,
+        match plan.reference {
+            Reference::Path { spp } => format!("the path-traced ground truth (`--method reference`, {spp} spp)"),
+            Reference::All => "the exhaustive VPL sum on the same VPL set (`--method all`)".to_string(),
+        }
+    );
+    for n in &plan.vpls {
+        md.push_str(&format!(" {n} VPLs: ms | relMSE | FLIP |"));
+    }
+    md.push_str("\n|---|");
+    for _ in &plan.vpls {
+        md.push_str("---:|---:|---:|");
+    }
+    md.push('\n');
+    for &m in &plan.methods {
+        md.push_str(&format!("| {} |", m.name()));
+        for &n in &plan.vpls {
+            let (t, e, fl) = cell(samples, m, n);
+            md.push_str(&format!(" {t:.1} | {e:.4} | {fl:.4} |"));
+        }
+        md.push('\n');
+    }
+    md
+}
+
+/// bench.md's second table: each pass's median GPU time per method, at the largest VPL count.
+fn pass_table(plan: &BenchPlan, samples: &[Sample], pass_names: &[&str]) -> String {
+    let mut md = String::from("\n## Per-pass GPU time (ms, median), at the largest VPL count\n\n| method |");
+    for p in pass_names {
+        md.push_str(&format!(" {p} |"));
+    }
+    md.push_str("\n|---|");
+    for _ in pass_names {
+        md.push_str("---:|");
+    }
+    md.push('\n');
+    let nmax = plan.vpls.iter().copied().max().unwrap_or(0);
+    for &m in &plan.methods {
+        md.push_str(&format!("| {} |", m.name()));
+        for p in pass_names {
+            let v = median(
+                samples
+                    .iter()
+                    .filter(|s| s.method == m && s.vpls == nmax)
+                    .filter_map(|s| s.passes.get(p).copied())
+                    .collect(),
+            );
+            md.push_str(&if v.is_finite() { format!(" {v:.2} |") } else { " – |".to_string() });
+        }
+        md.push('\n');
+    }
+    md
+}

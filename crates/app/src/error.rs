@@ -1,0 +1,126 @@
+//! The exit-code policy, decided by the *type* of an error, and the one-line error report.
+//!
+//! - [`SUCCESS`] (0): the command did what it was asked (and `--help`, `--version`).
+//! - [`BAD_INPUT`] (2): something the user fixes by changing the input or the machine: an argument clap
+//!   rejects, a scene that does not load ([`SceneError`]), settings the device or scene cannot run
+//!   ([`SettingsError`]), an
+//!   unreadable input image ([`BadInput`]), no usable Vulkan device or validation layer (the
+//!   [`bounce_device::Error`] variants of [`device_missing`]).
+//! - [`RUNTIME`] (1): everything else: a Vulkan call that failed, an output that cannot be written, …
+//!
+//! Every error is one line on stderr, starting with `error: `.
+
+use bounce_graph::frame::SettingsError;
+use bounce_graph::scene::SceneError;
+use std::io::Write;
+
+pub const SUCCESS: i32 = 0;
+pub const RUNTIME: i32 = 1;
+pub const BAD_INPUT: i32 = 2;
+
+/// An error the user can fix by changing the input: the app's own input checks.
+#[derive(Debug, thiserror::Error)]
+#[error("{0:#}")]
+pub struct BadInput(anyhow::Error);
+
+/// Marks `e` as bad input (exit code 2).
+pub fn bad(e: impl Into<anyhow::Error>) -> anyhow::Error {
+    anyhow::Error::new(BadInput(e.into()))
+}
+
+/// The device errors that mean "no usable device here" (the machine lacks a driver, a layer, a
+/// feature) rather than a failure of a device that works.
+pub fn device_missing(e: &bounce_device::Error) -> bool {
+    use bounce_device::Error as E;
+    matches!(
+        e,
+        E::Loader(_) | E::NoDevice(_) | E::NoMatchingDevice { .. } | E::MissingFeature { .. } | E::NoValidationLayer
+    )
+}
+
+/// A device error for the report: a missing device speaks for itself; any other failure says what
+/// was being done.
+pub fn device(e: bounce_device::Error) -> anyhow::Error {
+    if device_missing(&e) {
+        e.into()
+    } else {
+        anyhow::Error::new(e).context("creating the Vulkan device")
+    }
+}
+
+/// The exit code of a failed command: [`BAD_INPUT`] when any error in the chain is one of the input
+/// types, else [`RUNTIME`].
+pub fn exit_code(e: &anyhow::Error) -> i32 {
+    let bad_input = e.chain().any(|cause| {
+        cause.is::<BadInput>()
+            || cause.is::<SceneError>()
+            || cause.is::<SettingsError>()
+            || cause.downcast_ref::<bounce_device::Error>().is_some_and(device_missing)
+    });
+    if bad_input {
+        BAD_INPUT
+    } else {
+        RUNTIME
+    }
+}
+
+/// Writes `e` as one `error:` line on `err` and returns its exit code.
+pub fn report(e: &anyhow::Error, err: &mut dyn Write) -> i32 {
+    let one_line = format!("{e:#}").replace('\n', " ");
+    // Nothing is left to tell the user if stderr itself fails; the exit code still says it.
+    let _ = writeln!(err, "error: {one_line}");
+    exit_code(e)
+}
+
+/// A command line clap rejected (exit 2, one line on `err`), or `--help` / `--version` (exit 0, the
+/// text on `out`).
+pub fn report_usage(e: &clap::Error, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    let text = e.render().to_string();
+    if !e.use_stderr() {
+        let _ = write!(out, "{text}");
+        return SUCCESS;
+    }
+    // clap's message is several lines; the first names the problem. One line, like every error.
+    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+    let _ = writeln!(err, "error: {} (see `bounce --help`)", first.trim_start_matches("error: ").trim());
+    BAD_INPUT
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn scene_error() -> SceneError {
+        SceneError::Invalid { path: PathBuf::from("s.toml"), msg: "no light".into() }
+    }
+
+    #[test]
+    fn input_errors_are_bad_input_wherever_they_sit_in_the_chain() {
+        assert_eq!(exit_code(&scene_error().into()), BAD_INPUT);
+        assert_eq!(exit_code(&anyhow::Error::new(scene_error()).context("loading")), BAD_INPUT);
+        assert_eq!(exit_code(&bad(anyhow::anyhow!("--regions must be a perfect square"))), BAD_INPUT);
+        let missing = bounce_device::Error::NoDevice(String::new());
+        assert_eq!(exit_code(&device(missing)), BAD_INPUT);
+        assert_eq!(exit_code(&device(bounce_device::Error::NoValidationLayer)), BAD_INPUT);
+    }
+
+    #[test]
+    fn other_errors_are_runtime_failures() {
+        assert_eq!(exit_code(&anyhow::anyhow!("vkQueueSubmit failed")), RUNTIME);
+        let failed = bounce_device::Error::Vk { call: "vkCreateDevice", result: ash::vk::Result::ERROR_DEVICE_LOST };
+        let e = device(failed);
+        assert_eq!(exit_code(&e), RUNTIME);
+        assert!(format!("{e:#}").starts_with("creating the Vulkan device: vkCreateDevice failed"), "{e:#}");
+        // Text that merely mentions an input problem does not make an error bad input.
+        assert_eq!(exit_code(&anyhow::anyhow!("cannot read s.toml")), RUNTIME);
+    }
+
+    #[test]
+    fn a_report_is_one_line() {
+        let mut err = vec![];
+        let e = anyhow::anyhow!("first\nsecond").context("outer");
+        assert_eq!(report(&e, &mut err), RUNTIME);
+        assert_eq!(String::from_utf8(err).unwrap(), "error: outer: first second\n");
+    }
+}
