@@ -3,9 +3,9 @@
 //! inputs.
 
 use anyhow::Result;
+use bounce_device::Image;
 use bounce_graph::frame::{FrameSettings, Renderer};
 use bounce_graph::graph::{Graph, Handle};
-use bounce_device::Image;
 
 /// The direct light's paraboloid depth map: distance / far per texel, layer after layer.
 pub fn render_dprsm(r: &Renderer, s: &FrameSettings) -> Result<Vec<f32>> {

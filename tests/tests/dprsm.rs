@@ -128,7 +128,8 @@ fn a_light_sealed_in_a_box_has_every_vpl_on_the_box() {
     for res in [16u32, 64, 256] {
         let gpu = TestGpu::new();
         let r = Renderer::new(&gpu, &scene).unwrap();
-        let [pos, _, _] = bounce_tests::maps::render_vpls(&r, &FrameSettings { dprsm_res: res, ..FrameSettings::default() }).unwrap();
+        let [pos, _, _] =
+            bounce_tests::maps::render_vpls(&r, &FrameSettings { dprsm_res: res, ..FrameSettings::default() }).unwrap();
         let outside: Vec<String> = pos
             .iter()
             .enumerate()

@@ -329,9 +329,10 @@ fn temporal_and_history_images_live_across_graphs() {
         let mut prev_copy = image(&mut g, "previous copy");
         if let Some(p) = hist.previous {
             let hp = prev_copy;
-            g.add_pass("copy").read(&p, Access::TransferRead).overwrite(&mut prev_copy, Access::TransferWrite).record(
-                move |ctx| copy(ctx, &p, &hp),
-            );
+            g.add_pass("copy")
+                .read(&p, Access::TransferRead)
+                .overwrite(&mut prev_copy, Access::TransferWrite)
+                .record(move |ctx| copy(ctx, &p, &hp));
             g.export(&prev_copy);
         }
         let done = g.execute().unwrap();

@@ -33,8 +33,11 @@ fn texel_solid_angles_cover_each_map() {
         (LightMap::Rsm { fov_deg: 120.0 }, 4.0 * (0.75f64).asin(), 1e-3),
     ] {
         assert!((map.solid_angle() - want).abs() < 1e-9, "{map:?}: solid_angle() {}", map.solid_angle());
-        let [pos, _, flux] =
-            bounce_tests::maps::render_vpls(&r, &FrameSettings { dprsm_res: res, light_map: map, ..FrameSettings::default() }).unwrap();
+        let [pos, _, flux] = bounce_tests::maps::render_vpls(
+            &r,
+            &FrameSettings { dprsm_res: res, light_map: map, ..FrameSettings::default() },
+        )
+        .unwrap();
         let valid = pos.iter().filter(|p| p[3] != 0.0).count();
         let sum: f64 = flux.iter().zip(&pos).filter(|(_, p)| p[3] != 0.0).map(|(f, _)| f[3] as f64).sum();
         eprintln!("{map:?}: {valid} VPLs, Σ Δω = {sum:.5} vs {want:.5}");

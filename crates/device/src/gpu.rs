@@ -346,8 +346,10 @@ fn create_device(instance: &ash::Instance, picked: &Picked, opts: &GpuOptions) -
         .fragment_stores_and_atomics(true)
         .vertex_pipeline_stores_and_atomics(true);
     let mut f2 = vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v13).push_next(&mut v12);
-    let dinfo =
-        vk::DeviceCreateInfo::default().queue_create_infos(&qinfo).enabled_extension_names(&dev_exts).push_next(&mut f2);
+    let dinfo = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&qinfo)
+        .enabled_extension_names(&dev_exts)
+        .push_next(&mut f2);
     unsafe { instance.create_device(picked.physical, &dinfo, None) }
         .map_err(|result| Error::Vk { call: "vkCreateDevice", result })
 }
@@ -440,7 +442,13 @@ impl Gpu {
 
     /// The allocator, the command pool and the handle, around a created device.
     fn with_device(
-        (entry, instance, device, picked, validation): (ash::Entry, ash::Instance, ash::Device, Picked, Arc<ValidationLog>),
+        (entry, instance, device, picked, validation): (
+            ash::Entry,
+            ash::Instance,
+            ash::Device,
+            Picked,
+            Arc<ValidationLog>,
+        ),
         has_debug_utils: bool,
         messenger: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     ) -> Result<Gpu> {
@@ -546,7 +554,8 @@ impl Drop for Shared {
     fn drop(&mut self) {
         unsafe {
             let _ = self.device.device_wait_idle();
-            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(PoisonError::into_inner), None);
+            self.device
+                .destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(PoisonError::into_inner), None);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             if let Some((du, m)) = self.messenger.take() {

@@ -221,7 +221,10 @@ pub enum Target<'a> {
     Buffer(vk::Buffer),
     Image(&'a Image),
     /// An image bounce does not own (a swapchain image): its handle and the range to transition.
-    External { image: vk::Image, range: vk::ImageSubresourceRange },
+    External {
+        image: vk::Image,
+        range: vk::ImageSubresourceRange,
+    },
 }
 
 impl Target<'_> {

@@ -378,7 +378,11 @@ impl PassContext<'_> {
     /// state to the access the pass declared for it.
     pub fn serialize<T>(&self, h: &Handle<T>) {
         let access = self.declared(h.id);
-        debug_assert!(access.info().writes, "serialize() on `{}`, which this pass only reads", self.resources[h.id].name);
+        debug_assert!(
+            access.info().writes,
+            "serialize() on `{}`, which this pass only reads",
+            self.resources[h.id].name
+        );
         self.resources[h.id].transition(self.gpu, self.cmd, access);
     }
 }
@@ -409,7 +413,14 @@ pub struct Graph<'a> {
 impl<'a> Graph<'a> {
     /// A graph that keeps nothing across frames (`cached` always builds).
     pub fn new(gpu: &Gpu) -> Self {
-        Graph { gpu: gpu.clone(), resources: vec![], passes: vec![], exported: vec![], retained: None, requests: vec![] }
+        Graph {
+            gpu: gpu.clone(),
+            resources: vec![],
+            passes: vec![],
+            exported: vec![],
+            retained: None,
+            requests: vec![],
+        }
     }
 
     /// A graph that borrows `retained` for its cached products and temporal resources.
@@ -425,12 +436,22 @@ impl<'a> Graph<'a> {
     /// A buffer that lives for this frame only.
     pub fn create_buffer(&mut self, desc: BufferDesc) -> Handle<Buffer> {
         let name = desc.name.clone();
-        Handle::new(self.push(name, Storage::TransientBuffer(desc, None), Tracked::after(Access::Nothing, false), Home::Frame))
+        Handle::new(self.push(
+            name,
+            Storage::TransientBuffer(desc, None),
+            Tracked::after(Access::Nothing, false),
+            Home::Frame,
+        ))
     }
     /// An image that lives for this frame only.
     pub fn create_image(&mut self, desc: ImageDesc) -> Handle<Image> {
         let name = desc.name.clone();
-        Handle::new(self.push(name, Storage::TransientImage(desc, None), Tracked::after(Access::Nothing, false), Home::Frame))
+        Handle::new(self.push(
+            name,
+            Storage::TransientImage(desc, None),
+            Tracked::after(Access::Nothing, false),
+            Home::Frame,
+        ))
     }
     pub fn import_buffer(&mut self, p: &'a Persistent<Buffer>) -> Handle<Buffer> {
         let state = Tracked::after(p.last.get(), false);
@@ -445,7 +466,12 @@ impl<'a> Graph<'a> {
     /// product of this name and key, its resources are lent to this graph and `build` does not run;
     /// otherwise `build` adds its passes, and if they run, what it returns is kept (an older product of
     /// the name is dropped). Asking twice in one graph returns the same handles.
-    pub fn cached<P: Products>(&mut self, name: &'static str, key: &impl Hash, build: impl FnOnce(&mut Self) -> P) -> P {
+    pub fn cached<P: Products>(
+        &mut self,
+        name: &'static str,
+        key: &impl Hash,
+        build: impl FnOnce(&mut Self) -> P,
+    ) -> P {
         let key = fingerprint(key);
         if let Some((_, r)) = self.requests.iter().find(|(n, r)| *n == name && r.key == key) {
             return P::from_handles(&mut r.handles.iter().copied());

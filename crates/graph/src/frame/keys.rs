@@ -36,7 +36,8 @@ pub struct Keys {
 impl Keys {
     pub fn new(s: &FrameSettings, camera: &Camera, spec: &VoxelGridSpec, p: &ImportanceParams) -> Keys {
         let c = camera;
-        let cam = bits(&[c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fov_y_deg]);
+        let cam =
+            bits(&[c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fov_y_deg]);
         let gbuffer = fingerprint(&(cam, s.width, s.height));
         let vpls = fingerprint(&(s.dprsm_res, s.light_map.name(), s.light_map.tan_half_fov().to_bits()));
         let voxels = fingerprint(&(bits(&spec.origin.to_array()), spec.cell.to_bits(), spec.dims.to_array()));

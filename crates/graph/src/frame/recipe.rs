@@ -81,7 +81,12 @@ pub fn build_frame<'a>(
     let mut out = g.temporal_image("radiance", desc(out_name(s.method)), &()).handle;
     if s.method == Method::Reference {
         let mut sq = g.temporal_image("radiance.sq", desc("reference.sq"), &()).handle;
-        let io = ReferenceIo { g_position: gbuffer.position, g_normal: gbuffer.normal, g_albedo: gbuffer.albedo, direct: combined };
+        let io = ReferenceIo {
+            g_position: gbuffer.position,
+            g_normal: gbuffer.normal,
+            g_albedo: gbuffer.albedo,
+            direct: combined,
+        };
         let bvh = f.bvh.expect("the reference traces the BVH (the renderer builds it first)");
         r.reference.add(g, f, bvh, io, &mut out, &mut sq, reference_push(s, chunk), i.reference_per_dispatch);
         return FrameOut { radiance: out, second_moment: Some(sq), cdf: None };
@@ -143,7 +148,14 @@ fn gather_push(s: &FrameSettings, f: FrameInputs, p: ImportanceParams, chunk: Ra
     };
     if s.method == Method::All {
         let all = GATHER_ALL;
-        return GatherPush { mode: all, samples: 1, first: chunk.start, last: chunk.end, accumulate: (chunk.start > 0) as u32, ..common };
+        return GatherPush {
+            mode: all,
+            samples: 1,
+            first: chunk.start,
+            last: chunk.end,
+            accumulate: (chunk.start > 0) as u32,
+            ..common
+        };
     }
     let rows = f.vpl_faces * f.scene.light_count * f.dprsm_res;
     let push = GatherPush {

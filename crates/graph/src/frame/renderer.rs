@@ -281,9 +281,11 @@ impl RenderContext {
             return None;
         }
         let cdf: Vec<f32> = bytemuck::pod_collect_to_vec(bytes);
-        let len = CdfReduce::section_len(s.light_map.faces() * self.scene.light_count * s.dprsm_res, s.dprsm_res) as usize;
+        let len =
+            CdfReduce::section_len(s.light_map.faces() * self.scene.light_count * s.dprsm_res, s.dprsm_res) as usize;
         let live = (1..=sections).filter(|k| cdf.get(k * len).is_some_and(|t| *t > 0.0)).count();
-        (live == 0).then(|| format!("the {} importance is zero for every VPL; sampling uniformly instead", s.method.name()))
+        (live == 0)
+            .then(|| format!("the {} importance is zero for every VPL; sampling uniformly instead", s.method.name()))
     }
 
     /// The importance pass's parameters for `s`.
