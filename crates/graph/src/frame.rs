@@ -1084,7 +1084,7 @@ impl Renderer {
     /// The BVH of the scene, built on first use.
     pub fn bvh(&self) -> Result<&crate::bvh::GpuBvh> {
         if self.bvh.get().is_none() {
-            let cpu = crate::cpu_ref::Bvh::from_vertices(&self.vertices);
+            let cpu = crate::bvh::Bvh::from_vertices(&self.vertices);
             let flat = crate::bvh::FlatBvh::new(&cpu, &self.vertices);
             let _ = self.bvh.set(crate::bvh::GpuBvh::upload(&self.gpu, &flat).context("uploading the BVH")?);
         }

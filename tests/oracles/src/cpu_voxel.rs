@@ -15,8 +15,8 @@
 //! 2.5 ulp off. That is why the arithmetic below is written component by component instead of with
 //! glam's `dot`/`cross`.
 
-use crate::passes::voxelize::{VoxelGridSpec, VOXEL_EPS};
-use crate::scene::Scene;
+use bounce_graph::passes::voxelize::{VoxelGridSpec, VOXEL_EPS};
+use bounce_graph::scene::Scene;
 use glam::{IVec3, Vec3};
 
 /// Half size of a grown cell in grid units: ½ + ε (exact: ε is a power of two).

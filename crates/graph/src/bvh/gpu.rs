@@ -1,16 +1,16 @@
-//! The GPU BVH: the scene's triangles in a bounding volume hierarchy that shaders ray cast against
-//! (`glsl/shared/bvh.glsl`: `bvh_closest`, `bvh_occluded`), for exact visibility where the voxel march
-//! is too coarse.
+//! The GPU layout of the BVH: the SAH tree of [`super::build`] flattened to the nodes and triangles
+//! that shaders ray cast against (`glsl/shared/bvh.glsl`: `bvh_closest`, `bvh_occluded`), for exact
+//! visibility where the voxel march is too coarse.
 //!
-//! Owns: the flattening of the CPU reference's tree ([`FlatBvh`]) into the GPU layout, its upload
-//! ([`GpuBvh`], once per scene, read-only afterwards, so the graph does not track it), the layout mirrors
-//! ([`GpuBvhNode`], [`GpuBvhTri`]) and the constants the shaders share ([`MAX_STEPS`], [`STACK_SIZE`],
-//! the binding numbers). The traversal itself is in `bvh.glsl`, whose header is its contract.
+//! Owns: the flattening ([`FlatBvh`]), its upload ([`GpuBvh`], once per scene, read-only afterwards,
+//! so the graph does not track it), the layout mirrors ([`GpuBvhNode`], [`GpuBvhTri`]) and the
+//! constants the shaders share ([`MAX_STEPS`], [`STACK_SIZE`], [`SHADOW_EPS`], the binding numbers).
+//! The traversal itself is in `bvh.glsl`, whose header is its contract.
 //!
-//! **Why the CPU tree.** [`crate::cpu_ref::Bvh`] is already a binned-SAH tree, tested against brute
-//! force; reusing its structure means the GPU and the reference it is checked against walk the same
-//! tree. Only its shape is taken: the boxes are recomputed here in f32 from the f32 vertices (min/max
-//! are exact, so a box holds its triangles exactly).
+//! **Why the SAH tree's shape.** The CPU reference (`bounce-oracles`) casts its f64 rays through the
+//! same [`Bvh`], so the GPU and the reference it is checked against walk the same tree. Only its shape
+//! is taken: the boxes are recomputed here in f32 from the f32 vertices (min/max are exact, so a box
+//! holds its triangles exactly).
 //!
 //! **Layout** (std430, two storage buffers, bindings [`B_BVH_NODES`] and [`B_BVH_TRIS`]):
 //! * nodes: [`GpuBvhNode`] `{ vec3 lo; uint first; vec3 hi; uint count; }`, 32 bytes. A leaf
@@ -26,9 +26,9 @@
 //!   triangles becomes one leaf holding one degenerate triangle that nothing hits.
 //!
 //! **Depth and stack.** The traversal keeps a stack of [`STACK_SIZE`] = 64 entries, and a tree of
-//! height h (levels below the root) needs at most h. The CPU builder may go deeper on pathological
-//! input (it switches to median splits only at depth 96), so [`FlatBvh::new`] copies the CPU tree
-//! where it can and rebuilds a subtree by median splits (each halves the count, height
+//! height h (levels below the root) needs at most h. The SAH builder may go deeper on pathological
+//! input (it switches to median splits only at depth [`super::build::MEDIAN_DEPTH`]), so
+//! [`FlatBvh::new`] copies the tree where it can and rebuilds a subtree by median splits (each halves the count, height
 //! ⌈log2(n / 2)⌉) wherever a child would otherwise be unable to fit below the limit: the result never
 //! exceeds 64 levels for any triangle count the buffers can hold. On real scenes nothing is rebuilt.
 //!
@@ -50,7 +50,7 @@
 //! **Bindings.** [`B_BVH_NODES`], [`B_BVH_TRIS`], [`MAX_STEPS`] and [`STACK_SIZE`] come from
 //! `glsl/shared/bindings.glsl` (generated constants); a test checks the rest of `bvh.glsl`'s constants.
 
-use crate::cpu_ref::Bvh;
+use super::build::Bvh;
 use crate::scene::Scene;
 use crate::shader_types::Vertex;
 use anyhow::{Context, Result};
@@ -66,10 +66,15 @@ pub const MAX_STEPS: u32 = crate::bindings::BVH_MAX_STEPS;
 pub const STACK_SIZE: u32 = crate::bindings::BVH_STACK_SIZE;
 /// The triangle index of "no hit" (`BVH_NO_TRI`).
 pub const NO_TRI: u32 = u32::MAX;
-/// Relative end epsilon of `bvh_occluded` (`BVH_SHADOW_EPS`), the CPU reference's
-/// [`crate::cpu_ref::SHADOW_EPS`].
-pub const SHADOW_EPS: f32 = crate::cpu_ref::SHADOW_EPS as f32;
-/// Triangles per leaf of a median-rebuilt subtree (the CPU builder's smallest leaf, too).
+/// Relative end epsilon of `bvh_occluded` (`BVH_SHADOW_EPS`): only occluders at segment parameter
+/// `t ∈ (SHADOW_EPS, 1 − SHADOW_EPS)` count. Relative (not absolute) so it scales with the scene: it
+/// keeps a segment's own end surfaces (and a light lying on a surface) from occluding, while an
+/// occluder closer than 0.01 % of the segment length to either end is ignored.
+pub const SHADOW_EPS: f32 = SHADOW_EPS_F64 as f32;
+/// [`SHADOW_EPS`] before its rounding to f32: the CPU reference tests segments in f64 with this value
+/// (one source for both; the f32 rounding of it would move the reference's cut by 2.5e-12).
+pub const SHADOW_EPS_F64: f64 = 1e-4;
+/// Triangles per leaf of a median-rebuilt subtree (the SAH builder's smallest leaf, too).
 const MEDIAN_LEAF: u32 = 2;
 
 /// A node: box `[lo, hi]`; a leaf (`count > 0`) holds `tris[first .. first + count]`, an interior node
@@ -126,7 +131,7 @@ pub struct FlatBvh {
     pub triangle_count: u32,
     /// Levels below the root (a lone root leaf: 0); at most [`STACK_SIZE`].
     pub height: u32,
-    /// Subtrees of the CPU tree rebuilt by median splits to fit the height limit (0 on real scenes).
+    /// Subtrees of the SAH tree rebuilt by median splits to fit the height limit (0 on real scenes).
     pub rebuilt_subtrees: u32,
 }
 
@@ -141,7 +146,7 @@ fn median_height(mut n: u32) -> u32 {
 }
 
 impl FlatBvh {
-    /// The GPU layout of `bvh`, the CPU tree of the flat triangle list `vertices` (the same list it was
+    /// The GPU layout of `bvh`, the SAH tree of the flat triangle list `vertices` (the same list it was
     /// built from), at most [`STACK_SIZE`] levels deep.
     pub fn new(bvh: &Bvh, vertices: &[Vertex]) -> FlatBvh {
         FlatBvh::with_max_height(bvh, vertices, STACK_SIZE)
@@ -171,7 +176,7 @@ impl FlatBvh {
             };
         }
 
-        // Triangle count and first position in `order` of every CPU subtree (children come after their
+        // Triangle count and first position in `order` of every SAH subtree (children come after their
         // parent, so one reverse sweep; a left child's range directly precedes its sibling's).
         let n = bvh.node_count();
         let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
@@ -186,7 +191,7 @@ impl FlatBvh {
         }
         let fits = |depth: u32, tris: u32| depth + median_height(tris) <= max_height;
 
-        // Triangles of a rebuilt range are permuted in `items` (a copy of `order`; CPU leaves read the
+        // Triangles of a rebuilt range are permuted in `items` (a copy of `order`; SAH leaves read the
         // same positions, which no rebuild of another subtree touches).
         let mut items = order.to_vec();
         let centroid = |t: u32| {
@@ -309,13 +314,13 @@ pub struct GpuBvh {
 }
 
 impl GpuBvh {
-    /// Builds the CPU reference tree of `scene` (binned SAH), flattens and uploads it.
+    /// Builds the SAH tree of `scene`, flattens and uploads it.
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<GpuBvh> {
         let bvh = Bvh::new(scene);
         GpuBvh::upload(gpu, &FlatBvh::new(&bvh, &scene.vertices))
     }
 
-    /// Uploads a flattened tree (for a CPU tree the caller already has, or a custom height limit).
+    /// Uploads a flattened tree (for a tree the caller already has, or a custom height limit).
     pub fn upload(gpu: &Gpu, flat: &FlatBvh) -> Result<GpuBvh> {
         anyhow::ensure!(flat.height <= STACK_SIZE, "BVH of height {} exceeds the stack ({STACK_SIZE})", flat.height);
         let max_range = gpu.limits().max_storage_buffer_range as u64;
@@ -444,12 +449,12 @@ mod tests {
     }
 
     #[test]
-    fn flattening_keeps_the_cpu_tree_and_every_triangle() {
+    fn flattening_keeps_the_sah_tree_and_every_triangle() {
         let scene = scene_of(&soup(3000));
         let bvh = Bvh::new(&scene);
         let flat = FlatBvh::new(&bvh, &scene.vertices);
         check(&flat, &scene, STACK_SIZE);
-        // Nothing rebuilt: the GPU tree has the CPU tree's shape.
+        // Nothing rebuilt: the GPU tree has the SAH tree's shape.
         assert_eq!(flat.rebuilt_subtrees, 0);
         assert_eq!(flat.nodes.len(), bvh.node_count());
         assert_eq!(flat.triangle_count, 3000);
