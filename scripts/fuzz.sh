@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fuzz the scene loader (TOML, OBJ, MTL, PNG) with cargo-fuzz / libFuzzer for a while; the contract it
-# checks is in crates/graph/src/scene_fuzz.rs. Usage: scripts/fuzz.sh [seconds, default 300].
+# checks is in tests/oracles/src/scene_fuzz.rs. Usage: scripts/fuzz.sh [seconds, default 300].
 # Needs a nightly toolchain (installed by rustup if missing) and cargo-fuzz (installed if missing).
 # New corpus entries go to $CARGO_TARGET_DIR/fuzz-corpus (the committed seeds stay small), crashes to
 # $CARGO_TARGET_DIR/fuzz-artifacts; copy a crash into tests/fuzz/regressions/ once fixed, and the

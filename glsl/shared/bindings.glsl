@@ -101,7 +101,7 @@ const uint CDF_HEADER = 4u;
 #define BVH_STACK_SIZE 64
 // bvh_tri of "no hit".
 #define BVH_NO_TRI 0xFFFFFFFFu
-// Relative end epsilon of bvh_occluded: the f32 rounding of the CPU reference's cpu_ref::SHADOW_EPS.
+// Relative end epsilon of bvh_occluded (the CPU reference uses the same value in f64: bounce_oracles::cpu_ref::SHADOW_EPS).
 const float BVH_SHADOW_EPS = 1e-4;
 
 // ---- reference: the exact one-bounce integrator --------------------------------------------------------

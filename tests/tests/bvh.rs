@@ -1,6 +1,6 @@
-//! The GPU BVH (`crates/graph/src/bvh.rs`, `glsl/shared/bvh.glsl`) against the exact CPU reference
-//! (`cpu_ref::Bvh`, f64 Möller–Trumbore), through the test kernel `glsl/test/bvh_trace.comp` (one
-//! invocation per query: a closest-hit ray and an occlusion segment).
+//! The GPU BVH (`crates/graph/src/bvh/`, `glsl/shared/bvh.glsl`) against the exact CPU reference
+//! (`bounce_oracles::cpu_ref`: f64 Möller–Trumbore through the same SAH tree), through the test kernel
+//! `glsl/test/bvh_trace.comp` (one invocation per query: a closest-hit ray and an occlusion segment).
 //!
 //! Compared, on the Cornell box, a closed 50k-triangle bumpy sphere with a soup inside (also flattened
 //! with a height limit that forces median rebuilds) and a 301k-triangle terrain:
@@ -30,9 +30,9 @@
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
 use bounce_graph::bvh::{FlatBvh, GpuBvh, MAX_STEPS, NO_TRI, SHADOW_EPS};
-use bounce_graph::cpu_ref::{self, Bvh};
 use bounce_graph::scene::Scene;
 use bounce_graph::shader_types::Vertex;
+use bounce_oracles::cpu_ref::{self, Bvh, Trace};
 use bounce_tests::Rng;
 use bounce_tests::TestGpu;
 use bytemuck::{Pod, Zeroable};

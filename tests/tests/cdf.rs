@@ -1,7 +1,7 @@
 //! The two-level CDF: `cdf_reduce` (`crates/graph/src/passes/cdf_reduce.rs`, `glsl/cdf_reduce.comp`) and
 //! the sampling of `glsl/shared/cdf.glsl` (`cdf_sample`, `cdf_sample_rows`, `cdf_prob_rows`, run here
 //! through the test kernel `glsl/test/cdf_sample.comp`), against the CPU twin
-//! `crates/graph/src/cpu_cdf.rs` and against the distribution they must produce.
+//! `tests/oracles/src/cpu_cdf.rs` and against the distribution they must produce.
 //!
 //! - **Reduce vs twin.** The real pass, run through a `Graph` as the frame runs it, equals the CPU twin
 //!   bit for bit on integer weights (which are also checked against exact integer sums) for one row,
@@ -29,9 +29,9 @@
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
 use bounce_graph::bindings::{B_CDF, B_IMPORTANCE, WG_1D};
-use bounce_graph::cpu_cdf::{self, pcg_hash, rand01, sanitise};
 use bounce_graph::graph::{Graph, Persistent};
 use bounce_graph::passes::cdf_reduce::CdfReduce;
+use bounce_oracles::cpu_cdf::{self, pcg_hash, rand01, sanitise};
 use bounce_tests::Rng;
 use bounce_tests::TestGpu;
 use std::time::Instant;

@@ -1,5 +1,5 @@
 //! Direct light at every pixel against the CPU reference with exact ray–triangle visibility
-//! (`bounce_graph::cpu_ref`).
+//! (`bounce_oracles::cpu_ref`).
 //!
 //! Pixels excluded from the comparison (the shadow-edge rule): those the reference flags as
 //! `shadow_edge`, i.e. where visibility to some light, the hit plane, or hit/miss differs between the
@@ -8,9 +8,9 @@
 //! float rounding (relative 1e-3) and the visibility exactly; the test also bounds how many pixels
 //! the rule excludes, so the rule cannot hide a broken renderer.
 
-use bounce_graph::cpu_ref::{sample_image, Bvh};
 use bounce_graph::frame::{Component, FrameSettings, Renderer};
 use bounce_graph::scene::Scene;
+use bounce_oracles::cpu_ref::{sample_image, Bvh};
 use bounce_tests::TestGpu;
 
 fn compare(name: &str, scene: &Scene, w: u32, h: u32, shadow_res: u32, max_excluded: f64) {

@@ -4,9 +4,9 @@
 //! ray grazes a triangle edge (there the two sides may legitimately pick different triangles).
 
 use bounce_graph::camera::Camera;
-use bounce_graph::cpu_ref::Bvh;
 use bounce_graph::frame::{FrameSettings, Renderer};
 use bounce_graph::scene::{point_light, Scene};
+use bounce_oracles::cpu_ref::{Bvh, Trace};
 use bounce_tests::TestGpu;
 use glam::{DVec3, Vec3};
 

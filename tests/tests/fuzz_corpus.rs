@@ -1,9 +1,9 @@
 //! Replays the scene fuzzer's corpus (`tests/fuzz/corpus/scene`) and every input it ever crashed on
 //! (`tests/fuzz/regressions`) through the same contract check the fuzz target runs
-//! (`bounce_graph::scene_fuzz::check_load`), on the stable toolchain: what the fuzzer found stays fixed.
+//! (`bounce_oracles::scene_fuzz::check_load`), on the stable toolchain: what the fuzzer found stays fixed.
 //! The seeds that are well-formed must load and the broken ones must not, so the check is not vacuous.
 
-use bounce_graph::scene_fuzz::check_load;
+use bounce_oracles::scene_fuzz::check_load;
 use std::path::PathBuf;
 
 fn inputs(sub: &str) -> Vec<PathBuf> {

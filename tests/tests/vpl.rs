@@ -186,8 +186,8 @@ fn the_cpu_one_bounce_reference_matches_the_sphere_closed_form() {
     let (radius, rho, intensity) = (1.0f32, 0.5f32, 2.0f32);
     let scene = sphere_scene(radius, 48, rho, Vec3::new(0.25, 0.3, -0.15), intensity);
     let want = (rho * rho * intensity / (PI * radius * radius)) as f64;
-    let bvh = bounce_graph::cpu_ref::Bvh::new(&scene);
-    let img = bounce_graph::cpu_ref::render_indirect(&scene, &bvh, 8, 8, 256, 3);
+    let bvh = bounce_oracles::cpu_ref::Bvh::new(&scene);
+    let img = bounce_oracles::cpu_ref::render_indirect(&scene, &bvh, 8, 8, 256, 3);
     let mean = img.iter().map(|(m, _)| m[0] as f64).sum::<f64>() / img.len() as f64;
     let se = (img.iter().map(|(_, e)| (e[0] as f64).powi(2)).sum::<f64>()).sqrt() / img.len() as f64;
     eprintln!("cpu one-bounce on the sphere: {mean:.5} ± {se:.5} vs {want:.5}");
@@ -201,8 +201,8 @@ fn the_cpu_one_bounce_reference_matches_the_sphere_closed_form() {
 fn all_agrees_with_the_exact_one_bounce_reference_in_the_cornell_box() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let (w, h) = (24, 24);
-    let bvh = bounce_graph::cpu_ref::Bvh::new(&scene);
-    let reference = bounce_graph::cpu_ref::render_indirect(&scene, &bvh, w, h, 2048, 11);
+    let bvh = bounce_oracles::cpu_ref::Bvh::new(&scene);
+    let reference = bounce_oracles::cpu_ref::render_indirect(&scene, &bvh, w, h, 2048, 11);
     let r_img: Vec<[f32; 3]> = reference.iter().map(|(m, _)| *m).collect();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
@@ -394,9 +394,9 @@ fn gpu_reference_matches_the_closed_form_and_the_cpu_tracer() {
         32,
         32,
     );
-    let bvh = bounce_graph::cpu_ref::Bvh::new(&scene);
+    let bvh = bounce_oracles::cpu_ref::Bvh::new(&scene);
     let cpu: Vec<[f32; 3]> =
-        bounce_graph::cpu_ref::render_indirect(&scene, &bvh, w, h, 1024, 5).iter().map(|(m, _)| *m).collect();
+        bounce_oracles::cpu_ref::render_indirect(&scene, &bvh, w, h, 1024, 5).iter().map(|(m, _)| *m).collect();
     let (mg, mc) = (bounce_tests::mean(&gpu_img), bounce_tests::mean(&cpu));
     let e = bounce_tests::rel_mse(&gpu_img, &cpu);
     eprintln!(

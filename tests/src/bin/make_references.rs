@@ -1,11 +1,12 @@
 //! Regenerates the committed reference images under `tests/references/` with the exact CPU reference
-//! renderer (`bounce_graph::cpu_ref`: BVH ray casting, exact visibility). Not run by the tests, which
+//! renderer (`bounce_oracles::cpu_ref`: BVH ray casting, exact visibility). Not run by the tests, which
 //! fail when a reference is missing instead of writing it.
 //!
 //!     cargo run -p bounce-tests --bin make-references
 
 use bounce::output::{write_exr, RgbImage};
-use bounce_graph::{cpu_ref, scene::Scene};
+use bounce_graph::scene::Scene;
+use bounce_oracles::cpu_ref;
 
 fn main() -> anyhow::Result<()> {
     let root = bounce_tests::workspace();

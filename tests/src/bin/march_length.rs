@@ -1,12 +1,12 @@
 //! Mean number of voxel cells the visibility march visits per VPL–point pair (CPU twin of the GPU
-//! march, `bounce_graph::cpu_voxel`), over random pairs of surface points of the default scene: the
+//! march, `bounce_oracles::cpu_voxel`), over random pairs of surface points of the default scene: the
 //! factor between VPL evaluations/s and voxel steps/s in BENCHMARKS.md.
 //!
 //!     cargo run -p bounce-tests --bin march-length [voxels]
 
-use bounce_graph::cpu_voxel;
 use bounce_graph::passes::voxelize;
 use bounce_graph::scene::Scene;
+use bounce_oracles::cpu_voxel;
 use glam::Vec3;
 
 fn main() -> anyhow::Result<()> {

@@ -124,7 +124,7 @@ impl Renderer {
     /// The BVH of the scene, built on first use.
     pub fn bvh(&mut self) -> Result<&GpuBvh> {
         if self.ctx.bvh.is_none() {
-            let cpu = crate::cpu_ref::Bvh::from_vertices(&self.ctx.vertices);
+            let cpu = crate::bvh::Bvh::from_vertices(&self.ctx.vertices);
             let flat = crate::bvh::FlatBvh::new(&cpu, &self.ctx.vertices);
             self.ctx.bvh = Some(GpuBvh::upload(&self.ctx.gpu, &flat).context("uploading the BVH")?);
         }

@@ -2,7 +2,7 @@
 //!
 //! Owns: the grid fitting ([`fit`], [`VoxelGridSpec`]), the grid buffer ([`create_grid_buffer`]) and the
 //! GPU voxelization ([`Voxelize`], `glsl/voxelize.comp`). The march lives in `glsl/shared/voxel.glsl`; the
-//! CPU twins of both are in [`crate::cpu_voxel`].
+//! CPU twins of both are in `bounce-oracles` (`tests/oracles/src/cpu_voxel.rs`).
 //!
 //! **Grid.** Cubic cells of size `cell`, `dims` cells per axis, minimum corner `origin`. Grid units are
 //! g = (p − origin) · rcp(cell) (`rcp` = `voxel_rcp`, a division-free reciprocal that every device computes

@@ -1,6 +1,7 @@
 //! An exact CPU reference for the *direct* lighting component, used to check the GPU passes
-//! pixel by pixel. It owns a BVH over the scene's flat triangle list, f64 ray–triangle
-//! intersection, and the shading contract:
+//! pixel by pixel, and a Monte Carlo one-bounce reference ([`indirect_at_pixel`]). It owns the f64
+//! ray casting through the renderer's SAH tree ([`Trace`] on [`Bvh`]: Möller–Trumbore and slab tests
+//! in f64, its own traversal) and the shading contract:
 //!
 //! * every surface is two-sided Lambertian, BRDF = albedo / π;
 //! * albedo = Kd × `map_Kd` texel, sRGB-decoded, NEAREST filtering, repeat wrap, v flipped
@@ -8,21 +9,29 @@
 //! * shading normal = barycentric interpolation of the vertex normals, normalized, flipped to face
 //!   the camera (`dot(n, eye − x) < 0 ? −n : n`);
 //! * `direct(x) = Σ_l albedo/π · I_l · max(0, dot(n, l̂)) / d² · V(x, l)`, with `V` a hard
-//!   visibility test of the segment x → light ([`Bvh::occluded`]);
+//!   visibility test of the segment x → light ([`Trace::occluded`]);
 //! * a camera ray that hits nothing gives 0.
 //!
 //! Everything geometric is done in f64 so that the reference is limited by the scene's f32 data,
-//! not by its own arithmetic: differences against the GPU are then the GPU's.
+//! not by its own arithmetic: differences against the GPU are then the GPU's. The tree is the
+//! renderer's ([`bounce_graph::bvh::build`]): only which triangles are tested depends on it, and the
+//! brute-force comparison in the unit tests checks that the traversal misses none.
+//!
+//! Used by the integration tests and `tests/src/bin/make_references.rs`.
 
-use crate::scene::Scene;
-use crate::shader_types::Vertex;
+pub use bounce_graph::bvh::Bvh;
+use bounce_graph::bvh::{BvhNode, BvhTri, MEDIAN_DEPTH};
+use bounce_graph::scene::Scene;
 use glam::{DVec3, Vec2, Vec3};
 
-/// Relative epsilon of segment visibility tests: [`Bvh::occluded`] only counts hits with
-/// `t ∈ (SHADOW_EPS, 1 − SHADOW_EPS)` of the segment. Relative (not absolute) so it scales with
-/// the scene: it keeps the origin's own triangle (hit at `t ≈ 1e-12` since the origin is computed
-/// on it in f64) and a light lying on a surface from occluding, while an occluder closer than
-/// 0.01 % of the segment length to either end is ignored.
+/// Relative epsilon of segment visibility tests: [`Trace::occluded`] only counts hits with
+/// `t ∈ (SHADOW_EPS, 1 − SHADOW_EPS)` of the segment. It is the renderer's
+/// ([`bounce_graph::bvh::SHADOW_EPS`], `BVH_SHADOW_EPS` of `bindings.glsl`) before its rounding to f32
+/// (in f64 here, because the reference tests segments in f64; `tests/tests/bvh.rs` checks that the two
+/// agree).
+/// Relative (not absolute) so it scales with the scene: it keeps the origin's own triangle (hit at
+/// `t ≈ 1e-12` since the origin is computed on it in f64) and a light lying on a surface from
+/// occluding, while an occluder closer than 0.01 % of the segment length to either end is ignored.
 pub const SHADOW_EPS: f64 = 1e-4;
 
 /// Largest angle (degrees) between the shading normals of the centre and a corner hit of a
@@ -32,6 +41,9 @@ pub const EDGE_NORMAL_DEG: f64 = 5.0;
 /// Largest distance of a corner hit from the centre hit's plane, relative to the centre hit
 /// distance, before the pixel counts as a depth edge (see [`DirectSample::shadow_edge`]).
 pub const EDGE_PLANE_REL: f64 = 1e-3;
+
+/// Traversal stack entries: the SAH build's height is at most `MEDIAN_DEPTH + 32`.
+const STACK: usize = MEDIAN_DEPTH + 40;
 
 /// A ray–triangle hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,354 +56,31 @@ pub struct Hit {
     pub barycentrics: DVec3,
 }
 
-/// A triangle prepared for Möller–Trumbore.
-#[derive(Clone, Copy, Debug)]
-struct Tri {
-    p0: DVec3,
-    e1: DVec3,
-    e2: DVec3,
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: DVec3,
-    hi: DVec3,
-    /// Leaf: first index into `order`; interior: index of the left child (right = left + 1).
-    first: u32,
-    /// Triangle count of a leaf; 0 for an interior node.
-    count: u32,
-}
-
-/// Leaves stop splitting at this size.
-const LEAF_MIN: usize = 2;
-/// SAH may keep leaves up to this size when splitting does not pay.
-const LEAF_MAX: usize = 8;
-/// Binned SAH resolution.
-const BINS: usize = 16;
-/// Beyond this depth the builder switches to median splits (each halves the count), which bounds
-/// the depth to `MEDIAN_DEPTH + 32` and therefore the traversal stack.
-const MEDIAN_DEPTH: usize = 96;
-const STACK: usize = MEDIAN_DEPTH + 40;
-
-/// A bounding volume hierarchy over a flat triangle list (binned SAH build).
-///
-/// Zero-area triangles are never hit (they are excluded at build time).
-#[derive(Clone, Debug)]
-pub struct Bvh {
-    nodes: Vec<Node>,
-    order: Vec<u32>,
-    tris: Vec<Tri>,
-}
-
-fn area(lo: DVec3, hi: DVec3) -> f64 {
-    let d = (hi - lo).max(DVec3::ZERO);
-    2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
-}
-
-impl Bvh {
-    /// Builds the BVH of a scene's triangles.
-    pub fn new(scene: &Scene) -> Bvh {
-        Bvh::from_vertices(&scene.vertices)
-    }
-
-    /// Builds the BVH of a flat triangle list (`3t..3t+3` = triangle `t`; a trailing partial
-    /// triangle is ignored).
-    pub fn from_vertices(vertices: &[Vertex]) -> Bvh {
-        let tris: Vec<Tri> = vertices
-            .chunks_exact(3)
-            .map(|v| {
-                let p0 = v[0].position().as_dvec3();
-                Tri { p0, e1: v[1].position().as_dvec3() - p0, e2: v[2].position().as_dvec3() - p0 }
-            })
-            .collect();
-        // Bounds and centroids of the triangles that can be hit.
-        let mut order = Vec::with_capacity(tris.len());
-        let mut tri_lo = Vec::with_capacity(tris.len());
-        let mut tri_hi = Vec::with_capacity(tris.len());
-        let mut centroid = Vec::with_capacity(tris.len());
-        for (k, t) in tris.iter().enumerate() {
-            let (a, b, c) = (t.p0, t.p0 + t.e1, t.p0 + t.e2);
-            let lo = a.min(b).min(c);
-            let hi = a.max(b).max(c);
-            tri_lo.push(lo);
-            tri_hi.push(hi);
-            centroid.push((lo + hi) * 0.5);
-            let cross = t.e1.cross(t.e2);
-            if cross != DVec3::ZERO && cross.is_finite() && lo.is_finite() && hi.is_finite() {
-                order.push(k as u32);
-            }
-        }
-
-        let mut nodes = vec![Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: order.len() as u32 }];
-        // (node index, depth)
-        let mut work = vec![(0usize, 0usize)];
-        while let Some((ni, depth)) = work.pop() {
-            let first = nodes[ni].first as usize;
-            let count = nodes[ni].count as usize;
-            let items = &mut order[first..first + count];
-            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            let (mut clo, mut chi) = (lo, hi);
-            for &k in items.iter() {
-                lo = lo.min(tri_lo[k as usize]);
-                hi = hi.max(tri_hi[k as usize]);
-                clo = clo.min(centroid[k as usize]);
-                chi = chi.max(centroid[k as usize]);
-            }
-            if count == 0 {
-                lo = DVec3::ZERO;
-                hi = DVec3::ZERO;
-            }
-            nodes[ni].lo = lo;
-            nodes[ni].hi = hi;
-            if count <= LEAF_MIN {
-                continue;
-            }
-
-            let extent = chi - clo;
-            let mut mid = None;
-            if depth < MEDIAN_DEPTH {
-                // Binned SAH over all three axes.
-                let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins on the left)
-                for axis in 0..3 {
-                    if extent[axis] <= 0.0 {
-                        continue;
-                    }
-                    let scale = BINS as f64 / extent[axis];
-                    let bin_of = |k: u32| (((centroid[k as usize][axis] - clo[axis]) * scale) as usize).min(BINS - 1);
-                    let mut bcount = [0usize; BINS];
-                    let mut blo = [DVec3::splat(f64::INFINITY); BINS];
-                    let mut bhi = [DVec3::splat(f64::NEG_INFINITY); BINS];
-                    for &k in items.iter() {
-                        let b = bin_of(k);
-                        bcount[b] += 1;
-                        blo[b] = blo[b].min(tri_lo[k as usize]);
-                        bhi[b] = bhi[b].max(tri_hi[k as usize]);
-                    }
-                    // Sweep from the right to get suffix areas, then from the left.
-                    let mut right_area = [0.0; BINS];
-                    let mut right_count = [0usize; BINS];
-                    let (mut rlo, mut rhi, mut rc) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
-                    for b in (1..BINS).rev() {
-                        rlo = rlo.min(blo[b]);
-                        rhi = rhi.max(bhi[b]);
-                        rc += bcount[b];
-                        right_area[b] = area(rlo, rhi);
-                        right_count[b] = rc;
-                    }
-                    let (mut llo, mut lhi, mut lc) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
-                    for b in 0..BINS - 1 {
-                        llo = llo.min(blo[b]);
-                        lhi = lhi.max(bhi[b]);
-                        lc += bcount[b];
-                        let rc = right_count[b + 1];
-                        if lc == 0 || rc == 0 {
-                            continue;
-                        }
-                        let cost = lc as f64 * area(llo, lhi) + rc as f64 * right_area[b + 1];
-                        let better = match best {
-                            None => true,
-                            Some((c, _, _)) => cost < c,
-                        };
-                        if better {
-                            best = Some((cost, axis, b + 1));
-                        }
-                    }
-                }
-                if let Some((cost, axis, left_bins)) = best {
-                    let leaf_cost = count as f64 * area(lo, hi);
-                    if cost >= leaf_cost && count <= LEAF_MAX {
-                        continue;
-                    }
-                    let scale = BINS as f64 / extent[axis];
-                    let split = partition(items, |k| {
-                        ((((centroid[k as usize][axis] - clo[axis]) * scale) as usize).min(BINS - 1)) < left_bins
-                    });
-                    if split > 0 && split < count {
-                        mid = Some(split);
-                    }
-                }
-            }
-            let mid = match mid {
-                Some(m) => m,
-                None => {
-                    // All centroids coincide, or too deep: split at the median of the widest axis.
-                    let axis = if extent.x >= extent.y && extent.x >= extent.z {
-                        0
-                    } else if extent.y >= extent.z {
-                        1
-                    } else {
-                        2
-                    };
-                    let m = count / 2;
-                    items.select_nth_unstable_by(m, |&a, &b| {
-                        centroid[a as usize][axis].total_cmp(&centroid[b as usize][axis])
-                    });
-                    m
-                }
-            };
-            let left = nodes.len();
-            nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: first as u32, count: mid as u32 });
-            nodes.push(Node {
-                lo: DVec3::ZERO,
-                hi: DVec3::ZERO,
-                first: (first + mid) as u32,
-                count: (count - mid) as u32,
-            });
-            nodes[ni].first = left as u32;
-            nodes[ni].count = 0;
-            work.push((left, depth + 1));
-            work.push((left + 1, depth + 1));
-        }
-        Bvh { nodes, order, tris }
-    }
-
-    /// Number of triangles (including zero-area ones, which are never hit).
-    pub fn triangle_count(&self) -> usize {
-        self.tris.len()
-    }
-
-    /// Number of BVH nodes (for logging).
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
-
-    /// The structure of node `i` (`i < node_count()`), for flattening the tree into another layout
-    /// (the GPU BVH, [`crate::bvh`]): `(first, count)`. A leaf (`count > 0`) holds the triangles
-    /// `leaf_order()[first..first + count]`; an interior node (`count == 0`) has the children `first`
-    /// and `first + 1`, which cover consecutive ranges of `leaf_order()` (left before right). Node 0 is
-    /// the root; a tree without triangles is the single node `(0, 0)`, which has no children.
-    pub fn node_links(&self, i: usize) -> (u32, u32) {
-        (self.nodes[i].first, self.nodes[i].count)
-    }
-
-    /// The indices of the triangles that can be hit (zero-area ones excluded), in leaf order (see
-    /// [`Bvh::node_links`]).
-    pub fn leaf_order(&self) -> &[u32] {
-        &self.order
-    }
-
-    /// Möller–Trumbore in f64: `(t, u, v)` with `u`, `v` the weights of vertices 1 and 2, or
-    /// `None` for a miss, a parallel ray or any NaN. Edges and vertices count as inside, so a ray
-    /// through a shared edge hits at least one of the two triangles.
-    fn hit_tri(tri: &Tri, o: DVec3, d: DVec3) -> Option<(f64, f64, f64)> {
-        let p = d.cross(tri.e2);
-        let det = tri.e1.dot(p);
-        if det == 0.0 || !det.is_finite() {
-            return None;
-        }
-        let inv = 1.0 / det;
-        let s = o - tri.p0;
-        let u = s.dot(p) * inv;
-        if u.is_nan() || !(0.0..=1.0).contains(&u) {
-            return None;
-        }
-        let q = s.cross(tri.e1);
-        let v = d.dot(q) * inv;
-        if v.is_nan() || v < 0.0 || u + v > 1.0 {
-            return None;
-        }
-        let t = tri.e2.dot(q) * inv;
-        t.is_finite().then_some((t, u, v))
-    }
-
-    /// Slab test in f64. Returns the entry distance if the ray segment `(t_min, t_max)` meets
-    /// the box. `t_max` is inflated by a few ulps (PBRT's conservative trick) so that rounding
-    /// never culls a hit lying on the box boundary (flat boxes of axis-aligned walls are common).
-    #[inline]
-    fn hit_box(node: &Node, o: DVec3, inv_d: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
-        let t0 = (node.lo - o) * inv_d;
-        let t1 = (node.hi - o) * inv_d;
-        let mut near = t_min;
-        let mut far = t_max;
-        for a in 0..3 {
-            // NaN (0 · ∞: origin on a slab plane, ray parallel to it) is ignored by min/max,
-            // which treats the ray as inside that slab.
-            let (lo, hi) = (t0[a].min(t1[a]), t0[a].max(t1[a]));
-            near = near.max(lo);
-            far = far.min(hi * (1.0 + 4.0 * f64::EPSILON));
-        }
-        (near <= far).then_some(near)
-    }
-
-    /// Visits every triangle whose node the ray segment `(t_min, t_max)` may touch, in
-    /// front-to-back-ish order. `visit(tri_index, t, u, v)` is called for every triangle hit with
-    /// `t ∈ (t_min, t_max_current)`; it returns the new upper bound (to shrink the search) or
-    /// `None` to stop the traversal.
-    fn traverse(
-        &self,
-        o: DVec3,
-        d: DVec3,
-        t_min: f64,
-        mut t_max: f64,
-        mut visit: impl FnMut(u32, f64, f64, f64, f64) -> Option<f64>,
-    ) {
-        if self.order.is_empty() {
-            return;
-        }
-        let inv_d = DVec3::ONE / d;
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
-        let mut node = 0usize;
-        loop {
-            let n = &self.nodes[node];
-            if Self::hit_box(n, o, inv_d, t_min, t_max).is_some() {
-                if n.count > 0 {
-                    for &k in &self.order[n.first as usize..(n.first + n.count) as usize] {
-                        if let Some((t, u, v)) = Self::hit_tri(&self.tris[k as usize], o, d) {
-                            if t > t_min && t <= t_max {
-                                match visit(k, t, u, v, t_max) {
-                                    Some(new_max) => t_max = new_max,
-                                    None => return,
-                                }
-                            }
-                        }
-                    }
-                } else {
-                    // Visit the nearer child first.
-                    let l = n.first as usize;
-                    let (tl, tr) = (
-                        Self::hit_box(&self.nodes[l], o, inv_d, t_min, t_max),
-                        Self::hit_box(&self.nodes[l + 1], o, inv_d, t_min, t_max),
-                    );
-                    match (tl, tr) {
-                        (Some(a), Some(b)) => {
-                            let (first, second) = if a <= b { (l, l + 1) } else { (l + 1, l) };
-                            stack[sp] = second as u32;
-                            sp += 1;
-                            node = first;
-                            continue;
-                        }
-                        (Some(_), None) => {
-                            node = l;
-                            continue;
-                        }
-                        (None, Some(_)) => {
-                            node = l + 1;
-                            continue;
-                        }
-                        (None, None) => {}
-                    }
-                }
-            }
-            if sp == 0 {
-                return;
-            }
-            sp -= 1;
-            node = stack[sp] as usize;
-        }
-    }
-
+/// Exact f64 ray casting through the renderer's tree. Zero-area triangles are never hit (the build
+/// leaves them out).
+pub trait Trace {
     /// Closest hit along the ray `origin + t · dir`, `t > 0` (`dir` need not be unit; `t` is in
     /// units of `|dir|`). Ties at exactly equal `t` (coplanar duplicates, shared edges) go to
     /// the lower triangle index, so the result does not depend on the traversal order.
-    pub fn intersect(&self, origin: DVec3, dir: DVec3) -> Option<Hit> {
+    fn intersect(&self, origin: DVec3, dir: DVec3) -> Option<Hit>;
+    /// Closest hit with `t ∈ (t_min, t_max]`; tie rule as in [`Trace::intersect`].
+    fn intersect_range(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Hit>;
+    /// The same as [`Trace::intersect`] by testing every triangle: O(n), for tests of the BVH.
+    fn intersect_brute_force(&self, origin: DVec3, dir: DVec3) -> Option<Hit>;
+    /// Whether any triangle blocks the open segment `origin → target`, both ends excluded:
+    /// only hits with segment parameter `t ∈ (SHADOW_EPS, 1 − SHADOW_EPS)` count (see
+    /// [`SHADOW_EPS`]).
+    fn occluded(&self, origin: DVec3, target: DVec3) -> bool;
+}
+
+impl Trace for Bvh {
+    fn intersect(&self, origin: DVec3, dir: DVec3) -> Option<Hit> {
         self.intersect_range(origin, dir, 0.0, f64::INFINITY)
     }
 
-    /// Closest hit with `t ∈ (t_min, t_max]`; tie rule as in [`Bvh::intersect`].
-    pub fn intersect_range(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Hit> {
+    fn intersect_range(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        self.traverse(origin, dir, t_min, t_max, |k, t, u, v, cur_max| {
+        traverse(self, origin, dir, t_min, t_max, |k, t, u, v, cur_max| {
             let better = match &best {
                 None => true,
                 Some(b) => t < b.t || (t == b.t && k < b.tri),
@@ -406,11 +95,10 @@ impl Bvh {
         best
     }
 
-    /// The same as [`Bvh::intersect`] by testing every triangle: O(n), for tests of the BVH.
-    pub fn intersect_brute_force(&self, origin: DVec3, dir: DVec3) -> Option<Hit> {
+    fn intersect_brute_force(&self, origin: DVec3, dir: DVec3) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        for &k in &self.order {
-            if let Some((t, u, v)) = Self::hit_tri(&self.tris[k as usize], origin, dir) {
+        for &k in self.leaf_order() {
+            if let Some((t, u, v)) = hit_tri(&self.triangles()[k as usize], origin, dir) {
                 if t <= 0.0 {
                     continue;
                 }
@@ -426,13 +114,10 @@ impl Bvh {
         best
     }
 
-    /// Whether any triangle blocks the open segment `origin → target`, both ends excluded:
-    /// only hits with segment parameter `t ∈ (SHADOW_EPS, 1 − SHADOW_EPS)` count (see
-    /// [`SHADOW_EPS`]).
-    pub fn occluded(&self, origin: DVec3, target: DVec3) -> bool {
+    fn occluded(&self, origin: DVec3, target: DVec3) -> bool {
         let d = target - origin;
         let mut blocked = false;
-        self.traverse(origin, d, SHADOW_EPS, 1.0 - SHADOW_EPS, |_, t, _, _, _| {
+        traverse(self, origin, d, SHADOW_EPS, 1.0 - SHADOW_EPS, |_, t, _, _, _| {
             if t < 1.0 - SHADOW_EPS {
                 blocked = true;
                 None
@@ -444,16 +129,114 @@ impl Bvh {
     }
 }
 
-/// In-place partition: elements satisfying `left` first; returns their count.
-fn partition(items: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..items.len() {
-        if left(items[j]) {
-            items.swap(i, j);
-            i += 1;
-        }
+/// Möller–Trumbore in f64: `(t, u, v)` with `u`, `v` the weights of vertices 1 and 2, or
+/// `None` for a miss, a parallel ray or any NaN. Edges and vertices count as inside, so a ray
+/// through a shared edge hits at least one of the two triangles.
+fn hit_tri(tri: &BvhTri, o: DVec3, d: DVec3) -> Option<(f64, f64, f64)> {
+    let p = d.cross(tri.e2);
+    let det = tri.e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
     }
-    i
+    let inv = 1.0 / det;
+    let s = o - tri.p0;
+    let u = s.dot(p) * inv;
+    if u.is_nan() || !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(tri.e1);
+    let v = d.dot(q) * inv;
+    if v.is_nan() || v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = tri.e2.dot(q) * inv;
+    t.is_finite().then_some((t, u, v))
+}
+
+/// Slab test in f64. Returns the entry distance if the ray segment `(t_min, t_max)` meets
+/// the box. `t_max` is inflated by a few ulps (PBRT's conservative trick) so that rounding
+/// never culls a hit lying on the box boundary (flat boxes of axis-aligned walls are common).
+#[inline]
+fn hit_box(node: &BvhNode, o: DVec3, inv_d: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
+    let t0 = (node.lo - o) * inv_d;
+    let t1 = (node.hi - o) * inv_d;
+    let mut near = t_min;
+    let mut far = t_max;
+    for a in 0..3 {
+        // NaN (0 · ∞: origin on a slab plane, ray parallel to it) is ignored by min/max,
+        // which treats the ray as inside that slab.
+        let (lo, hi) = (t0[a].min(t1[a]), t0[a].max(t1[a]));
+        near = near.max(lo);
+        far = far.min(hi * (1.0 + 4.0 * f64::EPSILON));
+    }
+    (near <= far).then_some(near)
+}
+
+/// Visits every triangle whose node the ray segment `(t_min, t_max)` may touch, in
+/// front-to-back-ish order. `visit(tri_index, t, u, v, t_max)` is called for every triangle hit with
+/// `t ∈ (t_min, t_max_current)`; it returns the new upper bound (to shrink the search) or
+/// `None` to stop the traversal.
+fn traverse(
+    bvh: &Bvh,
+    o: DVec3,
+    d: DVec3,
+    t_min: f64,
+    mut t_max: f64,
+    mut visit: impl FnMut(u32, f64, f64, f64, f64) -> Option<f64>,
+) {
+    let (nodes, order, tris) = (bvh.nodes(), bvh.leaf_order(), bvh.triangles());
+    if order.is_empty() {
+        return;
+    }
+    let inv_d = DVec3::ONE / d;
+    let mut stack = [0u32; STACK];
+    let mut sp = 0usize;
+    let mut node = 0usize;
+    loop {
+        let n = &nodes[node];
+        if hit_box(n, o, inv_d, t_min, t_max).is_some() {
+            if n.count > 0 {
+                for &k in &order[n.first as usize..(n.first + n.count) as usize] {
+                    if let Some((t, u, v)) = hit_tri(&tris[k as usize], o, d) {
+                        if t > t_min && t <= t_max {
+                            match visit(k, t, u, v, t_max) {
+                                Some(new_max) => t_max = new_max,
+                                None => return,
+                            }
+                        }
+                    }
+                }
+            } else {
+                // Visit the nearer child first.
+                let l = n.first as usize;
+                let (tl, tr) =
+                    (hit_box(&nodes[l], o, inv_d, t_min, t_max), hit_box(&nodes[l + 1], o, inv_d, t_min, t_max));
+                match (tl, tr) {
+                    (Some(a), Some(b)) => {
+                        let (first, second) = if a <= b { (l, l + 1) } else { (l + 1, l) };
+                        stack[sp] = second as u32;
+                        sp += 1;
+                        node = first;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = l;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = l + 1;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+        }
+        if sp == 0 {
+            return;
+        }
+        sp -= 1;
+        node = stack[sp] as usize;
+    }
 }
 
 /// sRGB transfer function decode of one channel in [0, 1].
@@ -484,7 +267,7 @@ pub fn texel_coords(uv: Vec2, w: u32, h: u32) -> (u32, u32) {
 /// Linear albedo of material `material` at texture coordinate `uv` (Kd × decoded texel).
 pub fn albedo(scene: &Scene, material: u32, uv: Vec2) -> Vec3 {
     let Some(m) = scene.materials.get(material as usize) else {
-        return Vec3::splat(crate::scene::DEFAULT_ALBEDO);
+        return Vec3::splat(bounce_graph::scene::DEFAULT_ALBEDO);
     };
     let kd = m.kd();
     let Some(info) = m.texture().and_then(|t| scene.textures.get(t)) else {
@@ -519,7 +302,7 @@ fn surface(scene: &Scene, bvh: &Bvh, hit: &Hit, eye: DVec3) -> Surface {
     let v = &scene.vertices[3 * t..3 * t + 3];
     let w = hit.barycentrics;
     let x = v[0].position().as_dvec3() * w.x + v[1].position().as_dvec3() * w.y + v[2].position().as_dvec3() * w.z;
-    let tri = &bvh.tris[t];
+    let tri = &bvh.triangles()[t];
     let mut ng = tri.e1.cross(tri.e2).normalize_or_zero();
     let interp = v[0].normal().as_dvec3() * w.x + v[1].normal().as_dvec3() * w.y + v[2].normal().as_dvec3() * w.z;
     let mut n = interp.normalize_or_zero();
@@ -776,9 +559,9 @@ pub fn render_indirect(scene: &Scene, bvh: &Bvh, w: u32, h: u32, spp: u32, seed:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::Camera;
-    use crate::scene::point_light;
-    use crate::shader_types::{Material, TextureInfo};
+    use bounce_graph::camera::Camera;
+    use bounce_graph::scene::point_light;
+    use bounce_graph::shader_types::{Material, TextureInfo, Vertex};
     use std::f32::consts::PI;
 
     /// A 20×20 floor quad at y = 0 (two triangles, counter-clockwise seen from +y).
@@ -999,7 +782,7 @@ mod tests {
     #[test]
     fn bvh_matches_brute_force_on_the_cornell_box() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
-        let scene = crate::scene::load(&path).expect("cornell box loads");
+        let scene = bounce_graph::scene::load(&path).expect("cornell box loads");
         let hits = check_bvh_against_brute_force(&scene, 20_000, 0x9e3779b97f4a7c15);
         assert!(hits > 10_000, "{hits}");
     }
@@ -1030,7 +813,7 @@ mod tests {
     #[test]
     fn cornell_box_direct_image_is_sane() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
-        let scene = crate::scene::load(&path).expect("cornell box loads");
+        let scene = bounce_graph::scene::load(&path).expect("cornell box loads");
         let bvh = Bvh::new(&scene);
         let n = 64;
         let img = render_direct_with(&scene, &bvh, n, n);

@@ -1,16 +1,16 @@
-//! The GPU BVH: the scene's triangles in a bounding volume hierarchy that shaders ray cast against
-//! (`glsl/shared/bvh.glsl`: `bvh_closest`, `bvh_occluded`), for exact visibility where the voxel march
-//! is too coarse.
+//! The GPU layout of the BVH: the SAH tree of [`super::build`] flattened to the nodes and triangles
+//! that shaders ray cast against (`glsl/shared/bvh.glsl`: `bvh_closest`, `bvh_occluded`), for exact
+//! visibility where the voxel march is too coarse.
 //!
-//! Owns: the flattening of the CPU reference's tree ([`FlatBvh`]) into the GPU layout, its upload
-//! ([`GpuBvh`], once per scene, read-only afterwards, so the graph does not track it), the layout mirrors
-//! ([`GpuBvhNode`], [`GpuBvhTri`]) and the constants the shaders share ([`MAX_STEPS`], [`STACK_SIZE`],
-//! the binding numbers). The traversal itself is in `bvh.glsl`, whose header is its contract.
+//! Owns: the flattening ([`FlatBvh`]), its upload ([`GpuBvh`], once per scene, read-only afterwards,
+//! so the graph does not track it), the layout mirrors ([`GpuBvhNode`], [`GpuBvhTri`]) and the
+//! constants the shaders share ([`MAX_STEPS`], [`STACK_SIZE`], [`SHADOW_EPS`], the binding numbers).
+//! The traversal itself is in `bvh.glsl`, whose header is its contract.
 //!
-//! **Why the CPU tree.** [`crate::cpu_ref::Bvh`] is already a binned-SAH tree, tested against brute
-//! force; reusing its structure means the GPU and the reference it is checked against walk the same
-//! tree. Only its shape is taken: the boxes are recomputed here in f32 from the f32 vertices (min/max
-//! are exact, so a box holds its triangles exactly).
+//! **Why the SAH tree's shape.** The CPU reference (`bounce-oracles`) casts its f64 rays through the
+//! same [`Bvh`], so the GPU and the reference it is checked against walk the same tree. Only its shape
+//! is taken: the boxes are recomputed here in f32 from the f32 vertices (min/max are exact, so a box
+//! holds its triangles exactly).
 //!
 //! **Layout** (std430, two storage buffers, bindings [`B_BVH_NODES`] and [`B_BVH_TRIS`]):
 //! * nodes: [`GpuBvhNode`] `{ vec3 lo; uint first; vec3 hi; uint count; }`, 32 bytes. A leaf
@@ -26,9 +26,9 @@
 //!   triangles becomes one leaf holding one degenerate triangle that nothing hits.
 //!
 //! **Depth and stack.** The traversal keeps a stack of [`STACK_SIZE`] = 64 entries, and a tree of
-//! height h (levels below the root) needs at most h. The CPU builder may go deeper on pathological
-//! input (it switches to median splits only at depth 96), so [`FlatBvh::new`] copies the CPU tree
-//! where it can and rebuilds a subtree by median splits (each halves the count, height
+//! height h (levels below the root) needs at most h. The SAH builder may go deeper on pathological
+//! input (it switches to median splits only at depth [`super::build::MEDIAN_DEPTH`]), so
+//! [`FlatBvh::new`] copies the tree where it can and rebuilds a subtree by median splits (each halves the count, height
 //! ⌈log2(n / 2)⌉) wherever a child would otherwise be unable to fit below the limit: the result never
 //! exceeds 64 levels for any triangle count the buffers can hold. On real scenes nothing is rebuilt.
 //!
@@ -50,7 +50,7 @@
 //! **Bindings.** [`B_BVH_NODES`], [`B_BVH_TRIS`], [`MAX_STEPS`] and [`STACK_SIZE`] come from
 //! `glsl/shared/bindings.glsl` (generated constants); a test checks the rest of `bvh.glsl`'s constants.
 
-use crate::cpu_ref::Bvh;
+use super::build::Bvh;
 use crate::scene::Scene;
 use crate::shader_types::Vertex;
 use anyhow::{Context, Result};
@@ -66,10 +66,12 @@ pub const MAX_STEPS: u32 = crate::bindings::BVH_MAX_STEPS;
 pub const STACK_SIZE: u32 = crate::bindings::BVH_STACK_SIZE;
 /// The triangle index of "no hit" (`BVH_NO_TRI`).
 pub const NO_TRI: u32 = crate::bindings::BVH_NO_TRI;
-/// Relative end epsilon of `bvh_occluded` (`BVH_SHADOW_EPS`), the f32 rounding of the CPU reference's
-/// [`crate::cpu_ref::SHADOW_EPS`].
+/// Relative end epsilon of `bvh_occluded` (`BVH_SHADOW_EPS` of `glsl/shared/bindings.glsl`): only
+/// occluders at segment parameter `t ∈ (SHADOW_EPS, 1 − SHADOW_EPS)` count. Relative (not absolute) so it
+/// scales with the scene: it keeps a segment's own end surfaces (and a light lying on a surface) from
+/// occluding, while an occluder closer than 0.01 % of the segment length to either end is ignored.
 pub const SHADOW_EPS: f32 = crate::bindings::BVH_SHADOW_EPS;
-/// Triangles per leaf of a median-rebuilt subtree (the CPU builder's smallest leaf, too).
+/// Triangles per leaf of a median-rebuilt subtree (the SAH builder's smallest leaf, too).
 const MEDIAN_LEAF: u32 = 2;
 
 /// A node: box `[lo, hi]`; a leaf (`count > 0`) holds `tris[first .. first + count]`, an interior node
@@ -126,7 +128,7 @@ pub struct FlatBvh {
     pub triangle_count: u32,
     /// Levels below the root (a lone root leaf: 0); at most [`STACK_SIZE`].
     pub height: u32,
-    /// Subtrees of the CPU tree rebuilt by median splits to fit the height limit (0 on real scenes).
+    /// Subtrees of the SAH tree rebuilt by median splits to fit the height limit (0 on real scenes).
     pub rebuilt_subtrees: u32,
 }
 
@@ -141,7 +143,7 @@ fn median_height(mut n: u32) -> u32 {
 }
 
 impl FlatBvh {
-    /// The GPU layout of `bvh`, the CPU tree of the flat triangle list `vertices` (the same list it was
+    /// The GPU layout of `bvh`, the SAH tree of the flat triangle list `vertices` (the same list it was
     /// built from), at most [`STACK_SIZE`] levels deep.
     pub fn new(bvh: &Bvh, vertices: &[Vertex]) -> FlatBvh {
         FlatBvh::with_max_height(bvh, vertices, STACK_SIZE)
@@ -151,16 +153,7 @@ impl FlatBvh {
     /// median-split tree cannot fit (more than 2^(max_height + 1) triangles, only for tiny limits), the
     /// deepest leaves hold more triangles instead.
     pub fn with_max_height(bvh: &Bvh, vertices: &[Vertex], max_height: u32) -> FlatBvh {
-        let max_height = max_height.min(STACK_SIZE);
         let order = bvh.leaf_order();
-        let pos = |t: u32| {
-            let v = &vertices[3 * t as usize..3 * t as usize + 3];
-            [v[0].position(), v[1].position(), v[2].position()]
-        };
-        let gpu_tri = |t: u32| {
-            let [a, b, c] = pos(t);
-            GpuBvhTri { v0: a.into(), tri: t, v1: b.into(), pad1: 0, v2: c.into(), pad2: 0 }
-        };
         if order.is_empty() {
             return FlatBvh {
                 nodes: vec![GpuBvhNode { count: 1, ..Default::default() }],
@@ -170,127 +163,191 @@ impl FlatBvh {
                 rebuilt_subtrees: 0,
             };
         }
-
-        // Triangle count and first position in `order` of every CPU subtree (children come after their
-        // parent, so one reverse sweep; a left child's range directly precedes its sibling's).
-        let n = bvh.node_count();
-        let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
-        for i in (0..n).rev() {
-            let (first, c) = bvh.node_links(i);
-            if c > 0 {
-                (count[i], start[i]) = (c, first);
-            } else {
-                let l = first as usize;
-                (count[i], start[i]) = (count[l] + count[l + 1], start[l]);
-            }
-        }
-        let fits = |depth: u32, tris: u32| depth + median_height(tris) <= max_height;
-
-        // Triangles of a rebuilt range are permuted in `items` (a copy of `order`; CPU leaves read the
-        // same positions, which no rebuild of another subtree touches).
-        let mut items = order.to_vec();
-        let centroid = |t: u32| {
-            let [a, b, c] = pos(t);
-            (a.min(b).min(c) + a.max(b).max(c)) * 0.5
+        let (count, start) = subtree_ranges(bvh);
+        let mut f = Flattener {
+            bvh,
+            vertices,
+            max_height: max_height.min(STACK_SIZE),
+            count,
+            start,
+            items: order.to_vec(),
+            nodes: vec![GpuBvhNode::default()],
+            work: vec![(Src::Tree(0), 0, 0)],
+            rebuilt: 0,
         };
-        enum Src {
-            Cpu(usize),
-            Range(usize, usize),
-        }
-        let mut nodes = vec![GpuBvhNode::default()];
         let mut tris: Vec<GpuBvhTri> = Vec::with_capacity(order.len());
-        let (mut height, mut rebuilt) = (0, 0);
-        let mut work = vec![(Src::Cpu(0), 0usize, 0u32)];
-        while let Some((src, slot, depth)) = work.pop() {
+        let mut height = 0;
+        while let Some((src, slot, depth)) = f.work.pop() {
             height = height.max(depth);
-            let (s, e) = match src {
-                Src::Cpu(i) => {
-                    let (first, c) = bvh.node_links(i);
-                    if c > 0 {
-                        (first as usize, (first + c) as usize)
-                    } else {
-                        let l = first as usize;
-                        if fits(depth + 1, count[l]) && fits(depth + 1, count[l + 1]) {
-                            let left = nodes.len();
-                            nodes.push(GpuBvhNode::default());
-                            nodes.push(GpuBvhNode::default());
-                            nodes[slot].first = left as u32;
-                            work.push((Src::Cpu(l + 1), left + 1, depth + 1));
-                            work.push((Src::Cpu(l), left, depth + 1));
-                            continue;
-                        }
-                        rebuilt += 1;
-                        let s = start[i] as usize;
-                        work.push((Src::Range(s, s + count[i] as usize), slot, depth));
-                        continue;
-                    }
-                }
-                Src::Range(s, e) => {
-                    if e - s > MEDIAN_LEAF as usize && depth < max_height {
-                        // Median split along the widest axis of the centroids.
-                        let range = &mut items[s..e];
-                        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-                        for &t in range.iter() {
-                            lo = lo.min(centroid(t));
-                            hi = hi.max(centroid(t));
-                        }
-                        let ext = hi - lo;
-                        let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                            0
-                        } else if ext.y >= ext.z {
-                            1
-                        } else {
-                            2
-                        };
-                        let m = range.len() / 2;
-                        range.select_nth_unstable_by(m, |&a, &b| {
-                            centroid(a)[axis].total_cmp(&centroid(b)[axis]).then(a.cmp(&b))
-                        });
-                        let left = nodes.len();
-                        nodes.push(GpuBvhNode::default());
-                        nodes.push(GpuBvhNode::default());
-                        nodes[slot].first = left as u32;
-                        work.push((Src::Range(s + m, e), left + 1, depth + 1));
-                        work.push((Src::Range(s, s + m), left, depth + 1));
-                        continue;
-                    }
-                    (s, e)
-                }
-            };
+            let Some((s, e)) = f.expand(src, slot, depth) else { continue };
             // A leaf: its triangles, appended in order.
-            nodes[slot].first = tris.len() as u32;
-            nodes[slot].count = (e - s) as u32;
-            tris.extend(items[s..e].iter().map(|&t| gpu_tri(t)));
+            f.nodes[slot].first = tris.len() as u32;
+            f.nodes[slot].count = (e - s) as u32;
+            tris.extend(f.items[s..e].iter().map(|&t| gpu_tri(vertices, t)));
         }
-
-        // Boxes, bottom-up (children come after their parent).
-        for i in (0..nodes.len()).rev() {
-            let nd = nodes[i];
-            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-            if nd.is_leaf() {
-                for t in &tris[nd.first as usize..(nd.first + nd.count) as usize] {
-                    for p in t.positions() {
-                        lo = lo.min(p);
-                        hi = hi.max(p);
-                    }
-                }
-            } else {
-                for c in &nodes[nd.first as usize..nd.first as usize + 2] {
-                    lo = lo.min(Vec3::from(c.lo));
-                    hi = hi.max(Vec3::from(c.hi));
-                }
-            }
-            nodes[i].lo = lo.into();
-            nodes[i].hi = hi.into();
-        }
+        let mut nodes = f.nodes;
+        fit_boxes(&mut nodes, &tris);
         let triangle_count = tris.len() as u32;
-        FlatBvh { nodes, tris, triangle_count, height, rebuilt_subtrees: rebuilt }
+        FlatBvh { nodes, tris, triangle_count, height, rebuilt_subtrees: f.rebuilt }
     }
 
     /// An upper bound of the loop iterations of one trace (see the module doc).
     pub fn max_iterations_per_ray(&self) -> u32 {
         let walk = self.nodes.len() as u64 + self.tris.len() as u64 + 1;
         walk.min(MAX_STEPS as u64) as u32
+    }
+}
+
+/// The positions of scene triangle `t`.
+fn positions(vertices: &[Vertex], t: u32) -> [Vec3; 3] {
+    let v = &vertices[3 * t as usize..3 * t as usize + 3];
+    [v[0].position(), v[1].position(), v[2].position()]
+}
+
+fn gpu_tri(vertices: &[Vertex], t: u32) -> GpuBvhTri {
+    let [a, b, c] = positions(vertices, t);
+    GpuBvhTri { v0: a.into(), tri: t, v1: b.into(), pad1: 0, v2: c.into(), pad2: 0 }
+}
+
+/// Triangle count and first position in `leaf_order` of every SAH subtree (children come after their
+/// parent, so one reverse sweep; a left child's range directly precedes its sibling's).
+fn subtree_ranges(bvh: &Bvh) -> (Vec<u32>, Vec<u32>) {
+    let n = bvh.node_count();
+    let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
+    for i in (0..n).rev() {
+        let (first, c) = bvh.node_links(i);
+        if c > 0 {
+            (count[i], start[i]) = (c, first);
+        } else {
+            let l = first as usize;
+            (count[i], start[i]) = (count[l] + count[l + 1], start[l]);
+        }
+    }
+    (count, start)
+}
+
+/// Where a GPU node's content comes from.
+enum Src {
+    /// Node `i` of the SAH tree, copied as it is where its children fit under the height limit.
+    Tree(usize),
+    /// `items[s..e]`, rebuilt by median splits.
+    Range(usize, usize),
+}
+
+/// The state of [`FlatBvh::with_max_height`].
+struct Flattener<'a> {
+    bvh: &'a Bvh,
+    vertices: &'a [Vertex],
+    max_height: u32,
+    /// Per SAH node: its subtree's triangle count and first position in `items` ([`subtree_ranges`]).
+    count: Vec<u32>,
+    start: Vec<u32>,
+    /// The leaf order; a rebuilt range is permuted in place (SAH leaves read the same positions, which
+    /// no rebuild of another subtree touches).
+    items: Vec<u32>,
+    nodes: Vec<GpuBvhNode>,
+    /// Nodes still to fill: (source, GPU node, depth).
+    work: Vec<(Src, usize, u32)>,
+    rebuilt: u32,
+}
+
+impl Flattener<'_> {
+    /// Whether `tris` triangles fit below a node at `depth`, even by median splits.
+    fn fits(&self, depth: u32, tris: u32) -> bool {
+        depth + median_height(tris) <= self.max_height
+    }
+
+    /// Two adjacent new nodes as the children of `slot`; returns the left one.
+    fn children(&mut self, slot: usize) -> usize {
+        let left = self.nodes.len();
+        self.nodes.push(GpuBvhNode::default());
+        self.nodes.push(GpuBvhNode::default());
+        self.nodes[slot].first = left as u32;
+        left
+    }
+
+    /// Fills node `slot` from `src`: the `items` range of a leaf, or `None` when it queued the
+    /// node's children (or its rebuild).
+    fn expand(&mut self, src: Src, slot: usize, depth: u32) -> Option<(usize, usize)> {
+        match src {
+            Src::Tree(i) => {
+                let (first, c) = self.bvh.node_links(i);
+                if c > 0 {
+                    return Some((first as usize, (first + c) as usize));
+                }
+                let l = first as usize;
+                if self.fits(depth + 1, self.count[l]) && self.fits(depth + 1, self.count[l + 1]) {
+                    let left = self.children(slot);
+                    self.work.push((Src::Tree(l + 1), left + 1, depth + 1));
+                    self.work.push((Src::Tree(l), left, depth + 1));
+                } else {
+                    self.rebuilt += 1;
+                    let s = self.start[i] as usize;
+                    self.work.push((Src::Range(s, s + self.count[i] as usize), slot, depth));
+                }
+                None
+            }
+            Src::Range(s, e) => {
+                if e - s <= MEDIAN_LEAF as usize || depth >= self.max_height {
+                    return Some((s, e));
+                }
+                let m = self.median_split(s, e);
+                let left = self.children(slot);
+                self.work.push((Src::Range(s + m, e), left + 1, depth + 1));
+                self.work.push((Src::Range(s, s + m), left, depth + 1));
+                None
+            }
+        }
+    }
+
+    /// Splits `items[s..e]` at its median along the widest axis of the centroids; returns the left
+    /// count.
+    fn median_split(&mut self, s: usize, e: usize) -> usize {
+        let vertices = self.vertices;
+        let centroid = |t: u32| {
+            let [a, b, c] = positions(vertices, t);
+            (a.min(b).min(c) + a.max(b).max(c)) * 0.5
+        };
+        let range = &mut self.items[s..e];
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for &t in range.iter() {
+            lo = lo.min(centroid(t));
+            hi = hi.max(centroid(t));
+        }
+        let ext = hi - lo;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let m = range.len() / 2;
+        range.select_nth_unstable_by(m, |&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]).then(a.cmp(&b)));
+        m
+    }
+}
+
+/// The boxes, bottom-up (children come after their parent): f32 min/max of the positions, exact.
+fn fit_boxes(nodes: &mut [GpuBvhNode], tris: &[GpuBvhTri]) {
+    for i in (0..nodes.len()).rev() {
+        let nd = nodes[i];
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        if nd.is_leaf() {
+            for t in &tris[nd.first as usize..(nd.first + nd.count) as usize] {
+                for p in t.positions() {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+            }
+        } else {
+            for c in &nodes[nd.first as usize..nd.first as usize + 2] {
+                lo = lo.min(Vec3::from(c.lo));
+                hi = hi.max(Vec3::from(c.hi));
+            }
+        }
+        nodes[i].lo = lo.into();
+        nodes[i].hi = hi.into();
     }
 }
 
@@ -309,13 +366,13 @@ pub struct GpuBvh {
 }
 
 impl GpuBvh {
-    /// Builds the CPU reference tree of `scene` (binned SAH), flattens and uploads it.
+    /// Builds the SAH tree of `scene`, flattens and uploads it.
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<GpuBvh> {
         let bvh = Bvh::new(scene);
         GpuBvh::upload(gpu, &FlatBvh::new(&bvh, &scene.vertices))
     }
 
-    /// Uploads a flattened tree (for a CPU tree the caller already has, or a custom height limit).
+    /// Uploads a flattened tree (for a tree the caller already has, or a custom height limit).
     pub fn upload(gpu: &Gpu, flat: &FlatBvh) -> Result<GpuBvh> {
         anyhow::ensure!(flat.height <= STACK_SIZE, "BVH of height {} exceeds the stack ({STACK_SIZE})", flat.height);
         let max_range = gpu.limits().max_storage_buffer_range as u64;
@@ -444,12 +501,12 @@ mod tests {
     }
 
     #[test]
-    fn flattening_keeps_the_cpu_tree_and_every_triangle() {
+    fn flattening_keeps_the_sah_tree_and_every_triangle() {
         let scene = scene_of(&soup(3000));
         let bvh = Bvh::new(&scene);
         let flat = FlatBvh::new(&bvh, &scene.vertices);
         check(&flat, &scene, STACK_SIZE);
-        // Nothing rebuilt: the GPU tree has the CPU tree's shape.
+        // Nothing rebuilt: the GPU tree has the SAH tree's shape.
         assert_eq!(flat.rebuilt_subtrees, 0);
         assert_eq!(flat.nodes.len(), bvh.node_count());
         assert_eq!(flat.triangle_count, 3000);

@@ -1,0 +1,16 @@
+//! The BVH: the scene's triangles in a bounding volume hierarchy, built once per scene on the CPU and
+//! ray cast on the GPU (`glsl/shared/bvh.glsl`) where the voxel march is too coarse.
+//!
+//! - [`build`]: the binned-SAH build in f64 ([`Bvh`]). The CPU reference of the tests
+//!   (`bounce-oracles`) casts its rays through this same tree.
+//! - [`gpu`]: the GPU layout (32-byte nodes, 48-byte leaf-ordered triangles), the flattening under the
+//!   traversal's stack limit ([`FlatBvh`]), the upload and bindings ([`GpuBvh`]), and the constants the
+//!   shaders share.
+
+pub mod build;
+pub mod gpu;
+
+pub use build::{Bvh, BvhNode, BvhTri, MEDIAN_DEPTH};
+pub use gpu::{
+    FlatBvh, GpuBvh, GpuBvhNode, GpuBvhTri, B_BVH_NODES, B_BVH_TRIS, MAX_STEPS, NO_TRI, SHADOW_EPS, STACK_SIZE,
+};
