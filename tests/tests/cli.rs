@@ -490,3 +490,57 @@ fn a_textured_scene_renders_its_texture() {
     assert!(left[0] > 10.0 * left[1].max(1e-9) && left[2] == 0.0, "left half not red: {left:?}");
     assert!(right[1] > 10.0 * right[0].max(1e-9) && right[2] == 0.0, "right half not green: {right:?}");
 }
+
+/// `render --time-limit`: progressive frames until the budget, their count and the time in the EXR's
+/// metadata; `all` (the same every frame) is refused as bad input; `bench --time-limits` writes one
+/// row per method and budget with the frames it averaged.
+#[test]
+fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
+    let d = scratch("time-limit");
+    let scene = bounce_tests::default_scene();
+    let s = scene.to_str().unwrap();
+    let out = d.join("t.exr");
+    let small = ["--width", "16", "--height", "16", "--dprsm-res", "16", "--voxels", "16", "--component", "indirect"];
+    let mut args = vec!["render", s, "--out", out.to_str().unwrap(), "--method", "gbg", "--vpls", "4"];
+    args.extend(small);
+    args.extend(["--time-limit", "1.5", "--validation"]);
+    let r = bounce(&args);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (_, meta) = read_exr(&out).unwrap();
+    let get = |k: &str| meta.iter().find(|(m, _)| m == &format!("bounce.{k}")).map(|(_, v)| v.clone());
+    let frames: u32 = get("frames").expect("frames in the metadata").parse().unwrap();
+    let wall: f64 = get("wall_s").expect("wall_s in the metadata").parse().unwrap();
+    assert!(frames >= 2, "1.5 s at 16² holds more than one frame: {frames}");
+    assert!(wall <= 1.5 * 1.5, "the budget was overrun: {wall} s");
+    assert_eq!(get("time_limit_s").as_deref(), Some("1.5"));
+
+    let all_out = d.join("all.exr");
+    let mut all = vec!["render", s, "--out", all_out.to_str().unwrap(), "--method", "all"];
+    all.extend(small);
+    all.extend(["--time-limit", "1"]);
+    let r = bounce(&all);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert_eq!(error_lines(&r).len(), 1, "{}", r.stderr);
+    assert!(!all_out.exists());
+
+    let bench_dir = d.join("bench");
+    let mut bench = vec!["bench", s, "--out", bench_dir.to_str().unwrap(), "--methods", "uniform,gbg"];
+    bench.extend(["--vpls", "4", "--repeats", "1", "--time-limits", "0.3,0.6", "--reference", "all"]);
+    bench.extend(["--width", "16", "--height", "16", "--dprsm-res", "16", "--voxels", "16"]);
+    let r = bounce(&bench);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let csv = std::fs::read_to_string(bench_dir.join("bench.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let (t_col, f_col) = (
+        header.iter().position(|h| *h == "time_limit_s").unwrap(),
+        header.iter().position(|h| *h == "frames").unwrap(),
+    );
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2 * 2, "one row per method and budget:\n{csv}");
+    for row in &rows {
+        assert!(["0.3", "0.6"].contains(&row[t_col]), "{row:?}");
+        assert!(row[f_col].parse::<u32>().unwrap() >= 1, "{row:?}");
+    }
+    let md = std::fs::read_to_string(bench_dir.join("bench.md")).unwrap();
+    assert!(md.contains("0.3 s: frames") && md.contains("0.6 s: frames"), "{md}");
+}

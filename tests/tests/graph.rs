@@ -360,3 +360,43 @@ fn a_pass_that_uses_an_undeclared_handle_is_refused() {
     g.export(&y);
     let _ = g.execute();
 }
+
+/// Progressive rendering under a time budget is exactly the mean of the frames `render` makes with seeds
+/// `seed + k` and one CDF (`cdf_seed = seed`), for as many frames as it reports.
+#[test]
+fn a_time_limited_render_is_the_mean_of_its_frames() {
+    use bounce_graph::frame::progressive::render_for;
+    use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+    use bounce_graph::scene::Scene;
+    let gpu = TestGpu::new();
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let s = FrameSettings {
+        width: 16,
+        height: 16,
+        component: Component::Indirect,
+        method: Method::Gbg,
+        vpls: 2,
+        seed: 7,
+        dprsm_res: 16,
+        shadow_res: 64,
+        voxels: 16,
+        ..FrameSettings::default()
+    };
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let p = render_for(&mut r, &s, std::time::Duration::from_millis(400), &mut |_, _| {}).unwrap();
+    assert!(p.frames >= 1);
+    let mut fresh = Renderer::new(&gpu, &scene).unwrap();
+    let mut sum = vec![[0.0f64; 4]; p.radiance.len()];
+    for k in 0..p.frames as u64 {
+        let f = fresh.render(&FrameSettings { seed: 7 + k, cdf_seed: Some(7), ..s.clone() }).unwrap();
+        for (a, x) in sum.iter_mut().zip(&f.radiance) {
+            for c in 0..4 {
+                a[c] += x[c] as f64;
+            }
+        }
+    }
+    let n = p.frames as f64;
+    let want: Vec<[f32; 4]> =
+        sum.iter().map(|a| [(a[0] / n) as f32, (a[1] / n) as f32, (a[2] / n) as f32, (a[3] / n) as f32]).collect();
+    assert_eq!(p.radiance, want, "{} frames", p.frames);
+}

@@ -275,6 +275,10 @@ pub struct RenderArgs {
     /// Print a per-pass GPU time table.
     #[arg(long)]
     pub timings: bool,
+    /// Render progressive frames (seed, seed + 1, …; one CDF) for this many seconds of wall time and
+    /// write their mean: equal-time comparisons in one flag. Not for `all` (the same every frame).
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
 }
 
 /// `view` renders a frame per redraw, so it starts from a smaller window and cheaper maps than
@@ -322,9 +326,14 @@ pub struct BenchArgs {
     /// Methods to sweep, comma-separated.
     #[arg(long, value_parser = METHODS, value_delimiter = ',', default_value = "uniform,global,stratified,local,gbg,mis")]
     pub methods: Vec<Method>,
-    /// VPL counts per pixel, comma-separated.
+    /// VPL counts per pixel, comma-separated (with --time-limits: the first is the VPLs per frame).
     #[arg(long, value_delimiter = ',', default_value = "16,64,256")]
     pub vpls: Vec<u32>,
+    /// Wall-time budgets in seconds, comma-separated: instead of one frame per VPL count, each method
+    /// renders progressive frames for each budget (`render --time-limit`), so every column is an
+    /// equal-time comparison.
+    #[arg(long, value_delimiter = ',', value_name = "SECONDS")]
+    pub time_limits: Vec<f64>,
     /// Frames (seeds 1..=K) per method and VPL count; medians are reported.
     #[arg(long, default_value_t = 3)]
     pub repeats: u32,

@@ -15,9 +15,33 @@ fn register_font() {
     });
 }
 
-/// `series`: (method, [(GPU ms, relMSE)]) in VPL order. Points with a non-positive or non-finite value
+/// What the two axes show (the error axis names what the error is measured against).
+pub struct Axes<'a> {
+    pub time: &'a str,
+    pub error: &'a str,
+}
+
+/// A log-axis tick: three significant digits, no trailing zeros, so ticks stay short and distinct
+/// (`0.25`, `3`, `120`, `1.5e4`) where a fixed `{:.3}` read "100.000" and overlapped.
+pub fn tick(v: f64) -> String {
+    if !(v.is_finite() && v > 0.0) {
+        return String::new();
+    }
+    if !(1e-3..1e4).contains(&v) {
+        return format!("{v:.2e}").replace(".00e", "e").replace("0e", "e");
+    }
+    let digits = (2 - v.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// `series`: (method, [(time, relMSE)]) in column order. Points with a non-positive or non-finite value
 /// cannot go on log axes and are left out.
-pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle: &str) -> Result<()> {
+pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle: &str, axes: &Axes) -> Result<()> {
     register_font();
     let pts: Vec<(f64, f64)> = series
         .iter()
@@ -44,10 +68,12 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
             .map_err(|e| anyhow!("plot: {e}"))?;
         chart
             .configure_mesh()
-            .x_desc("GPU time per frame (ms, log)")
-            .y_desc("relMSE against the reference (log)")
-            .x_label_formatter(&|v| format!("{v:.3}"))
-            .y_label_formatter(&|v| format!("{v:.2e}"))
+            .x_desc(axes.time)
+            .y_desc(axes.error)
+            .x_labels(8)
+            .y_labels(8)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .label_style(("sans-serif", 15))
             .draw()
             .map_err(|e| anyhow!("plot: {e}"))?;
@@ -74,4 +100,20 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
         root.present().map_err(|e| anyhow!("plot: {e}"))?;
     }
     std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick;
+
+    #[test]
+    fn ticks_are_short_and_distinct() {
+        assert_eq!(tick(100.0), "100");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(3.0), "3");
+        assert_eq!(tick(12.5), "12.5");
+        assert_eq!(tick(0.0043), "0.0043");
+        assert_eq!(tick(1.5e4), "1.5e4");
+        assert_eq!(tick(2e-5), "2e-5");
+    }
 }

@@ -1,4 +1,6 @@
-//! `bounce bench`: run time against error for every method and VPL count.
+//! `bounce bench`: run time against error for every method and VPL count, or (with `--time-limits`) for
+//! every method and wall-time budget: each budget's column is then an equal-time comparison, every
+//! method averaging as many progressive frames (`--vpls`'s first value per frame) as fit in it.
 //!
 //! For each method × VPL count it renders `--repeats` full frames (seeds 1..=K; the renderer's frame
 //! cache is cleared before each) of the indirect component and records, per frame, the GPU time (sum
@@ -19,11 +21,12 @@ use crate::metrics::Metrics;
 use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
-use bounce_graph::frame::{Component, FrameSettings, LightMap, Method, Renderer, Visibility};
+use bounce_graph::frame::progressive::render_for;
+use bounce_graph::frame::{Component, FrameOutput, FrameSettings, LightMap, Method, Renderer, Visibility};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     let scene = super::load_scene(&a.scene, err)?;
@@ -36,9 +39,16 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
+    if a.time_limits.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(bad(anyhow::anyhow!("--time-limits must be positive numbers of seconds")));
+    }
+    let columns = match a.time_limits.is_empty() {
+        true => a.vpls.iter().map(|&vpls| Column { vpls, seconds: None }).collect(),
+        false => a.time_limits.iter().map(|&t| Column { vpls: a.vpls[0], seconds: Some(t) }).collect(),
+    };
     let plan = BenchPlan {
         methods: a.methods.clone(),
-        vpls: a.vpls.clone(),
+        columns,
         repeats: a.repeats,
         base,
         reference: match a.reference {
@@ -48,8 +58,8 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     };
     // Every frame the sweep will render, checked before the first one renders.
     for &method in &plan.methods {
-        for &vpls in &plan.vpls {
-            renderer.check(&FrameSettings { method, vpls, ..plan.base.clone() })?;
+        for c in &plan.columns {
+            renderer.check(&FrameSettings { method, vpls: c.vpls, ..plan.base.clone() })?;
         }
     }
     renderer.check(&plan.reference.settings(&plan.base))?;
@@ -62,12 +72,30 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     Ok(())
 }
 
-/// One measured frame.
+/// One column of the sweep: a VPL count per frame, and for an equal-time sweep the wall-time budget.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Column {
+    vpls: u32,
+    seconds: Option<f64>,
+}
+
+impl Column {
+    fn label(self) -> String {
+        match self.seconds {
+            Some(t) => format!("{t} s"),
+            None => format!("{} VPLs", self.vpls),
+        }
+    }
+}
+
+/// One measured frame (or, in an equal-time sweep, one budget's progressive frames).
 #[derive(Clone, Debug)]
 struct Sample {
     method: Method,
-    vpls: u32,
+    column: Column,
     seed: u64,
+    /// Frames averaged (1 without a time budget).
+    frames: u32,
     gpu_ms: f64,
     wall_ms: f64,
     passes: BTreeMap<&'static str, f64>,
@@ -86,7 +114,7 @@ enum Reference {
 /// What `bench` sweeps, over which base settings, against which reference.
 struct BenchPlan {
     methods: Vec<Method>,
-    vpls: Vec<u32>,
+    columns: Vec<Column>,
     repeats: u32,
     base: FrameSettings,
     reference: Reference,
@@ -114,6 +142,14 @@ impl Reference {
             Reference::All => (Method::All, base.spp),
         };
         FrameSettings { method, spp, component: Component::Indirect, ..base.clone() }
+    }
+
+    /// What the plot's error axis says it is measured against.
+    fn short(self) -> String {
+        match self {
+            Reference::Path { spp } => format!("the ground truth (path traced, {spp} spp)"),
+            Reference::All => "`all` (selection error only)".to_string(),
+        }
     }
 
     /// How the progress line and the cache file name it.
@@ -179,7 +215,7 @@ fn reference(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: 
 fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut dyn Write) -> Result<Vec<Sample>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let reference = reference(r, plan, scene, dir, err)?;
-    let total = (plan.methods.len() * plan.vpls.len()) as u64 * plan.repeats as u64;
+    let total = (plan.methods.len() * plan.columns.len()) as u64 * plan.repeats as u64;
     let bar = indicatif::ProgressBar::new(total);
     bar.set_style(
         indicatif::ProgressStyle::with_template("bench {bar:40} {pos}/{len} frames ({msg}), eta {eta}")
@@ -190,35 +226,51 @@ fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
     r.render(&FrameSettings { method: plan.methods[0], vpls: 1, component: Component::Indirect, ..plan.base.clone() })?;
     let mut samples = vec![];
     for &method in &plan.methods {
-        for &vpls in &plan.vpls {
+        for &column in &plan.columns {
             for seed in 1..=plan.repeats as u64 {
-                bar.set_message(format!("{} {vpls}", method.name()));
-                let s = FrameSettings { method, vpls, seed, component: Component::Indirect, ..plan.base.clone() };
-                // Full frames for every method (a seed-independent CDF would otherwise be reused).
-                r.clear_frame_cache();
-                let t0 = Instant::now();
-                let f = r.render(&s)?;
-                let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
-                let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
-                let mut passes = BTreeMap::new();
-                for t in &f.timings {
-                    *passes.entry(t.name).or_insert(0.0) += t.ms.unwrap_or(f64::NAN);
-                }
-                samples.push(Sample {
+                bar.set_message(format!("{} {}", method.name(), column.label()));
+                let s = FrameSettings {
                     method,
-                    vpls,
+                    vpls: column.vpls,
                     seed,
-                    gpu_ms: f.gpu_ms().unwrap_or(f64::NAN),
-                    wall_ms,
-                    passes,
-                    metrics: Metrics::with_flip(&img, &reference),
-                });
+                    component: Component::Indirect,
+                    ..plan.base.clone()
+                };
+                samples.push(measure(r, &s, column, &reference)?);
                 bar.inc(1);
             }
         }
     }
     bar.finish_and_clear();
     Ok(samples)
+}
+
+/// One frame of `s` (or its column's budget of progressive frames), timed and compared. Every method pays
+/// for its full frame: the kept products are dropped first (a seed-independent CDF would otherwise be
+/// reused); within a budget, the frames after the first reuse them, as `render --time-limit` does.
+fn measure(r: &mut Renderer, s: &FrameSettings, column: Column, reference: &RgbImage) -> Result<Sample> {
+    r.clear_frame_cache();
+    let t0 = Instant::now();
+    let (f, frames, gpu_ms) = match column.seconds {
+        None => {
+            let f = r.render(s)?;
+            let gpu_ms = f.gpu_ms().unwrap_or(f64::NAN);
+            (f, 1, gpu_ms)
+        }
+        Some(t) => {
+            let p = render_for(r, s, Duration::from_secs_f64(t), &mut |_, _| {})?;
+            let f = FrameOutput { radiance: p.radiance, ..p.last };
+            (f, p.frames, p.gpu_ms.unwrap_or(f64::NAN))
+        }
+    };
+    let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+    let mut passes = BTreeMap::new();
+    for t in &f.timings {
+        *passes.entry(t.name).or_insert(0.0) += t.ms.unwrap_or(f64::NAN);
+    }
+    let metrics = Metrics::with_flip(&img, reference);
+    Ok(Sample { method: s.method, column, seed: s.seed, frames, gpu_ms, wall_ms, passes, metrics })
 }
 
 /// Write bench.csv, bench.md and time_vs_error.png (each through a temporary file).
@@ -236,30 +288,38 @@ fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &str,
         .methods
         .iter()
         .map(|&m| {
-            let points = plan.vpls.iter().map(|&n| cell(samples, m, n)).map(|(ms, rel_mse, _)| (ms, rel_mse));
+            let points = plan.columns.iter().map(|&c| cell(samples, m, c)).map(|x| (x.time, x.rel_mse));
             (m.name().to_string(), points.collect())
         })
         .collect();
     let b = &plan.base;
+    let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
+    let axes = crate::plot::Axes {
+        time: if equal_time { "wall time per budget (s, log)" } else { "GPU time per frame (ms, log)" },
+        error: &format!("relMSE against {} (log)", plan.reference.short()),
+    };
     crate::plot::time_vs_error(
         &dir.join("time_vs_error.png"),
         &series,
         &format!("{}×{}, {}", b.width, b.height, device),
+        &axes,
     )
 }
 
-/// One row per frame, one column per pass.
+/// One row per frame (per budget with `--time-limits`: `time_limit_s` and the `frames` averaged), one
+/// column per pass.
 fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
-    let mut csv = String::from("method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs,flip");
+    let mut csv =
+        String::from("method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs,flip,time_limit_s,frames");
     for p in pass_names {
         csv.push_str(&format!(",pass_{p}_ms"));
     }
     csv.push('\n');
     for s in samples {
         csv.push_str(&format!(
-            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e},{:.6}",
+            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e},{:.6},{},{}",
             s.method.name(),
-            s.vpls,
+            s.column.vpls,
             s.seed,
             s.gpu_ms,
             s.wall_ms,
@@ -267,7 +327,9 @@ fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
             s.metrics.rel_mse,
             s.metrics.mean_ratio,
             s.metrics.p99_abs,
-            s.metrics.flip.unwrap_or(f64::NAN)
+            s.metrics.flip.unwrap_or(f64::NAN),
+            s.column.seconds.map(|t| t.to_string()).unwrap_or_default(),
+            s.frames,
         ));
         for p in pass_names {
             csv.push_str(&format!(",{:.4}", s.passes.get(p).copied().unwrap_or(0.0)));
@@ -277,14 +339,24 @@ fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
     csv
 }
 
-/// The medians of one method at one VPL count: (GPU ms, relMSE, FLIP).
-fn cell(samples: &[Sample], m: Method, n: u32) -> (f64, f64, f64) {
-    let sel: Vec<&Sample> = samples.iter().filter(|s| s.method == m && s.vpls == n).collect();
-    (
-        median(sel.iter().map(|s| s.gpu_ms).collect()),
-        median(sel.iter().map(|s| s.metrics.rel_mse).collect()),
-        median(sel.iter().map(|s| s.metrics.flip.unwrap_or(f64::NAN)).collect()),
-    )
+/// The medians of one method in one column.
+struct Cell {
+    /// GPU ms per frame, or wall seconds for a time budget (the plot's x).
+    time: f64,
+    rel_mse: f64,
+    flip: f64,
+    frames: f64,
+}
+
+fn cell(samples: &[Sample], m: Method, c: Column) -> Cell {
+    let sel: Vec<&Sample> = samples.iter().filter(|s| s.method == m && s.column == c).collect();
+    let time = |s: &Sample| if c.seconds.is_some() { s.wall_ms / 1e3 } else { s.gpu_ms };
+    Cell {
+        time: median(sel.iter().map(|s| time(s)).collect()),
+        rel_mse: median(sel.iter().map(|s| s.metrics.rel_mse).collect()),
+        flip: median(sel.iter().map(|s| s.metrics.flip.unwrap_or(f64::NAN)).collect()),
+        frames: median(sel.iter().map(|s| s.frames as f64).collect()),
+    }
 }
 
 /// bench.md's heading and its first table: methods in rows, VPL counts in columns.
@@ -305,19 +377,22 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
             Reference::All => "the exhaustive VPL sum on the same VPL set (`--method all`)".to_string(),
         }
     );
-    for n in &plan.vpls {
-        md.push_str(&format!(" {n} VPLs: ms | relMSE | FLIP |"));
+    let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
+    for c in &plan.columns {
+        let first = if equal_time { "frames" } else { "ms" };
+        md.push_str(&format!(" {}: {first} | relMSE | FLIP |", c.label()));
     }
     md.push_str("\n|---|");
-    for _ in &plan.vpls {
+    for _ in &plan.columns {
         md.push_str("---:|---:|---:|");
     }
     md.push('\n');
     for &m in &plan.methods {
         md.push_str(&format!("| {} |", m.name()));
-        for &n in &plan.vpls {
-            let (t, e, fl) = cell(samples, m, n);
-            md.push_str(&format!(" {t:.1} | {e:.4} | {fl:.4} |"));
+        for &c in &plan.columns {
+            let x = cell(samples, m, c);
+            let first = if equal_time { x.frames } else { x.time };
+            md.push_str(&format!(" {first:.1} | {:.4} | {:.4} |", x.rel_mse, x.flip));
         }
         md.push('\n');
     }
@@ -326,7 +401,9 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
 
 /// bench.md's second table: each pass's median GPU time per method, at the largest VPL count.
 fn pass_table(plan: &BenchPlan, samples: &[Sample], pass_names: &[&str]) -> String {
-    let mut md = String::from("\n## Per-pass GPU time (ms, median), at the largest VPL count\n\n| method |");
+    let mut md = String::from(
+        "\n## Per-pass GPU time (ms, median; the last frame of a budget), in the last column\n\n| method |",
+    );
     for p in pass_names {
         md.push_str(&format!(" {p} |"));
     }
@@ -335,14 +412,14 @@ fn pass_table(plan: &BenchPlan, samples: &[Sample], pass_names: &[&str]) -> Stri
         md.push_str("---:|");
     }
     md.push('\n');
-    let nmax = plan.vpls.iter().copied().max().unwrap_or(0);
+    let last = plan.columns.last().copied();
     for &m in &plan.methods {
         md.push_str(&format!("| {} |", m.name()));
         for p in pass_names {
             let v = median(
                 samples
                     .iter()
-                    .filter(|s| s.method == m && s.vpls == nmax)
+                    .filter(|s| s.method == m && Some(s.column) == last)
                     .filter_map(|s| s.passes.get(p).copied())
                     .collect(),
             );

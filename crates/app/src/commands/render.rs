@@ -1,16 +1,18 @@
-//! `bounce render`: one frame of a scene to a linear float32 EXR (with the settings as metadata), an
+//! `bounce render`: one frame of a scene (or, with `--time-limit`, the mean of as many progressive frames
+//! as fit in the time) to a linear float32 EXR (with the settings as metadata), an
 //! optional tone-mapped PNG, and with `--timings` the per-pass GPU time table on stdout. Warnings and
 //! the `wrote …` line go to stderr.
 
 use crate::cli::{RenderArgs, RENDER_FALLBACK_SIZE};
-use crate::error;
+use crate::error::{self, bad};
 use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
+use bounce_graph::frame::progressive::{render_for, Progressive};
 use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Renderer};
 use bounce_graph::passes::psm::{Psm, MAX_PSM_BYTES};
 use std::io::Write;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     let scene = super::load_scene(&a.scene, err)?;
@@ -19,8 +21,18 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
     renderer.check(&settings)?;
+    if a.time_limit.is_some() {
+        bounce_graph::frame::progressive::check_progressive(&settings)?;
+    }
     let t0 = Instant::now();
-    let frame = renderer.render(&settings)?;
+    let (frame, frames) = match a.time_limit {
+        None => (renderer.render(&settings)?, None),
+        Some(t) => {
+            let p = progressive(&mut renderer, &settings, t)?;
+            let last = FrameOutput { radiance: p.radiance, ..p.last };
+            (last, Some((p.frames, p.gpu_ms)))
+        }
+    };
     let wall = t0.elapsed().as_secs_f64();
     for w in &frame.warnings {
         writeln!(err, "warning: {w}")?;
@@ -38,7 +50,15 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     if bad_px > 0 {
         writeln!(err, "warning: {bad_px} pixel(s) are not finite")?;
     }
-    output::write_exr(&a.out, &img, &metadata(a, &settings, &gpu, &frame, bad_px))?;
+    let mut meta = metadata(a, &settings, &gpu, &frame, bad_px);
+    if let (Some((n, gpu_ms)), Some(t)) = (frames, a.time_limit) {
+        meta.push(("time_limit_s", t.to_string()));
+        meta.push(("frames", n.to_string()));
+        meta.push(("wall_s", format!("{wall:.3}")));
+        meta.push(("gpu_ms_total", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())));
+        writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {t} s)")?;
+    }
+    output::write_exr(&a.out, &img, &meta)?;
     if let Some(p) = &a.png {
         output::write_png(p, &img)?;
     }
@@ -53,6 +73,24 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     )
     .context("writing to stderr")?;
     Ok(())
+}
+
+/// Frames of `s` for `seconds` of wall time, averaged, with a progress bar on stderr.
+fn progressive(r: &mut Renderer, s: &FrameSettings, seconds: f64) -> Result<Progressive> {
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 1e6) {
+        return Err(bad(anyhow::anyhow!("--time-limit must be a positive number of seconds (got {seconds})")));
+    }
+    let bar = indicatif::ProgressBar::new((seconds * 10.0).ceil() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("render {bar:40} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let p = render_for(r, s, Duration::from_secs_f64(seconds), &mut |frames, elapsed| {
+        bar.set_position((elapsed.as_secs_f64() * 10.0) as u64);
+        bar.set_message(format!("{frames} frame(s), {:.1}/{seconds} s", elapsed.as_secs_f64()));
+    })?;
+    bar.finish_and_clear();
+    Ok(p)
 }
 
 /// The EXR's `bounce.*` attributes: what was rendered, how, and on what.

@@ -1,9 +1,11 @@
 //! A frame: its settings ([`settings`]), the keys under which its products are kept across frames
 //! ([`keys`]), the recipe ([`recipe::build_frame`]: start reading there), chunked submission
-//! ([`chunks`]) and the renderer that ties them together ([`renderer`]).
+//! ([`chunks`]), the renderer that ties them together ([`renderer`]) and progressive rendering under a
+//! time budget ([`progressive`]).
 
 pub mod chunks;
 pub mod keys;
+pub mod progressive;
 pub mod recipe;
 pub mod renderer;
 pub mod settings;

@@ -1,0 +1,80 @@
+//! Progressive rendering under a time budget (`bounce render --time-limit`, `bounce bench
+//! --time-limits`): frame k renders with seed `seed + k` and is added to a running mean (f64 on the
+//! host), until the budget would be exceeded. Every frame is an unbiased estimate of the same image (each
+//! sampled method is unbiased for the VPL sum given any CDF, the reference for the one-bounce integral),
+//! so the mean is too, and its variance falls as 1/frames. All frames share one CDF (the importance's
+//! seed is `--cdf-seed`, else the first frame's seed), as the viewer's do: the importance and CDF are
+//! built once and kept by the graph, and each later frame records only the gather.
+//!
+//! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
+//! upload). A frame is started only if the mean frame time so far says it ends within the budget; the
+//! first frame always runs.
+
+use super::renderer::{FrameOutput, Renderer};
+use super::settings::{FrameSettings, Method, SettingsError};
+use anyhow::Result;
+use std::time::{Duration, Instant};
+
+/// The accumulated result of [`render_for`].
+pub struct Progressive {
+    /// The mean of the frames' radiance.
+    pub radiance: Vec<[f32; 4]>,
+    pub frames: u32,
+    /// Wall time of the frames.
+    pub wall: Duration,
+    /// The last frame (its timings, warnings, size).
+    pub last: FrameOutput,
+    /// Sum of every frame's GPU time, if the device has timestamps.
+    pub gpu_ms: Option<f64>,
+}
+
+/// Whether `s` can be rendered progressively: `all` is exact per frame (nothing to average).
+pub fn check_progressive(s: &FrameSettings) -> Result<(), SettingsError> {
+    if s.method == Method::All && s.component != super::settings::Component::Direct {
+        return Err(SettingsError(
+            "a time limit averages frames with new seeds, but `all` is the same every frame: use a sampled method or `reference`"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Render frames of `s` (seeds `s.seed`, `s.seed + 1`, …) until `budget`, and average them.
+/// `progress(frames, elapsed)` is called after each frame.
+pub fn render_for(
+    r: &mut Renderer,
+    s: &FrameSettings,
+    budget: Duration,
+    progress: &mut dyn FnMut(u32, Duration),
+) -> Result<Progressive> {
+    check_progressive(s)?;
+    let t0 = Instant::now();
+    let mut sum: Vec<[f64; 4]> = vec![];
+    let (mut frames, mut gpu_ms) = (0u32, Some(0.0));
+    let last = loop {
+        let frame_s = FrameSettings {
+            seed: s.seed.wrapping_add(frames as u64),
+            cdf_seed: Some(s.cdf_seed.unwrap_or(s.seed)),
+            ..s.clone()
+        };
+        let f = r.render(&frame_s)?;
+        sum.resize(f.radiance.len(), [0.0; 4]);
+        for (a, p) in sum.iter_mut().zip(&f.radiance) {
+            for c in 0..4 {
+                a[c] += p[c] as f64;
+            }
+        }
+        frames += 1;
+        gpu_ms = gpu_ms.zip(f.gpu_ms()).map(|(a, b)| a + b);
+        let elapsed = t0.elapsed();
+        progress(frames, elapsed);
+        let per_frame = elapsed / frames;
+        if elapsed + per_frame > budget {
+            break f;
+        }
+    };
+    let n = frames as f64;
+    let radiance =
+        sum.iter().map(|a| [(a[0] / n) as f32, (a[1] / n) as f32, (a[2] / n) as f32, (a[3] / n) as f32]).collect();
+    Ok(Progressive { radiance, frames, wall: t0.elapsed(), last, gpu_ms })
+}
