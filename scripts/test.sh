@@ -14,6 +14,9 @@ cargo run -q -p bounce -- info | head -n 3
 # The default scene at 128² with validation: must finish and name every pass it ran.
 cargo run -q -p bounce -- render assets/cornell-box/scene.toml --width 128 --height 128 \
   --out "${CARGO_TARGET_DIR:-target}/default-128.exr" --validation --timings
+# The GPU benchmark's steps, end to end at a tiny size on this device (scripts/gpu-bench.sh).
+./scripts/gpu-bench.sh tiny "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny" >/dev/null
+grep -q "## conference: equal time" "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny/gpu-bench.md"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 set +e

@@ -124,14 +124,14 @@ fn metadata(
 /// PSM memory where the frame has per-VPL shadow maps, and the wall time.
 fn timings(out: &mut dyn Write, s: &FrameSettings, frame: &FrameOutput, wall: f64, device: &str) -> Result<()> {
     let ms = |m: Option<f64>| m.map(|m| format!("{m:10.3}")).unwrap_or_else(|| format!("{:>10}", "n/a"));
-    writeln!(out, "{:<12} {:>10}", "pass", "GPU ms")?;
+    writeln!(out, "{:<16} {:>10}", "pass", "GPU ms")?;
     for t in &frame.timings {
-        writeln!(out, "{:<12} {}", t.name, ms(t.ms))?;
+        writeln!(out, "{:<16} {}", t.name, ms(t.ms))?;
     }
     for skipped in &frame.skipped {
-        writeln!(out, "{skipped:<12} {:>10}", "skipped")?;
+        writeln!(out, "{skipped:<16} {:>10}", "skipped")?;
     }
-    writeln!(out, "{:<12} {}", "total", ms(frame.gpu_ms()))?;
+    writeln!(out, "{:<16} {}", "total", ms(frame.gpu_ms()))?;
     if s.visibility.shared_set() && s.component != Component::Direct {
         let bytes = Psm::bytes(s.vpls, s.psm_res);
         writeln!(

@@ -1,0 +1,130 @@
+#!/usr/bin/env bash
+# The thesis's measurements on a machine with a GPU, prepared here and run there in one command.
+#
+#   scripts/gpu-bench.sh stage          # here: build, then stage the stripped binary and the Vulkan
+#                                       # loader under out/gpu-bench/ (ignored by git; ~12 MiB)
+#   scripts/gpu-bench.sh run [OUT_DIR]  # there, from the repository root (assets/ and out/gpu-bench/
+#                                       # present): ~5 minutes on a recent GPU
+#   scripts/gpu-bench.sh tiny [OUT_DIR] # the same steps at a tiny size on whatever device is here
+#                                       # (lavapipe in CI): builds, stages and runs (~1 minute)
+#
+# `run` prints, for Sibenik and Conference: (1) the thesis configuration (512², 800 VPLs per pixel;
+# global, local, gbg, mis; the indirect component) with each pass's GPU ms, median of 3 frames with the
+# kept products dropped before each (full frames), shaped like the thesis's Tables 7.1 and 7.2; (2) the
+# equal-time error of each method against the path-traced ground truth (`--method reference`), every
+# method given the same wall-time budget (`render --time-limit`). Everything it prints is also written
+# to OUT_DIR/gpu-bench.md. No validation layers there (a GPU machine may have none).
+set -euo pipefail
+here="$(cd "$(dirname "$0")/.." && pwd)"
+mode="${1:-}"
+stage="$here/out/gpu-bench"
+
+stage_binary() {
+  source "$here/scripts/setup.sh"
+  (cd "$here" && cargo build -q -p bounce)
+  local target="${CARGO_TARGET_DIR:-$here/target}"
+  mkdir -p "$stage/bin" "$stage/lib"
+  cp "$target/debug/bounce" "$stage/bin/bounce.tmp"
+  strip "$stage/bin/bounce.tmp" 2>/dev/null || true
+  mv "$stage/bin/bounce.tmp" "$stage/bin/bounce"
+  # The loader, for a machine that has a GPU driver but no libvulkan.
+  local loader
+  loader="$(ldconfig -p | awk '/libvulkan\.so\.1 /{print $NF; exit}')"
+  [ -n "$loader" ] && cp -L "$loader" "$stage/lib/libvulkan.so.1"
+  echo "staged $(du -sh "$stage" | cut -f1) in $stage" >&2
+}
+
+median3() { sort -g | sed -n 2p; }
+
+run_bench() {
+  local out="$1" size="$2" vpls="$3" dprsm="$4" spp="$5" budget="$6" shadow="$7"
+  shift 7
+  local scenes=("$@")
+  local bin="$stage/bin/bounce"
+  [ -x "$bin" ] || { echo "error: $bin is missing: run 'scripts/gpu-bench.sh stage' first" >&2; exit 2; }
+  export LD_LIBRARY_PATH="$stage/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  local icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+  if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then export VK_DRIVER_FILES="$icd"; fi
+  mkdir -p "$out"
+  local md="$out/gpu-bench.md"
+  local device
+  device="$("$bin" info | awk -F': ' '/^device/{print $2; exit}')"
+  local common=(--width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" --shadow-res "$shadow")
+  local methods=(global local gbg mis)
+  {
+    echo "# gpu-bench: $(date -u +%Y-%m-%d), ${device:-unknown device}"
+    echo
+    echo "\`scripts/gpu-bench.sh $mode\`: ${size}², ${vpls} VPLs per pixel, DPRSM ${dprsm}² per face, indirect."
+  } | tee "$md"
+  for scene in "${scenes[@]}"; do
+    local toml="$here/assets/$scene/scene.toml"
+    {
+      echo
+      echo "## $scene: GPU ms per pass (median of 3 full frames; Tables 7.1/7.2)"
+      echo
+    } | tee -a "$md"
+    local table="$out/$scene-passes.txt"
+    : >"$table"
+    for m in "${methods[@]}"; do
+      for k in 1 2 3; do
+        "$bin" render "$toml" "${common[@]}" --method "$m" --vpls "$vpls" --seed "$k" --timings \
+          --out "$out/$scene-$m-$k.exr" 2>/dev/null | awk -v m="$m" -v k="$k" \
+          'NF==2 && $2 ~ /^[0-9.]+$/ {print m, k, $1, $2}' >>"$table"
+      done
+    done
+    local passes
+    passes="$(awk '$3 != "total" {print $3}' "$table" | awk '!seen[$0]++' | tr '\n' ' ')total"
+    {
+      printf '| method |'; for p in $passes; do printf ' %s |' "$p"; done; echo
+      printf '|---|'; for p in $passes; do printf -- '---:|'; done; echo
+      for m in "${methods[@]}"; do
+        printf '| %s |' "$m"
+        for p in $passes; do
+          v="$(awk -v m="$m" -v p="$p" '$1==m && $3==p {print $4}' "$table" | median3)"
+          printf ' %s |' "${v:-–}"
+        done
+        echo
+      done
+    } | tee -a "$md"
+    local ref="$out/$scene-reference.exr"
+    "$bin" render "$toml" "${common[@]}" --method reference --spp "$spp" --out "$ref" 2>/dev/null
+    {
+      echo
+      echo "## $scene: equal time ($budget s of wall time per method) against the ground truth (reference, $spp spp)"
+      echo
+      echo "| method | frames | relMSE | mean ratio |"
+      echo "|---|---:|---:|---:|"
+    } | tee -a "$md"
+    for m in uniform "${methods[@]}" reference; do
+      local img="$out/$scene-$m-equal-time.exr"
+      local per_frame=(--vpls "$vpls")
+      [ "$m" = reference ] && per_frame=(--spp 16)
+      local log
+      log="$("$bin" render "$toml" "${common[@]}" --method "$m" "${per_frame[@]}" --seed 101 \
+        --time-limit "$budget" --out "$img" 2>&1 >/dev/null)"
+      local frames
+      frames="$(echo "$log" | awk '/frame\(s\) in/{print $1}')"
+      local json
+      json="$("$bin" compare "$img" "$ref" --json)"
+      local rel mean
+      rel="$(echo "$json" | sed -E 's/.*"rel_mse": ([^,]+),.*/\1/')"
+      mean="$(echo "$json" | sed -E 's/.*"mean_ratio": ([^,]+),.*/\1/')"
+      printf '| %s | %s | %.4g | %.4f |\n' "$m" "${frames:-?}" "$rel" "$mean" | tee -a "$md"
+    done
+  done
+  echo >&2
+  echo "wrote $md" >&2
+}
+
+case "$mode" in
+  stage) stage_binary ;;
+  run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 2048 sibenik conference ;;
+  tiny)
+    stage_binary
+    run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 256 sibenik conference
+    ;;
+  *)
+    echo "error: usage: scripts/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR]" >&2
+    exit 2
+    ;;
+esac
