@@ -5,4 +5,5 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 source "$here/scripts/setup.sh"
 cd "$here"
+if first_build_notice; then cargo build -p bounce; fi
 cargo run -q -p bounce -- render assets/cornell-box/scene.toml --out "${OLDPWD:-.}/cornell.exr" --png "${OLDPWD:-.}/cornell.png" --validation --timings "$@"

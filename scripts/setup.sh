@@ -25,3 +25,15 @@ if ! command -v cargo >/dev/null 2>&1; then
   [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 fi
 command -v cargo >/dev/null 2>&1 || { echo "error: cargo not found; install Rust 1.80 or newer (https://rustup.rs)" >&2; exit 1; }
+
+# The first build compiles shaderc (glslang and SPIRV-Tools, C++) from source: say so before it starts,
+# and show cargo's progress (the callers build without -q when nothing is built yet).
+first_build_notice() {
+  local target="${CARGO_TARGET_DIR:-$(pwd)/target}"
+  if ! ls "$target"/debug/build/shaderc-sys-*/out >/dev/null 2>&1; then
+    echo "first build: compiling shaderc (glslang, SPIRV-Tools) from source; about 12 minutes on 2 cores" \
+      "(measured), less with more cores (it builds in parallel). Later builds take seconds." >&2
+    return 0
+  fi
+  return 1
+}

@@ -5,6 +5,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 source "$here/scripts/setup.sh"
 cd "$here"
+if first_build_notice; then cargo build --workspace --all-targets; fi
 # Shape before behaviour: formatting, lints, and the structure rules of ARCHITECTURE.md.
 cargo fmt --all --check
 cargo clippy -q --workspace --all-targets -- -D warnings
