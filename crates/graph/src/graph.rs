@@ -235,6 +235,8 @@ enum Storage<'a> {
     Lent(Res),
     ExternalBuffer(&'a Persistent<Buffer>),
     ExternalImage(&'a Persistent<Image>),
+    /// Moved back to the store when the frame ended.
+    Returned,
 }
 
 impl Storage<'_> {
@@ -261,7 +263,7 @@ impl Storage<'_> {
     }
     /// Move the realised resource out (to keep it); `None` if it was never realised or is external.
     fn take(&mut self) -> Option<Res> {
-        match std::mem::replace(self, Storage::TransientBuffer(BufferDesc::storage("taken", 0), None)) {
+        match std::mem::replace(self, Storage::Returned) {
             Storage::TransientBuffer(_, Some(b)) => Some(Res::Buffer(b)),
             Storage::TransientImage(_, Some(i)) => Some(Res::Image(i)),
             Storage::Lent(r) => Some(r),
