@@ -65,7 +65,10 @@ const SHADERS: &[Shader] = &[
     variant("mis.exact.comp", "mis.comp", &["EXACT_VISIBILITY"]),
     variant("mis.psm.comp", "mis.comp", &["PSM_VISIBILITY"]),
     variant("mis.psm_exact.comp", "mis.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
+    // The reference: two-strategy MIS (cosine at x, light side at y), and the cosine strategy alone
+    // (`--reference-estimator cosine`).
     file("reference.comp"),
+    variant("reference.cosine.comp", "reference.comp", &["COSINE_ONLY"]),
     // Kernels used only by the tests.
     file("test/bvh_trace.comp"),
     file("test/cdf_sample.comp"),
