@@ -73,6 +73,7 @@ const SHADERS: &[Shader] = &[
     file("test/bvh_trace.comp"),
     file("test/cdf_sample.comp"),
     file("test/layout_echo.comp"),
+    file("test/owen_sobol.comp"),
     file("test/voxel_march.comp"),
     file("test/voxel_rcp.comp"),
 ];

@@ -168,3 +168,60 @@ fn a_reference_frame_does_not_depend_on_its_chunks() {
         assert!(run(None, 4) != whole, "{}: another seed gave the same image", name(e));
     }
 }
+
+/// The sample points (`glsl/shared/owen_sobol.glsl`, run on the GPU by `glsl/test/owen_sobol.comp`):
+/// in [0, 1); every power-of-two prefix of a 2D set, and an aligned block further on, is a (0, m, 2)-net
+/// (exactly one point in each 2^a × 2^(m−a) elementary box, for every a); the 1D set's prefixes fall one
+/// per 1/2^m interval; and other seeds (pixels) give other points.
+#[test]
+fn the_sample_points_are_stratified_in_every_power_of_two_prefix() {
+    use bounce_device::sync::Access;
+    use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites};
+    use bounce_graph::bindings::{B_TEST_IN, B_TEST_OUT, WG_1D};
+    let gpu = TestGpu::new();
+    let (n, seeds) = (1024u32, [0u32, 1, 0x2545F491, 0xdeadbeef]);
+    let inputs: Vec<[u32; 2]> = seeds.iter().flat_map(|&s| (0..n).map(move |i| [i, s])).collect();
+    let p = ComputePipeline::new(
+        &gpu,
+        "owen_sobol",
+        &bounce_graph::spirv(bounce_graph::shaders::OWEN_SOBOL_COMP),
+        &[Binding::storage_buffer(B_TEST_IN), Binding::storage_buffer(B_TEST_OUT)],
+        0,
+        &[],
+    )
+    .unwrap();
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let inb = Buffer::with_data(&gpu, "owen_sobol in", storage, bytemuck::cast_slice(&inputs)).unwrap();
+    let outb = Buffer::new(&gpu, &BufferDesc::storage("owen_sobol out", 16 * inputs.len() as u64)).unwrap();
+    gpu.submit(|cmd| {
+        let w = DescriptorWrites::new().storage_buffer(B_TEST_IN, &inb).storage_buffer(B_TEST_OUT, &outb);
+        p.dispatch(cmd, &w, &[], [inputs.len() as u32, 1, 1], [WG_1D, 1, 1]);
+    })
+    .unwrap();
+    let got: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());
+    assert!(got.iter().all(|q| q[..3].iter().all(|&v| (0.0..1.0).contains(&v))), "a point outside [0, 1)");
+    let is_net = |pts: &[[f32; 4]], m: u32| {
+        (0..=m).all(|a| {
+            let (nx, ny) = (1u32 << a, 1u32 << (m - a));
+            let mut cells = vec![0u32; 1 << m];
+            for q in pts {
+                let (cx, cy) = ((q[0] * nx as f32) as u32, (q[1] * ny as f32) as u32);
+                cells[(cy * nx + cx) as usize] += 1;
+            }
+            cells.iter().all(|&c| c == 1)
+        })
+    };
+    for (s, pts) in seeds.iter().zip(got.chunks(n as usize)) {
+        for m in 0..=10 {
+            let prefix = &pts[..1 << m];
+            assert!(is_net(prefix, m), "seed {s:#x}: the first 2^{m} points are not a (0, {m}, 2)-net");
+            let mut cells = vec![0u32; 1 << m];
+            prefix.iter().for_each(|q| cells[(q[2] * (1u32 << m) as f32) as usize] += 1);
+            assert!(cells.iter().all(|&c| c == 1), "seed {s:#x}: the 1D set's first 2^{m} points are not stratified");
+        }
+        assert!(is_net(&pts[256..512], 8), "seed {s:#x}: points 256..512 are not a (0, 8, 2)-net");
+    }
+    let (a, b) = (&got[..n as usize], &got[n as usize..2 * n as usize]);
+    let same = a.iter().zip(b).filter(|(p, q)| p[0] == q[0] || p[1] == q[1]).count();
+    assert!(same <= 4, "seeds 0 and 1 share {same} of {n} coordinates");
+}

@@ -191,8 +191,8 @@ impl Renderer {
 /// The RMS over pixels and channels of the reference's standard error of the mean per pixel,
 /// sqrt((E[L²] − E[L]²) / (N − 1)), for the indirect component (a combined image's mean also holds the
 /// exact direct light, so none is given for it). It is the error of N independent samples; the
-/// reference's stratified samples do better, so it is an upper estimate (by about 2× on the default
-/// scene at 1024 samples).
+/// reference's stratified samples do better, so it is an upper estimate (on the default scene at 64²
+/// and 1024 samples, 3.4× the measured RMS error for `cosine`, 6× for `mis`).
 fn reference_stderr(s: &FrameSettings, mean: &[[f32; 4]], second: &[[f32; 4]]) -> Option<f64> {
     if s.component != Component::Indirect {
         return None;

@@ -262,7 +262,7 @@ impl Default for FrameSettings {
             defensive: 0.1,
             face: FaceMode::RussianRoulette,
             mis_weights: MisWeights::Consistent,
-            spp: 4096,
+            spp: 256,
             reference_estimator: ReferenceEstimator::Mis,
             reference_chunk: None,
             visibility: Visibility::Voxel,
