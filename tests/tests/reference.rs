@@ -151,12 +151,12 @@ fn a_reference_frame_does_not_depend_on_its_chunks() {
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     for e in ESTIMATORS {
-        let mut run = |chunk, seed| {
+        let mut run = |chunk: Option<u32>, seed| {
             let s = FrameSettings {
                 reference_estimator: e,
                 spp: 13,
                 seed,
-                reference_chunk: chunk,
+                reference_chunk: chunk.and_then(std::num::NonZeroU32::new),
                 ..FrameSettings::default()
             };
             reference_with(&mut r, s, 16, 16)

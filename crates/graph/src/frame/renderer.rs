@@ -270,7 +270,7 @@ impl RenderContext {
             (Component::Direct, _) => (1, 1),
             (_, Method::All) => (s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res, s.all_tile),
             (_, Method::Reference) => {
-                (s.spp, s.reference_chunk.unwrap_or(i.reference_per_dispatch.saturating_mul(4).clamp(1, 64)))
+                (s.spp, s.reference_chunk.map_or(i.reference_per_dispatch.saturating_mul(4).clamp(1, 64), |c| c.get()))
             }
             _ => (1, 1),
         }

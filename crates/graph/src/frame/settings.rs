@@ -228,7 +228,7 @@ pub struct FrameSettings {
     pub reference_estimator: ReferenceEstimator,
     /// Samples per submission of the reference (`None`: a few dispatches' worth under the device's loop
     /// limit, at most 64). The image does not depend on it.
-    pub reference_chunk: Option<u32>,
+    pub reference_chunk: Option<std::num::NonZeroU32>,
     pub visibility: Visibility,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
@@ -325,9 +325,6 @@ impl FrameSettings {
         }
         if self.spp == 0 {
             reject!("--spp must be at least 1");
-        }
-        if self.reference_chunk == Some(0) {
-            reject!("the reference's samples per submission must be at least 1");
         }
         if !(1..=1024).contains(&self.voxels) {
             reject!("voxels must be between 1 and 1024 (got {})", self.voxels);
