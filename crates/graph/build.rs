@@ -65,11 +65,15 @@ const SHADERS: &[Shader] = &[
     variant("mis.exact.comp", "mis.comp", &["EXACT_VISIBILITY"]),
     variant("mis.psm.comp", "mis.comp", &["PSM_VISIBILITY"]),
     variant("mis.psm_exact.comp", "mis.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
+    // The reference: two-strategy MIS (cosine at x, light side at y), and the cosine strategy alone
+    // (`--reference-estimator cosine`).
     file("reference.comp"),
+    variant("reference.cosine.comp", "reference.comp", &["COSINE_ONLY"]),
     // Kernels used only by the tests.
     file("test/bvh_trace.comp"),
     file("test/cdf_sample.comp"),
     file("test/layout_echo.comp"),
+    file("test/owen_sobol.comp"),
     file("test/voxel_march.comp"),
     file("test/voxel_rcp.comp"),
 ];

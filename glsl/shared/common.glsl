@@ -69,6 +69,12 @@ vec3 ray_triangle_bary(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
     return t > 0.0 ? vec3(t, u, v) : vec3(-1.0);
 }
 
+// The thesis's luminance (eq. 7.6): the scalar importance of an RGB contribution (also the
+// reference's light-strategy weights).
+float luminance(vec3 c) {
+    return 0.299 * c.r + 0.587 * c.g + 0.114 * c.b;
+}
+
 // PCG hash (Jarzynski & Olano 2020): a good 32-bit hash for per-pixel, per-sample random streams.
 uint pcg_hash(uint v) {
     uint state = v * 747796405u + 2891336453u;

@@ -37,9 +37,4 @@ vec3 vpl_unshadowed(vec3 x, vec3 nx, vec3 ax, Vpl vpl, float min_d2) {
     return ax / PI * vpl.flux * (cos_v / PI) * cos_x / max(d2, min_d2);
 }
 
-// The thesis's luminance (eq. 7.6): the scalar importance of an RGB contribution.
-float luminance(vec3 c) {
-    return 0.299 * c.r + 0.587 * c.g + 0.114 * c.b;
-}
-
 #endif

@@ -13,6 +13,7 @@ mod images;
 mod layout;
 mod lightmaps;
 mod psm;
+mod reference;
 mod stress;
 mod validation;
 mod voxelize;

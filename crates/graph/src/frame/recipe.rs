@@ -88,7 +88,8 @@ pub fn build_frame<'a>(
             direct: combined,
         };
         let bvh = f.bvh.expect("the reference traces the BVH (the renderer builds it first)");
-        r.reference.add(g, f, bvh, io, &mut out, &mut sq, reference_push(s, chunk), i.reference_per_dispatch);
+        let (push, per_dispatch) = (reference_push(s, chunk), i.reference_per_dispatch);
+        r.reference.add(g, f, bvh, io, &mut out, &mut sq, push, s.reference_estimator, per_dispatch);
         return FrameOut { radiance: out, second_moment: Some(sq), cdf: None };
     }
     let p = i.importance;

@@ -190,7 +190,9 @@ impl Renderer {
 
 /// The RMS over pixels and channels of the reference's standard error of the mean per pixel,
 /// sqrt((E[L²] − E[L]²) / (N − 1)), for the indirect component (a combined image's mean also holds the
-/// exact direct light, so none is given for it).
+/// exact direct light, so none is given for it). It is the error of N independent samples; the
+/// reference's stratified samples do better, so it is an upper estimate (on the default scene at 64²
+/// and 1024 samples, 3.4× the measured RMS error for `cosine`, 6× for `mis`).
 fn reference_stderr(s: &FrameSettings, mean: &[[f32; 4]], second: &[[f32; 4]]) -> Option<f64> {
     if s.component != Component::Indirect {
         return None;
@@ -256,18 +258,20 @@ impl RenderContext {
             reference_per_dispatch: self
                 .bvh
                 .as_ref()
-                .map_or(1, |b| Reference::per_dispatch(&self.gpu, b, self.scene.light_count)),
+                .map_or(1, |b| Reference::per_dispatch(&self.gpu, b, self.scene.light_count, s.reference_estimator)),
         }
     }
 
     /// (units of work, units per chunk) of a frame: VPL slots in tiles of `--all-tile` for `all`, samples
-    /// for `reference` (enough per submission to keep the GPU busy, few enough for a live progress
-    /// bar), one unit for the rest.
+    /// for `reference` (`reference_chunk`, else enough per submission to keep the GPU busy and few
+    /// enough for a live progress bar), one unit for the rest.
     fn chunking(&self, s: &FrameSettings, i: &RecipeInputs) -> (u32, u32) {
         match (s.component, s.method) {
             (Component::Direct, _) => (1, 1),
             (_, Method::All) => (s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res, s.all_tile),
-            (_, Method::Reference) => (s.spp, i.reference_per_dispatch.saturating_mul(4).clamp(1, 64)),
+            (_, Method::Reference) => {
+                (s.spp, s.reference_chunk.map_or(i.reference_per_dispatch.saturating_mul(4).clamp(1, 64), |c| c.get()))
+            }
             _ => (1, 1),
         }
     }

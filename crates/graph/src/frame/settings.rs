@@ -167,6 +167,16 @@ impl Method {
     }
 }
 
+/// How `Method::Reference` draws its bounce points (`glsl/reference.comp`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReferenceEstimator {
+    /// A cosine direction at x and a light-side point (a light, a uniform direction from it, its first
+    /// hit) per sample, combined by the balance heuristic.
+    Mis,
+    /// The cosine direction at x alone.
+    Cosine,
+}
+
 /// How a CDF method chooses the paraboloid face of a sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FaceMode {
@@ -212,8 +222,13 @@ pub struct FrameSettings {
     pub defensive: f32,
     pub face: FaceMode,
     pub mis_weights: MisWeights,
-    /// Samples per pixel of the reference integrator.
+    /// Samples per pixel of the reference integrator (under `ReferenceEstimator::Mis`, a sample is one
+    /// point of each strategy).
     pub spp: u32,
+    pub reference_estimator: ReferenceEstimator,
+    /// Samples per submission of the reference (`None`: a few dispatches' worth under the device's loop
+    /// limit, at most 64). The image does not depend on it.
+    pub reference_chunk: Option<std::num::NonZeroU32>,
     pub visibility: Visibility,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
@@ -247,7 +262,9 @@ impl Default for FrameSettings {
             defensive: 0.1,
             face: FaceMode::RussianRoulette,
             mis_weights: MisWeights::Consistent,
-            spp: 4096,
+            spp: 256,
+            reference_estimator: ReferenceEstimator::Mis,
+            reference_chunk: None,
             visibility: Visibility::Voxel,
             shadow_res: 2048,
             shadow_bias: 1e-5,

@@ -1,13 +1,19 @@
 //! reference: the exact one-bounce integrator (the scene contract's `indirect`), traced against the real
-//! triangles through the BVH (`crate::bvh`, `glsl/shared/bvh.glsl`). The estimator is stated in
-//! `glsl/reference.comp`. Inputs: the G-buffer (primary hits), the scene and BVH buffers, and the direct
-//! image for the combined component. Outputs: Σ L_k / N (RGBA32F, plus the direct image when asked) and
-//! Σ L_k² / N, accumulated over dispatches of at most `per_dispatch` samples (lavapipe's loop limit: one
-//! sample traces 1 + lights rays of at most `GpuBvh::max_iterations_per_ray` iterations each).
+//! triangles through the BVH (`crate::bvh`, `glsl/shared/bvh.glsl`). The estimators are stated in
+//! `glsl/reference.comp`: two-strategy MIS (a cosine direction at x and a light-side point y, balance
+//! heuristic, one of each per sample) by default, the cosine strategy alone as `reference.cosine.comp`.
+//! The variant is a shader row, not a push-constant branch, because the two differ in their per-sample
+//! loop budget (`per_dispatch`) and the cosine-only pipeline then carries none of the light side's code.
+//! Both draw Owen-scrambled Sobol points indexed by the global sample index, so a frame's image does not
+//! depend on how its samples are split. Inputs: the G-buffer (primary hits), the scene and BVH buffers,
+//! and the direct image for the combined component. Outputs: Σ L_k / N (RGBA32F, plus the direct image
+//! when asked) and Σ L_k² / N, accumulated over dispatches of at most `per_dispatch` samples (lavapipe's
+//! loop limit).
 
 use super::FrameInputs;
 use crate::bindings::*;
 use crate::bvh::GpuBvh;
+use crate::frame::ReferenceEstimator;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
 use crate::shader_types::GatherPush;
@@ -17,7 +23,8 @@ use bounce_device::sync::Access;
 use bounce_device::{Binding, ComputePipeline, Gpu, Image, Sampler};
 
 pub struct Reference {
-    pipeline: ComputePipeline,
+    mis: ComputePipeline,
+    cosine: ComputePipeline,
     sampler: Sampler,
 }
 
@@ -44,16 +51,26 @@ impl Reference {
         let push = std::mem::size_of::<GatherPush>() as u32;
         let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
         let pipeline =
-            ComputePipeline::new(gpu, "reference", &crate::spirv(shaders::REFERENCE_COMP), &bindings, push, &spec)?;
-        Ok(Reference { pipeline, sampler: Sampler::nearest(gpu)? })
+            |name, spirv: &[u8]| ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &spec);
+        Ok(Reference {
+            mis: pipeline("reference", shaders::REFERENCE_COMP)?,
+            cosine: pipeline("reference.cosine", shaders::REFERENCE_COSINE_COMP)?,
+            sampler: Sampler::nearest(gpu)?,
+        })
     }
 
-    /// Samples one dispatch may take under the device's loop iteration limit.
-    pub fn per_dispatch(gpu: &Gpu, bvh: &GpuBvh, lights: u32) -> u32 {
-        match gpu.loop_iteration_limit {
-            Some(limit) => (limit.saturating_sub(64) / ((1 + lights) * bvh.max_iterations_per_ray() + 8)).max(1),
-            None => u32::MAX,
-        }
+    /// Samples one dispatch may take under the device's loop iteration limit. Per sample an invocation
+    /// traces 1 + lights rays per strategy (a first hit, the shadow rays at y; under MIS the light
+    /// side's x ↔ y ray replaces the drawing light's own), loops ≤ 32 times per Sobol point, and over the
+    /// lights twice more under MIS (the pick, the densities), plus 8 for the rest.
+    pub fn per_dispatch(gpu: &Gpu, bvh: &GpuBvh, lights: u32, estimator: ReferenceEstimator) -> u32 {
+        let Some(limit) = gpu.loop_iteration_limit else { return u32::MAX };
+        let strategies = match estimator {
+            ReferenceEstimator::Mis => 2,
+            ReferenceEstimator::Cosine => 1,
+        };
+        let per_sample = strategies * ((1 + lights) * bvh.max_iterations_per_ray() + 32 + 2 * lights) + 8;
+        (limit.saturating_sub(64 + lights) / per_sample).max(1)
     }
 
     /// Samples `push.first..push.last` of `push.samples` into `sum` and `sq` (overwritten when
@@ -68,8 +85,13 @@ impl Reference {
         sum: &mut Handle<Image>,
         sq: &mut Handle<Image>,
         push: GatherPush,
+        estimator: ReferenceEstimator,
         per_dispatch: u32,
     ) {
+        let pipeline = match estimator {
+            ReferenceEstimator::Mis => &self.mis,
+            ReferenceEstimator::Cosine => &self.cosine,
+        };
         let (hs, hq) = (*sum, *sq);
         let mut b = g
             .add_pass("reference")
@@ -110,13 +132,7 @@ impl Reference {
                     ctx.serialize(&hs);
                     ctx.serialize(&hq);
                 }
-                self.pipeline.dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&p),
-                    [f.width, f.height, 1],
-                    [WG_2D, WG_2D, 1],
-                );
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
                 first = last;
                 if first >= push.last {
                     break;

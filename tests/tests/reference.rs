@@ -1,0 +1,227 @@
+//! `--method reference`, both estimators (`glsl/reference.comp`): the two-strategy MIS (cosine at x,
+//! light side at y, balance heuristic) and the cosine strategy alone, against
+//! - the closed form inside a sphere (one light, and two lights of different colour and power: the light
+//!   strategy picks by luminance, so a wrong P(l) in either density shows up as a wrong channel);
+//! - the independent CPU one-bounce tracer (`bounce_oracles::cpu_ref`) on the Cornell box, with its
+//!   light, and with two more lights, one of them behind the back wall (it draws points that light x
+//!   does not reach: the two-sided density without the radiance);
+//! - each other: the mean of the MIS estimator over seeds agrees with the cosine estimator's within
+//!   their combined standard errors;
+//! - themselves: a frame's image does not depend on how its samples are split into submissions.
+
+use super::vpl::sphere_scene;
+use bounce_graph::frame::{Component, FrameSettings, Method, ReferenceEstimator, Renderer};
+use bounce_graph::scene::{point_light, Scene};
+use bounce_tests::TestGpu;
+use glam::Vec3;
+use std::f32::consts::PI;
+
+const ESTIMATORS: [ReferenceEstimator; 2] = [ReferenceEstimator::Mis, ReferenceEstimator::Cosine];
+
+fn name(e: ReferenceEstimator) -> &'static str {
+    match e {
+        ReferenceEstimator::Mis => "mis",
+        ReferenceEstimator::Cosine => "cosine",
+    }
+}
+
+/// The reference's indirect image: `spp` samples of estimator `e`, `w` × `h`.
+fn reference(r: &mut Renderer, e: ReferenceEstimator, spp: u32, seed: u64, w: u32, h: u32) -> Vec<[f32; 3]> {
+    reference_with(r, FrameSettings { reference_estimator: e, spp, seed, ..FrameSettings::default() }, w, h)
+}
+
+fn reference_with(r: &mut Renderer, base: FrameSettings, w: u32, h: u32) -> Vec<[f32; 3]> {
+    // The light-map sizes do not matter to the reference; small ones keep the frame's other passes cheap.
+    let s = FrameSettings {
+        width: w,
+        height: h,
+        component: Component::Indirect,
+        method: Method::Reference,
+        dprsm_res: 32,
+        voxels: 32,
+        shadow_res: 64,
+        ..base
+    };
+    let f = r.render(&s).unwrap();
+    assert!(f.radiance.iter().all(|p| p.iter().all(|c| c.is_finite())), "non-finite radiance");
+    f.radiance.iter().map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+fn channel_mean(img: &[[f32; 3]], c: usize) -> f64 {
+    img.iter().map(|p| p[c] as f64).sum::<f64>() / img.len() as f64
+}
+
+/// Inside a closed sphere the bounce radiance is ρ²·ΣI/(πR²) per channel everywhere (tests/tests/vpl.rs),
+/// whatever the lights' positions: with one light, and with a second of another colour and power.
+#[test]
+fn both_estimators_match_the_sphere_closed_form_with_one_and_two_lights() {
+    let (radius, rho) = (1.0f32, 0.5f32);
+    let one = sphere_scene(radius, 48, rho, Vec3::new(0.25, 0.3, -0.15), 2.0);
+    let mut two = one.clone();
+    two.lights.push(point_light(Vec3::new(-0.4, -0.5, 0.2), Vec3::new(0.3, 1.2, 4.0)));
+    let gpu = TestGpu::new();
+    for scene in [&one, &two] {
+        let total: Vec3 = scene.lights.iter().map(|l| Vec3::from_slice(&l.intensity[..3])).sum();
+        let want = total * rho * rho / (PI * radius * radius);
+        let mut r = Renderer::new(&gpu, scene).unwrap();
+        for e in ESTIMATORS {
+            let img = reference(&mut r, e, 64, 1, 16, 16);
+            for c in 0..3 {
+                let (m, w) = (channel_mean(&img, c), want[c] as f64);
+                eprintln!(
+                    "{} reference, sphere, {} light(s), channel {c}: {m:.5} vs closed form {w:.5} ({:+.2}%)",
+                    name(e),
+                    scene.lights.len(),
+                    100.0 * (m - w) / w
+                );
+                // 1 %: the tessellation's 0.5 % (see sphere_closed_form_all_and_uniform) and the noise of
+                // 64 samples averaged over 256 pixels (below 0.3 % for either estimator here).
+                assert!(((m - w) / w).abs() < 0.01, "{}: {m} vs {w}", name(e));
+            }
+        }
+    }
+}
+
+/// The Cornell box with two more lights: a coloured one inside, and one behind the back wall.
+fn cornell_three_lights() -> Scene {
+    let mut scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let p = Vec3::from_slice(&scene.lights[0].position[..3]);
+    scene.lights.push(point_light(p + Vec3::new(-0.5, -0.9, 0.3), Vec3::new(1.0, 0.6, 0.2)));
+    scene.lights.push(point_light(p + Vec3::new(0.3, -0.8, -1.5), Vec3::new(2.0, 2.0, 2.0)));
+    scene
+}
+
+/// Each estimator against the independent CPU one-bounce tracer on the Cornell box (one light; three).
+#[test]
+fn both_estimators_match_the_cpu_tracer_in_the_cornell_box() {
+    let gpu = TestGpu::new();
+    let (w, h) = (20, 20);
+    for scene in [Scene::load(&bounce_tests::default_scene()).unwrap(), cornell_three_lights()] {
+        let bvh = bounce_oracles::cpu_ref::Bvh::new(&scene);
+        let cpu: Vec<[f32; 3]> =
+            bounce_oracles::cpu_ref::render_indirect(&scene, &bvh, w, h, 1024, 5).iter().map(|(m, _)| *m).collect();
+        let mut r = Renderer::new(&gpu, &scene).unwrap();
+        for e in ESTIMATORS {
+            let img = reference(&mut r, e, 512, 1, w, h);
+            let (mg, mc) = (bounce_tests::mean(&img), bounce_tests::mean(&cpu));
+            let err = bounce_tests::rel_mse(&img, &cpu);
+            eprintln!(
+                "{} reference vs cpu tracer, Cornell box, {} light(s): mean {mg:.5} vs {mc:.5} ({:+.2}%), relMSE {err:.4}",
+                name(e),
+                scene.lights.len(),
+                100.0 * (mg - mc) / mc
+            );
+            // The 1024-sample CPU tracer carries relMSE ≈ 0.0066 of noise on the one-light box; the
+            // 512-sample cosine estimate about as much again (stratified: less than twice its 1024's),
+            // the MIS estimate far less. The image means agree to about 1 %.
+            assert!(err <= 0.03, "{}: relMSE {err} between two unbiased estimates of one integral", name(e));
+            assert!(((mg - mc) / mc).abs() <= 0.03, "{}: means {mg} vs {mc}", name(e));
+        }
+    }
+}
+
+/// The MIS estimator's image mean over K seeds against the cosine estimator's: two unbiased estimators
+/// of one integral, so their difference is within 4 combined standard errors (of the means over
+/// seeds: stratified samples are not independent within a frame, but the seeds' frames are).
+#[test]
+fn the_mis_and_cosine_means_agree_within_their_standard_errors() {
+    let scene = cornell_three_lights();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let k = 12;
+    let mut stats = vec![];
+    for e in ESTIMATORS {
+        let means: Vec<f64> = (0..k).map(|seed| bounce_tests::mean(&reference(&mut r, e, 16, seed, 16, 16))).collect();
+        let m = means.iter().sum::<f64>() / k as f64;
+        let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64;
+        eprintln!("{}: image mean {m:.5} ± {:.5} over {k} seeds", name(e), (var / k as f64).sqrt());
+        stats.push((m, var / k as f64));
+    }
+    let ((m0, v0), (m1, v1)) = (stats[0], stats[1]);
+    let se = (v0 + v1).sqrt();
+    assert!((m0 - m1).abs() <= 4.0 * se, "mis {m0} vs cosine {m1}: {} standard errors", (m0 - m1).abs() / se);
+}
+
+/// The samples of a frame are indexed globally, so splitting them into other submissions gives the same
+/// image, bit for bit (each sample is added to the image in order of its index); a seed gives one image,
+/// another seed another.
+#[test]
+fn a_reference_frame_does_not_depend_on_its_chunks() {
+    let scene = cornell_three_lights();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    for e in ESTIMATORS {
+        let mut run = |chunk: Option<u32>, seed| {
+            let s = FrameSettings {
+                reference_estimator: e,
+                spp: 13,
+                seed,
+                reference_chunk: chunk.and_then(std::num::NonZeroU32::new),
+                ..FrameSettings::default()
+            };
+            reference_with(&mut r, s, 16, 16)
+        };
+        let whole = run(Some(13), 3);
+        for chunk in [None, Some(1), Some(5)] {
+            assert!(run(chunk, 3) == whole, "{}: chunks of {chunk:?} gave another image", name(e));
+        }
+        assert!(run(None, 4) != whole, "{}: another seed gave the same image", name(e));
+    }
+}
+
+/// The sample points (`glsl/shared/owen_sobol.glsl`, run on the GPU by `glsl/test/owen_sobol.comp`):
+/// in [0, 1); every power-of-two prefix of a 2D set, and an aligned block further on, is a (0, m, 2)-net
+/// (exactly one point in each 2^a × 2^(m−a) elementary box, for every a); the 1D set's prefixes fall one
+/// per 1/2^m interval; and other seeds (pixels) give other points.
+#[test]
+fn the_sample_points_are_stratified_in_every_power_of_two_prefix() {
+    use bounce_device::sync::Access;
+    use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites};
+    use bounce_graph::bindings::{B_TEST_IN, B_TEST_OUT, WG_1D};
+    let gpu = TestGpu::new();
+    let (n, seeds) = (1024u32, [0u32, 1, 0x2545F491, 0xdeadbeef]);
+    let inputs: Vec<[u32; 2]> = seeds.iter().flat_map(|&s| (0..n).map(move |i| [i, s])).collect();
+    let p = ComputePipeline::new(
+        &gpu,
+        "owen_sobol",
+        &bounce_graph::spirv(bounce_graph::shaders::OWEN_SOBOL_COMP),
+        &[Binding::storage_buffer(B_TEST_IN), Binding::storage_buffer(B_TEST_OUT)],
+        0,
+        &[],
+    )
+    .unwrap();
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let inb = Buffer::with_data(&gpu, "owen_sobol in", storage, bytemuck::cast_slice(&inputs)).unwrap();
+    let outb = Buffer::new(&gpu, &BufferDesc::storage("owen_sobol out", 16 * inputs.len() as u64)).unwrap();
+    gpu.submit(|cmd| {
+        let w = DescriptorWrites::new().storage_buffer(B_TEST_IN, &inb).storage_buffer(B_TEST_OUT, &outb);
+        p.dispatch(cmd, &w, &[], [inputs.len() as u32, 1, 1], [WG_1D, 1, 1]);
+    })
+    .unwrap();
+    let got: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());
+    assert!(got.iter().all(|q| q[..3].iter().all(|&v| (0.0..1.0).contains(&v))), "a point outside [0, 1)");
+    let is_net = |pts: &[[f32; 4]], m: u32| {
+        (0..=m).all(|a| {
+            let (nx, ny) = (1u32 << a, 1u32 << (m - a));
+            let mut cells = vec![0u32; 1 << m];
+            for q in pts {
+                let (cx, cy) = ((q[0] * nx as f32) as u32, (q[1] * ny as f32) as u32);
+                cells[(cy * nx + cx) as usize] += 1;
+            }
+            cells.iter().all(|&c| c == 1)
+        })
+    };
+    for (s, pts) in seeds.iter().zip(got.chunks(n as usize)) {
+        for m in 0..=10 {
+            let prefix = &pts[..1 << m];
+            assert!(is_net(prefix, m), "seed {s:#x}: the first 2^{m} points are not a (0, {m}, 2)-net");
+            let mut cells = vec![0u32; 1 << m];
+            prefix.iter().for_each(|q| cells[(q[2] * (1u32 << m) as f32) as usize] += 1);
+            assert!(cells.iter().all(|&c| c == 1), "seed {s:#x}: the 1D set's first 2^{m} points are not stratified");
+        }
+        assert!(is_net(&pts[256..512], 8), "seed {s:#x}: points 256..512 are not a (0, 8, 2)-net");
+    }
+    let (a, b) = (&got[..n as usize], &got[n as usize..2 * n as usize]);
+    let same = a.iter().zip(b).filter(|(p, q)| p[0] == q[0] || p[1] == q[1]).count();
+    assert!(same <= 4, "seeds 0 and 1 share {same} of {n} coordinates");
+}
