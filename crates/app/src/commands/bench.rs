@@ -22,6 +22,7 @@ use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
 use bounce_graph::frame::progressive::render_for;
+use bounce_graph::frame::settings::ReferenceEstimator;
 use bounce_graph::frame::{Component, FrameOutput, FrameSettings, LightMap, Method, Renderer, Visibility};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -168,6 +169,9 @@ impl Reference {
         let parent =
             scene.parent().and_then(|p| p.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let mut kind = self.kind();
+        if base.reference_estimator == ReferenceEstimator::Mis && self != Reference::All {
+            kind += "-mis"; // caches of earlier runs, named without it, hold the cosine estimator
+        }
         if self == Reference::All {
             match base.light_map {
                 LightMap::Dprsm => {}
