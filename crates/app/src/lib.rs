@@ -84,6 +84,8 @@ pub enum VisibilityArg {
     Psm,
     /// The shared set of `psm` with exact shadow rays (the maps' own error).
     PsmExact,
+    /// Exact shadow rays traced only through the voxel grid's occupied cells (`exact`'s answer).
+    Hybrid,
 }
 
 fn visibility_of(v: VisibilityArg) -> Visibility {
@@ -92,6 +94,7 @@ fn visibility_of(v: VisibilityArg) -> Visibility {
         VisibilityArg::Exact => Visibility::Exact,
         VisibilityArg::Psm => Visibility::Psm,
         VisibilityArg::PsmExact => Visibility::PsmExact,
+        VisibilityArg::Hybrid => Visibility::Hybrid,
     }
 }
 
