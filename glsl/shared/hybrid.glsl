@@ -17,82 +17,93 @@
 // look, never what is hit.
 //
 // Work bound (llvmpipe's per-invocation loop limit): the march takes at most dims.x + dims.y + dims.z + 3
-// iterations, and at most HYBRID_MAX_TRACES traversals of at most max_iterations_per_ray each: once
-// HYBRID_MAX_TRACES − 1 runs are traced, the last traversal covers everything from the next run to tmax.
+// iterations in all, plus at most HYBRID_MAX_TRACES iterations of the loop over runs, and at most
+// HYBRID_MAX_TRACES traversals of at most max_iterations_per_ray each: once HYBRID_MAX_TRACES − 1 runs are
+// traced, the last traversal covers everything from the next occupied cell to tmax.
 #ifndef BOUNCE_HYBRID_GLSL
 #define BOUNCE_HYBRID_GLSL
 
-// Trace the parameter interval [lo, hi] ∩ (tmin, tmax) of the ray; < 0 when nothing is hit there.
-float hybrid_trace_run(vec3 o, vec3 d, float lo, float hi, float tmin, float tmax, bool any_hit, out uint tri,
-                       out vec2 bary) {
-    float a = max(lo, tmin);
-    float b = min(hi, tmax);
-    tri = BVH_NO_TRI;
-    bary = vec2(0.0);
-    if (!(b > a)) return -1.0;
-    return bvh_trace(o, d, a, b, any_hit, tri, bary);
+// The march's state along the ray, in grid units: a + t·gd, t clipped to [t0, t1]; `cell` the current cell,
+// entered at parameter `enter`; `n` the cells tested so far (bounded by dims.x + dims.y + dims.z + 3 over
+// all calls, as voxel_visibility's march); `ended` once the march has left the grid or passed t1.
+struct HybridMarch {
+    vec3 a, gd, invd;
+    bvec3 moving;
+    float t1, enter;
+    ivec3 cell, step;
+    int n;
+    bool ended;
+};
+
+// Advance to the end of the next run of occupied cells (to the end of the march when `to_end`): its
+// interval [lo, hi] (hi is where the run was left, or t1), or false when no occupied cell is left.
+bool hybrid_next_run(inout HybridMarch m, bool to_end, out float lo, out float hi) {
+    ivec3 dims = ivec3(frame.voxel_dims.xyz);
+    int max_steps = dims.x + dims.y + dims.z + 3;
+    lo = -1.0;
+    hi = m.t1;
+    for (; !m.ended && m.n < max_steps; m.n++) {
+        bool occupied = voxel_occupied(m.cell);
+        if (occupied && lo < 0.0) lo = m.enter;
+        if (!occupied && lo >= 0.0 && !to_end) {
+            hi = m.enter;
+            return true;
+        }
+        // Step through the nearest exit plane (x before y before z on ties), as voxel_visibility does.
+        float tx = voxel_exit_t(m.cell.x, m.a.x, m.gd.x, m.invd.x, m.moving.x);
+        float ty = voxel_exit_t(m.cell.y, m.a.y, m.gd.y, m.invd.y, m.moving.y);
+        float tz = voxel_exit_t(m.cell.z, m.a.z, m.gd.z, m.invd.z, m.moving.z);
+        float best = min(tx, min(ty, tz));
+        int k = tx <= ty && tx <= tz ? 0 : (ty <= tz ? 1 : 2);
+        m.enter = best;
+        m.cell[k] += m.step[k];
+        if (best > m.t1 || m.cell[k] < 0 || m.cell[k] >= dims[k]) m.ended = true;
+    }
+    m.ended = true;
+    return lo >= 0.0;
 }
 
 float hybrid_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint tri, out vec2 bary) {
     tri = BVH_NO_TRI;
     bary = vec2(0.0);
-    uvec3 du = frame.voxel_dims.xyz;
-    // No grid: nothing to skip.
-    if (du.x == 0u || du.y == 0u || du.z == 0u) return bvh_trace(o, d, tmin, tmax, any_hit, tri, bary);
     if (!voxel_finite(o) || !voxel_finite(d) || isnan(tmin) || isnan(tmax) || !(tmax > tmin)) return -1.0;
-    ivec3 dims = ivec3(du);
-    vec3 dimsf = vec3(du);
+    uvec3 du = frame.voxel_dims.xyz;
     float inv = voxel_rcp(frame.voxel_origin.w);
-    vec3 a = voxel_to_grid(o, inv);
-    vec3 gd = d * inv;
-    float len = length(gd);
-    if (!(len > 0.0) || isinf(len)) return bvh_trace(o, d, tmin, tmax, any_hit, tri, bary);
+    HybridMarch m;
+    m.a = voxel_to_grid(o, inv);
+    m.gd = d * inv;
+    float len = length(m.gd);
+    // No grid, or a ray the grid cannot step along: one traversal of the whole interval.
+    bool whole = du.x == 0u || du.y == 0u || du.z == 0u || !(len > 0.0) || isinf(len);
     // Half a cell of ray parameter: the growth of each run's interval.
     float margin = 0.5 / len;
-
     float t0 = tmin;
-    float t1 = tmax;
-    vec3 invd;
-    bvec3 moving;
+    m.t1 = tmax;
     bool outside = false;
-    voxel_clip_axis(a.x, gd.x, dimsf.x, t0, t1, invd.x, moving.x, outside);
-    voxel_clip_axis(a.y, gd.y, dimsf.y, t0, t1, invd.y, moving.y, outside);
-    voxel_clip_axis(a.z, gd.z, dimsf.z, t0, t1, invd.z, moving.z, outside);
-    if (outside || t0 > t1) return -1.0;
-
-    ivec3 cell = ivec3(clamp(floor(a + gd * t0), vec3(0.0), dimsf - 1.0));
-    ivec3 step = ivec3(gd.x > 0.0 ? 1 : -1, gd.y > 0.0 ? 1 : -1, gd.z > 0.0 ? 1 : -1);
-    int max_steps = dims.x + dims.y + dims.z + 3;
-    // The open run: its entry parameter (< 0: none open). `enter` is where the march entered `cell`.
-    float run = -1.0;
-    float enter = t0;
-    uint traces = 0u;
-    for (int n = 0; n < max_steps; n++) {
-        float tx = voxel_exit_t(cell.x, a.x, gd.x, invd.x, moving.x);
-        float ty = voxel_exit_t(cell.y, a.y, gd.y, invd.y, moving.y);
-        float tz = voxel_exit_t(cell.z, a.z, gd.z, invd.z, moving.z);
-        float best = min(tx, min(ty, tz));
-        int m = tx <= ty && tx <= tz ? 0 : (ty <= tz ? 1 : 2);
-        bool last = best > t1;
-        if (voxel_occupied(cell)) {
-            if (run < 0.0) run = enter;
-            if (traces + 1u == uint(HYBRID_MAX_TRACES)) {
-                // The last traversal allowed: everything from this run on.
-                return hybrid_trace_run(o, d, run - margin, tmax, tmin, tmax, any_hit, tri, bary);
-            }
-        } else if (run >= 0.0) {
-            float t = hybrid_trace_run(o, d, run - margin, enter + margin, tmin, tmax, any_hit, tri, bary);
-            if (t >= 0.0) return t;
-            traces++;
-            run = -1.0;
+    vec3 dimsf = vec3(du);
+    voxel_clip_axis(m.a.x, m.gd.x, dimsf.x, t0, m.t1, m.invd.x, m.moving.x, outside);
+    voxel_clip_axis(m.a.y, m.gd.y, dimsf.y, t0, m.t1, m.invd.y, m.moving.y, outside);
+    voxel_clip_axis(m.a.z, m.gd.z, dimsf.z, t0, m.t1, m.invd.z, m.moving.z, outside);
+    m.ended = outside || t0 > m.t1;
+    if (!whole && m.ended) return -1.0;
+    m.enter = t0;
+    m.cell = ivec3(clamp(floor(m.a + m.gd * t0), vec3(0.0), max(dimsf - 1.0, vec3(0.0))));
+    m.step = ivec3(m.gd.x > 0.0 ? 1 : -1, m.gd.y > 0.0 ? 1 : -1, m.gd.z > 0.0 ? 1 : -1);
+    m.n = 0;
+    // One traversal per run, the last one allowed covering every run left: one call site of bvh_trace
+    // (each inlined copy of its loop and stack costs llvmpipe registers and time).
+    for (uint k = 0u; k < uint(HYBRID_MAX_TRACES); k++) {
+        float lo = tmin, hi = tmax;
+        if (!whole) {
+            bool last = k + 1u == uint(HYBRID_MAX_TRACES);
+            if (!hybrid_next_run(m, last, lo, hi)) return -1.0;
+            lo = max(lo - margin, tmin);
+            hi = last || m.ended ? tmax : min(hi + margin, tmax);
         }
-        if (last) break;
-        enter = best;
-        cell[m] += step[m];
-        if (cell[m] < 0 || cell[m] >= dims[m]) break;
+        float t = -1.0;
+        if (hi > lo) t = bvh_trace(o, d, lo, hi, any_hit, tri, bary);
+        if (t >= 0.0 || whole || m.ended) return t;
     }
-    // A run still open where the march left the grid or reached t1.
-    if (run >= 0.0) return hybrid_trace_run(o, d, run - margin, t1 + margin, tmin, tmax, any_hit, tri, bary);
     return -1.0;
 }
 

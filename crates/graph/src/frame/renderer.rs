@@ -232,8 +232,9 @@ impl RenderContext {
         let faces = s.light_map.faces() * self.scene.light_count;
         let grid_march = dims.x + dims.y + dims.z + 3;
         let march = match (s.visibility, self.bvh.as_ref()) {
-            // The grid march, then at most HYBRID_MAX_TRACES traversals (glsl/shared/hybrid.glsl).
-            (Visibility::Hybrid, Some(b)) => grid_march + HYBRID_MAX_TRACES * b.max_iterations_per_ray(),
+            // The grid march, then at most HYBRID_MAX_TRACES runs, each one loop iteration to find (besides
+            // the march's cells), one of the loop over runs and one traversal (glsl/shared/hybrid.glsl).
+            (Visibility::Hybrid, Some(b)) => grid_march + HYBRID_MAX_TRACES * (2 + b.max_iterations_per_ray()),
             (v, Some(b)) if v.uses_bvh() => b.max_iterations_per_ray(),
             _ => grid_march,
         };
