@@ -15,5 +15,6 @@ mod lightmaps;
 mod psm;
 mod stress;
 mod validation;
+mod visibility;
 mod voxelize;
 mod vpl;
