@@ -94,12 +94,8 @@ fn hybrid_sampled_and_mis_are_exact() {
 #[test]
 fn hybrid_has_no_seams_at_junctions() {
     let mut scene = stress_scene("box-on-floor");
-    scene.camera = Camera {
-        eye: Vec3::new(0.9, 0.9, 0.9),
-        target: Vec3::new(-1.6, 0.1, -1.6),
-        up: Vec3::Y,
-        fov_y_deg: 50.0,
-    };
+    scene.camera =
+        Camera { eye: Vec3::new(0.9, 0.9, 0.9), target: Vec3::new(-1.6, 0.1, -1.6), up: Vec3::Y, fov_y_deg: 50.0 };
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (me, mv, _) = hybrid_matches_exact("box-on-floor junctions", &mut r, Method::All);
@@ -129,15 +125,18 @@ fn hybrid_does_not_leak_through_thin_walls() {
         tris.extend(q(a, b, c, d));
     }
     let albedo = vec![Vec3::splat(0.7); tris.len()];
-    let camera =
-        Camera { eye: v(-2.8, 1.3, -1.3), target: v(0.0, 0.9, 0.6), up: Vec3::Y, fov_y_deg: 70.0 };
+    let camera = Camera { eye: v(-2.8, 1.3, -1.3), target: v(0.0, 0.9, 0.6), up: Vec3::Y, fov_y_deg: 70.0 };
     let scene = Scene::from_triangles(&tris, &albedo, camera, &[point_light(v(1.8, 1.6, -0.6), Vec3::splat(6.0))]);
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let hybrid = render(&mut r, &settings(Method::All, Visibility::Hybrid));
     let voxel = render(&mut r, &settings(Method::All, Visibility::Voxel));
     let lit = hybrid.iter().flatten().filter(|c| **c != 0.0).count();
-    eprintln!("sealed wall: hybrid mean {:.3e}, voxel mean {:.3e}", bounce_tests::mean(&hybrid), bounce_tests::mean(&voxel));
+    eprintln!(
+        "sealed wall: hybrid mean {:.3e}, voxel mean {:.3e}",
+        bounce_tests::mean(&hybrid),
+        bounce_tests::mean(&voxel)
+    );
     assert_eq!(lit, 0, "{lit} channels of the sealed room are lit through the wall");
 
     let scene = stress_scene("doorway");
