@@ -6,8 +6,11 @@
 // VPL estimate. See crates/graph/src/passes/gather.rs for the sampling mixture.
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
-#ifdef EXACT_VISIBILITY
+#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
 #include "shared/bvh.glsl"
+#endif
+#ifdef HYBRID_VISIBILITY
+#include "shared/hybrid.glsl"
 #endif
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;

@@ -29,8 +29,11 @@
 // MIS_CONSISTENT or MIS_THESIS; `rays` n_g). Dispatch ⌈W/8⌉ × ⌈H/8⌉.
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
-#ifdef EXACT_VISIBILITY
+#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
 #include "shared/bvh.glsl"
+#endif
+#ifdef HYBRID_VISIBILITY
+#include "shared/hybrid.glsl"
 #endif
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
@@ -90,13 +93,18 @@ Patch patch_of(uint v, Vpl vpl) {
     return q;
 }
 
-// The first hit of the gathering ray from x along unit d: voxel march, or the BVH.
+// The first hit of the gathering ray from x along unit d: voxel march, or the BVH (hybrid: the BVH through
+// the grid's occupied cells, the same hit).
 bool gathering_first_hit(vec3 x, vec3 nx, vec3 d, out vec3 hit) {
-#ifdef EXACT_VISIBILITY
+#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
     uint tri;
     vec2 bary;
     float lift = surface_lift(x, frame.scene_min.w);
+#ifdef HYBRID_VISIBILITY
+    float th = hybrid_trace(x + nx * lift, d, 0.0, 1e30, false, tri, bary);
+#else
     float th = bvh_closest(x + nx * lift, d, 1e30, tri, bary);
+#endif
     hit = x + nx * lift + d * max(th, 0.0);
     return th > 0.0;
 #else

@@ -55,16 +55,19 @@ const SHADERS: &[Shader] = &[
     file("cdf_reduce.comp"),
     file("psm.comp"),
     // gather and mis, each with its visibility variants: `--visibility exact` (shadow rays against the BVH
-    // instead of the voxel march), `psm` (the frame's shared VPL set and its shadow maps) and `psm-exact`
-    // (the shared set with exact shadow rays: the reference for the maps' own visibility error).
+    // instead of the voxel march), `psm` (the frame's shared VPL set and its shadow maps), `psm-exact`
+    // (the shared set with exact shadow rays: the reference for the maps' own visibility error) and `hybrid`
+    // (the exact rays traced only through the voxel grid's occupied cells).
     file("gather.comp"),
     variant("gather.exact.comp", "gather.comp", &["EXACT_VISIBILITY"]),
     variant("gather.psm.comp", "gather.comp", &["PSM_VISIBILITY"]),
     variant("gather.psm_exact.comp", "gather.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
+    variant("gather.hybrid.comp", "gather.comp", &["HYBRID_VISIBILITY"]),
     file("mis.comp"),
     variant("mis.exact.comp", "mis.comp", &["EXACT_VISIBILITY"]),
     variant("mis.psm.comp", "mis.comp", &["PSM_VISIBILITY"]),
     variant("mis.psm_exact.comp", "mis.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
+    variant("mis.hybrid.comp", "mis.comp", &["HYBRID_VISIBILITY"]),
     // The reference: two-strategy MIS (cosine at x, light side at y), and the cosine strategy alone
     // (`--reference-estimator cosine`).
     file("reference.comp"),

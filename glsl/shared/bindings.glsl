@@ -103,6 +103,9 @@ const uint CDF_HEADER = 4u;
 #define BVH_NO_TRI 0xFFFFFFFFu
 // Relative end epsilon of bvh_occluded (the CPU reference uses the same value in f64: bounce_oracles::cpu_ref::SHADOW_EPS).
 const float BVH_SHADOW_EPS = 1e-4;
+// `--visibility hybrid` (shared/hybrid.glsl): most BVH traversals one trace makes, one per run of occupied
+// cells, the last one covering every run left (Renderer::vpls_per_dispatch counts them).
+#define HYBRID_MAX_TRACES 4
 
 // ---- reference: the exact one-bounce integrator --------------------------------------------------------
 #define B_REF_SQ 28

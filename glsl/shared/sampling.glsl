@@ -89,16 +89,22 @@ uint draw_vpl(inout uint rng, out float prob) {
 // its light. Not the VPL along its normal: a VPL exactly on an edge of a closed box (a light at the
 // box's centre puts texel rays exactly through its edges) lifted along one face's normal stays in the
 // other face's plane, and its shadow rays left the box through that face (a sealed light leaked).
-// Towards the light is always into the free space the light saw it from.
+// Towards the light is always into the free space the light saw it from. With HYBRID_VISIBILITY (the
+// `*.hybrid.comp` variants, `--visibility hybrid`) the same shadow ray, traced only through the grid's
+// occupied cells (shared/hybrid.glsl): the same answer.
 vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
     Vpl vpl = vpl_fetch(v);
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return c;
-#ifdef EXACT_VISIBILITY
+#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
     float lx = surface_lift(x, frame.scene_min.w), lv = surface_lift(vpl.position, frame.scene_min.w);
     vec3 light = lights[v / (lm_faces() * frame.size.w * frame.size.w)].position.xyz;
     vec3 lifted = vpl.position + normalize(light - vpl.position) * lv;
+#ifdef HYBRID_VISIBILITY
+    return hybrid_occluded_lifted(x + nx * lx, lifted) ? vec3(0.0) : c;
+#else
     return bvh_occluded_lifted(x + nx * lx, lifted) ? vec3(0.0) : c;
+#endif
 #else
     return c * voxel_visibility(x, nx, vpl.position, vpl.normal);
 #endif

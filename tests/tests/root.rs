@@ -16,5 +16,6 @@ mod psm;
 mod reference;
 mod stress;
 mod validation;
+mod visibility;
 mod voxelize;
 mod vpl;

@@ -111,6 +111,11 @@ pub const VISIBILITIES: Choices<Visibility> = Choices(&[
         "Per-VPL paraboloid shadow maps (thesis ch. 6) for one shared set of --vpls VPLs per frame",
     ),
     ("psm-exact", Visibility::PsmExact, "The shared set of `psm` with exact shadow rays (the maps' own error)"),
+    (
+        "hybrid",
+        Visibility::Hybrid,
+        "Exact shadow rays traced only through the voxel grid's runs of occupied cells (exact's answer)",
+    ),
 ]);
 
 /// `rsm`'s field of view here is a placeholder: [`FrameArgs::settings`] puts `--rsm-fov` in.

@@ -8,7 +8,8 @@
 use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
 use super::recipe::{build_frame, seed32, RecipeInputs};
-use super::settings::{reject, Component, FrameSettings, LightMap, Method, SettingsError};
+use super::settings::{reject, Component, FrameSettings, LightMap, Method, SettingsError, Visibility};
+use crate::bindings::HYBRID_MAX_TRACES;
 use crate::bvh::GpuBvh;
 use crate::camera::Camera;
 use crate::gpu_scene::GpuScene;
@@ -231,9 +232,13 @@ impl RenderContext {
         // Sampling adds loops over the CDF sections and, with uniform face choice, over the faces.
         let sections = 1 + self.importance_params(s).kind.method_sections();
         let faces = s.light_map.faces() * self.scene.light_count;
+        let grid_march = dims.x + dims.y + dims.z + 3;
         let march = match (s.visibility, self.bvh.as_ref()) {
+            // The grid march, then at most HYBRID_MAX_TRACES runs, each one loop iteration to find (besides
+            // the march's cells), one of the loop over runs and one traversal (glsl/shared/hybrid.glsl).
+            (Visibility::Hybrid, Some(b)) => grid_march + HYBRID_MAX_TRACES * (2 + b.max_iterations_per_ray()),
             (v, Some(b)) if v.uses_bvh() => b.max_iterations_per_ray(),
-            _ => dims.x + dims.y + dims.z + 3,
+            _ => grid_march,
         };
         let per_vpl = march + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
         // MIS: a CDF sample adds one march (its gathering indicator); a gathering ray marches once to
@@ -371,6 +376,7 @@ impl RenderContext {
         let traced = s.visibility.uses_bvh() || (s.method == Method::Reference && s.component != Component::Direct);
         FrameInputs {
             bvh: if traced { self.bvh.as_ref() } else { None },
+            hybrid: s.visibility == Visibility::Hybrid,
             scene: &self.scene,
             uniforms,
             width: s.width,

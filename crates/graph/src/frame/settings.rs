@@ -70,12 +70,15 @@ pub enum Visibility {
     Psm,
     /// The shared set of `Psm` with exact shadow rays: the maps' own error, on identical VPLs.
     PsmExact,
+    /// Exact shadow rays traced only through the voxel grid's runs of occupied cells
+    /// (`glsl/shared/hybrid.glsl`): `Exact`'s answer, with the march to skip empty space.
+    Hybrid,
 }
 
 impl Visibility {
     /// Whether the gather's shadow rays go through the BVH.
     pub fn uses_bvh(self) -> bool {
-        matches!(self, Visibility::Exact | Visibility::PsmExact)
+        matches!(self, Visibility::Exact | Visibility::PsmExact | Visibility::Hybrid)
     }
     /// Whether the frame gathers a shared VPL set (`Psm`, `PsmExact`).
     pub fn shared_set(self) -> bool {

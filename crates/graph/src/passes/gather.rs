@@ -4,7 +4,9 @@
 //!
 //! Φ_v is the VPL's reflected flux (see `dprsm.rs`); Φ_v · cos θ_v / π is its radiant intensity toward
 //! x (a Lambertian emitter). V comes from an Amanatides–Woo march through the voxel grid
-//! (`glsl/shared/voxel.glsl` states where the march starts and stops). Modes:
+//! (`glsl/shared/voxel.glsl` states where the march starts and stops), or from shadow rays against the
+//! BVH: everywhere (`--visibility exact`) or only through the grid's occupied cells (`hybrid`,
+//! `glsl/shared/hybrid.glsl`). Modes:
 //! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
 //! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
 //!   (converged) VPL estimate, against which every sampling method is judged.
@@ -35,6 +37,8 @@ pub struct Gather {
     psm: ComputePipeline,
     /// The `--visibility psm-exact` variant (the shared set with exact rays; binds the BVH).
     psm_exact: ComputePipeline,
+    /// The `--visibility hybrid` variant (exact rays through the grid's occupied cells; binds the BVH).
+    hybrid: ComputePipeline,
     sampler: Sampler,
 }
 
@@ -102,7 +106,11 @@ impl GatherInputs {
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         use shaders::*;
-        Self::with_shaders(gpu, "gather", [GATHER_COMP, GATHER_EXACT_COMP, GATHER_PSM_COMP, GATHER_PSM_EXACT_COMP])
+        Self::with_shaders(
+            gpu,
+            "gather",
+            [GATHER_COMP, GATHER_EXACT_COMP, GATHER_PSM_COMP, GATHER_PSM_EXACT_COMP, GATHER_HYBRID_COMP],
+        )
     }
 
     fn bindings() -> (Vec<Binding>, u32) {
@@ -119,11 +127,11 @@ impl Gather {
         (bindings, std::mem::size_of::<GatherPush>() as u32)
     }
 
-    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. The four
+    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. The five
     /// SPIR-V variants: voxel visibility; exact visibility (also binds the BVH); `psm` (also binds the
-    /// shared set and its maps); `psm-exact` (the shared set and the BVH).
-    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 4]) -> Result<Self> {
-        let [spirv, exact, psm, psm_exact] = spirv;
+    /// shared set and its maps); `psm-exact` (the shared set and the BVH); `hybrid` (binds the BVH).
+    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 5]) -> Result<Self> {
+        let [spirv, exact, psm, psm_exact, hybrid] = spirv;
         let (mut bindings, push) = Self::bindings();
         let mut b = bindings.clone();
         b.extend(crate::passes::psm::gather_bindings(true));
@@ -135,7 +143,8 @@ impl Gather {
         let pipeline = ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &[])?;
         bindings.extend(crate::bvh::GpuBvh::bindings());
         let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
-        Ok(Gather { name, pipeline, exact, psm, psm_exact, sampler: Sampler::nearest(gpu)? })
+        let hybrid = ComputePipeline::new(gpu, name, &crate::spirv(hybrid), &bindings, push, &[])?;
+        Ok(Gather { name, pipeline, exact, psm, psm_exact, hybrid, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
@@ -196,7 +205,7 @@ impl Gather {
                         s,
                     ),
                 ),
-                (None, Some(bvh)) => (&self.exact, bvh.writes(writes)),
+                (None, Some(bvh)) => (if f.hybrid { &self.hybrid } else { &self.exact }, bvh.writes(writes)),
                 (None, None) => (&self.pipeline, writes),
             };
             let chunk = f.vpls_per_dispatch.max(1);

@@ -63,9 +63,11 @@ pub struct FrameInputs<'a> {
     pub dprsm_res: u32,
     /// Faces of each light's VPL map (`--light-map`: 2 dprsm, 1 rsm, 6 cube).
     pub vpl_faces: u32,
-    /// The scene's BVH when the gather tests visibility with exact shadow rays (`--visibility exact`);
-    /// `None`: the voxel march.
+    /// The scene's BVH when the gather tests visibility with exact shadow rays (`--visibility exact`,
+    /// `hybrid`); `None`: the voxel march.
     pub bvh: Option<&'a crate::bvh::GpuBvh>,
+    /// With `bvh`: trace it only through the voxel grid's occupied cells (`--visibility hybrid`).
+    pub hybrid: bool,
     /// VPLs one gather dispatch may evaluate per pixel, so that no invocation exceeds the driver's loop
     /// iteration limit (`Gpu::loop_iteration_limit`); `u32::MAX` where there is none.
     pub vpls_per_dispatch: u32,
