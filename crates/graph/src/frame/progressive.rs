@@ -7,8 +7,9 @@
 //! built once and kept by the graph, and each later frame records only the gather.
 //!
 //! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
-//! upload). A frame is started only if the mean frame time so far says it ends within the budget; the
-//! first frame always runs.
+//! upload). A frame is started only if it should end within the budget, judged by the last frame's time;
+//! the first frame always runs, and so does a second while time is left (the first also built what the
+//! others reuse, so only the second tells what a frame costs).
 
 use super::renderer::{FrameOutput, Renderer};
 use super::settings::{FrameSettings, Method, SettingsError};
@@ -51,6 +52,7 @@ pub fn render_for(
     let t0 = Instant::now();
     let mut sum: Vec<[f64; 4]> = vec![];
     let (mut frames, mut gpu_ms) = (0u32, Some(0.0));
+    let mut previous = Duration::ZERO;
     let last = loop {
         let frame_s = FrameSettings {
             seed: s.seed.wrapping_add(frames as u64),
@@ -68,8 +70,12 @@ pub fn render_for(
         gpu_ms = gpu_ms.zip(f.gpu_ms()).map(|(a, b)| a + b);
         let elapsed = t0.elapsed();
         progress(frames, elapsed);
-        let per_frame = elapsed / frames;
-        if elapsed + per_frame > budget {
+        // The next frame costs about what the last one did. The first also built what the others
+        // reuse (voxel grid, maps, CDF), so it is no guide: a second frame runs whenever time is left.
+        let this_frame = elapsed - previous;
+        previous = elapsed;
+        let next_ends_late = if frames == 1 { elapsed >= budget } else { elapsed + this_frame > budget };
+        if next_ends_late {
             break f;
         }
     };
