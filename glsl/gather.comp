@@ -71,11 +71,12 @@ void main() {
 #endif
             }
 #else
-            uint base = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+            // Sample k is point k of the pixel's stratified set (draw_vpl): a seed per pixel decorrelates
+            // neighbours, and progressive frames (seed, seed + 1, …) are independent scrambles.
+            uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
             for (uint k = pc.first; k < pc.last; k++) {
-                uint rng = pcg_hash(base ^ pcg_hash(k + 0x9E3779B9u));
                 float prob;
-                uint v = draw_vpl(rng, prob);
+                uint v = draw_vpl(k, seed, prob);
                 if (prob > 0.0) sum += contribution(x, nx, ax, v) / prob;
             }
 #endif

@@ -2,10 +2,11 @@
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 // importance (gathering-based global CDF, thesis §7.3.4), two stages:
-//   IMP_GBG_SCATTER (one invocation per pixel): R cosine-distributed rays from the gather point, each
-//     marched through the voxel grid to its first occupied cell; the entry point P is projected into
-//     each light's DPRSM, and when that texel's VPL is the surface at P (the light sees it: within 3
-//     cells), the VPL's unshadowed contribution (luminance) is added to its sum and its hit count raised.
+//   IMP_GBG_SCATTER (one invocation per pixel): R cosine-distributed rays from the gather point (a
+//     stratified set per pixel), each marched through the voxel grid to its first occupied cell; the
+//     entry point P is projected into each light's DPRSM, and when that texel's VPL is the surface at P
+//     (the light sees it: within 3 cells), the VPL's unshadowed contribution (luminance) is added to its
+//     sum and its hit count raised.
 //     Sums are u64 fixed point (atomic adds of integers commute: the result does not depend on thread
 //     order, so a seed gives one image).
 //   IMP_GBG_RESOLVE (one invocation per texel): average = sum / count; texels holding a VPL that no ray
@@ -29,6 +30,7 @@ layout(std430, set = 0, binding = B_GBG_COUNT) buffer Counts { uint counts[]; };
 
 #include "shared/vpl.glsl"
 #include "shared/gathering.glsl"
+#include "shared/owen_sobol.glsl"
 
 void scatter(ivec2 px) {
     vec4 gp = texelFetch(g_position, px, 0);
@@ -36,10 +38,12 @@ void scatter(ivec2 px) {
     vec3 x = gp.xyz;
     vec3 n = texelFetch(g_normal, px, 0).xyz;
     vec3 a = texelFetch(g_albedo, px, 0).rgb;
-    uint rng = pcg_hash(pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x5bd1e995u);
+    // The rays are the pixel's stratified set (shared/owen_sobol.glsl): R directions spread over the
+    // hemisphere rather than clumped, so each pixel's few rays cover more of what it sees.
+    uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x5bd1e995u;
     for (uint r = 0u; r < pc.samples; r++) {
-        float u1 = rand01(rng), u2 = rand01(rng);
-        vec3 d = cosine_direction(n, u1, u2);
+        vec2 u = owen_sobol2(r, seed);
+        vec3 d = cosine_direction(n, u.x, u.y);
         // One march per ray (2 cells off the surface, the march's rule), then each light's VPL there.
         vec3 p;
         if (!gathering_hit(x, n, d, p)) continue;

@@ -180,14 +180,16 @@ void main() {
         vec3 x = gp.xyz;
         vec3 nx = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
-        uint base = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+        // Stratified per pixel (shared/owen_sobol.glsl): CDF sample k is point k of draw_vpl's sets and
+        // of the patch set, gathering ray j point j of the ray set; the pixel's seed decorrelates
+        // neighbours, and progressive frames (seed, seed + 1, …) are independent scrambles.
+        uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
         float n_c = float(pc.samples), n_g = float(max(pc.rays, 1u));
         bool thesis = pc.mode == MIS_THESIS;
         // Items [first, last) of n_c CDF samples followed by n_g gathering rays (so dispatches split
         // both under the loop iteration limit).
         for (uint k = pc.first; k < pc.last; k++) {
             if (k < pc.samples) {
-                uint rng = pcg_hash(base ^ pcg_hash(k + 0x9E3779B9u));
 #ifdef PSM_VISIBILITY
                 PsmView sv = psm_views[k];
                 float p_v = sv.normal_p.w;
@@ -200,7 +202,7 @@ void main() {
 #endif
 #else
                 float p_v;
-                uint v = draw_vpl(rng, p_v);
+                uint v = draw_vpl(k, seed, p_v);
                 if (!(p_v > 0.0)) continue;
                 vec3 c = contribution(x, nx, ax, v);
 #endif
@@ -212,7 +214,8 @@ void main() {
                     continue;
                 }
                 Patch q = patch_of(v, vpl);
-                vec3 y = q.c + (rand01(rng) - 0.5) * q.side * q.t1 + (rand01(rng) - 0.5) * q.side * q.t2;
+                vec2 uy = owen_sobol2(k, seed ^ 0x9B05688Cu) - 0.5;
+                vec3 y = q.c + uy.x * q.side * q.t1 + uy.y * q.side * q.t2;
                 float ap_g = area_times_gathering_density(x, nx, q, y);
                 if (ap_g > 0.0) {
                     vec3 hit, d = normalize(y - x);
@@ -222,8 +225,8 @@ void main() {
                 }
                 sum += c / (n_c * p_v + n_g * ap_g);
             } else {
-                uint rng = pcg_hash(base ^ pcg_hash(k - pc.samples + 0x7F4A7C15u) ^ 0x68E31DA4u);
-                vec3 d = cosine_direction(nx, rand01(rng), rand01(rng));
+                vec2 ud = owen_sobol2(k - pc.samples, seed ^ 0x1F83D9ABu);
+                vec3 d = cosine_direction(nx, ud.x, ud.y);
                 vec3 hit;
                 if (!gathering_first_hit(x, nx, d, hit)) continue;
                 // One ray, one pair (v, y) per light.

@@ -1,7 +1,7 @@
 #version 460
 // psm (select): the frame's shared VPL set for `--visibility psm`: sample k (k < N) draws one VPL from
-// the method's CDF mixture exactly as a gather sample does (draw_vpl, shared/sampling.glsl), with a
-// random stream of (seed, k) only, so every pixel uses the same N VPLs and the same N shadow maps
+// the method's CDF mixture exactly as a gather sample does (draw_vpl, shared/sampling.glsl): point k of
+// one stratified set per seed (not per pixel), so every pixel uses the same N VPLs and the same N shadow maps
 // (thesis Fig. 6.1). The gather then weights sample k by 1/(N p_k): unbiased for the VPL sum given the
 // maps' visibility. Writes PsmView k (probability 0 when there is no VPL to draw). Dispatch ⌈N/64⌉.
 #include "shared/scene.glsl"
@@ -28,9 +28,8 @@ void main() {
     w.position_v = vec4(0.0);
     w.normal_p = vec4(0.0, 0.0, 1.0, 0.0);
     if (cdf_total_at(0u) > 0.0) {
-        uint rng = pcg_hash(pc.seed ^ pcg_hash(k + 0x85EBCA6Bu));
         float prob;
-        uint v = draw_vpl(rng, prob);
+        uint v = draw_vpl(k, pcg_hash(pc.seed ^ 0x85EBCA6Bu), prob);
         Vpl vpl = vpl_fetch(v);
         if (prob > 0.0 && vpl.valid) {
             // Off its own surface, so that surface (z = −lift in the map's frame) falls outside the

@@ -1,7 +1,8 @@
-// The VPL sampling mixture of the CDF methods and the shadowed VPL contribution, shared by gather.comp
-// and mis.comp. Include after cdf.glsl, vpl.glsl and voxel.glsl, with `pc` a GatherPush.
+// The VPL sampling mixture of the CDF methods and the shadowed VPL contribution, shared by gather.comp,
+// mis.comp and psm.comp. Include after cdf.glsl, vpl.glsl and voxel.glsl, with `pc` a GatherPush.
 #ifndef BOUNCE_SAMPLING_GLSL
 #define BOUNCE_SAMPLING_GLSL
+#include "owen_sobol.glsl"
 
 uint vpl_slots() { return lm_faces() * frame.size.z * frame.size.w * frame.size.w; }
 uint face_rows() { return frame.size.w; }
@@ -31,7 +32,12 @@ float section_prob(uint cb, uint v, uint nlive) {
 // whose face is chosen by its weight (Russian roulette, thesis alg. 9) or uniformly among the faces
 // with weight, then the texel by the face's CDF. Returns v and its exact mixture probability
 //   p_v = ε_eff · valid_v / #VPLs + (1 − ε_eff) · 1/S Σ_s P_s(v).
-uint draw_vpl(inout uint rng, out float prob) {
+// Sample k of the stratified set `seed` (shared/owen_sobol.glsl): three padded sets, each uniform per
+// sample (so p_v is its exact probability and the estimate stays unbiased) and stratified over the
+// samples k of one seed: (defensive, section) together, so the ε share and the sections each get their
+// proportion of the samples; (face, row), the two coarse levels of the inversion, together; the texel
+// alone. (face, row, texel) are the same three uniforms in either branch.
+uint draw_vpl(uint k, uint seed, out float prob) {
     uint len = pc.cdf_len;
     uint n = vpl_slots();
     uint sections = pc.sections;
@@ -39,36 +45,39 @@ uint draw_vpl(inout uint rng, out float prob) {
     uint live = 0u;
     for (uint s = 1u; s <= sections; s++) live += cdf_total_at(s * len) > 0.0 ? 1u : 0u;
     if (live == 0u) eps = 1.0; // all-zero importance: uniform (the host warns)
-    float u0 = rand01(rng), u1 = rand01(rng), u2 = rand01(rng);
+    vec2 choice = owen_sobol2(k, seed ^ 0x3C6EF372u);
+    vec2 face_row = owen_sobol2(k, seed ^ 0xA54FF53Au);
+    float texel = owen_sobol1(k, seed ^ 0x510E527Fu);
+    vec3 u = vec3(face_row, texel);
     uint v;
-    if (u0 < eps) {
-        v = cdf_sample_rows3(0u, 0u, vec3(u1, rand01(rng), rand01(rng)), 0u, faces() * face_rows());
+    if (choice.x < eps) {
+        v = cdf_sample_rows3(0u, 0u, u, 0u, faces() * face_rows());
     } else {
         // A section uniformly among those with weight (a local region whose gather points all missed
         // has none).
-        uint pick = min(uint(u1 * float(live)), live - 1u);
+        uint pick = min(uint(choice.y * float(live)), live - 1u);
         uint s = 1u;
-        for (uint k = 1u; k <= sections; k++) {
-            if (cdf_total_at(k * len) > 0.0) {
-                if (pick == 0u) { s = k; break; }
+        for (uint j = 1u; j <= sections; j++) {
+            if (cdf_total_at(j * len) > 0.0) {
+                if (pick == 0u) { s = j; break; }
                 pick--;
             }
         }
         uint cb = s * len;
         if (pc.face_mode == FACE_RR) {
-            v = cdf_sample_rows3(cb, s * n, vec3(u2, rand01(rng), rand01(rng)), 0u, faces() * face_rows());
+            v = cdf_sample_rows3(cb, s * n, u, 0u, faces() * face_rows());
         } else {
+            // The face uniformly among those with weight, then (row, texel) inside it.
             uint nlive = live_faces(cb);
-            pick = min(uint(u2 * float(nlive)), nlive - 1u);
-            float u3 = rand01(rng);
+            pick = min(uint(u.x * float(nlive)), nlive - 1u);
             uint f = 0u;
-            for (uint k = 0u; k < faces(); k++) {
-                if (cdf_rows_total(cb, k * face_rows(), (k + 1u) * face_rows()) > 0.0) {
-                    if (pick == 0u) { f = k; break; }
+            for (uint j = 0u; j < faces(); j++) {
+                if (cdf_rows_total(cb, j * face_rows(), (j + 1u) * face_rows()) > 0.0) {
+                    if (pick == 0u) { f = j; break; }
                     pick--;
                 }
             }
-            v = cdf_sample_rows3(cb, s * n, vec3(u3, rand01(rng), rand01(rng)), f * face_rows(), (f + 1u) * face_rows());
+            v = cdf_sample_rows3(cb, s * n, u.yzx, f * face_rows(), (f + 1u) * face_rows());
         }
     }
     // The mixture probability of v.

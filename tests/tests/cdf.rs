@@ -22,9 +22,10 @@
 //!   (`cdf_sample_rows` on rows [1024, 2048)). The same draws against a uniform expectation must fail by
 //!   far, so a sampler that ignores the weights cannot pass.
 //!
-//! The random numbers are the gather's: `rand01` of a PCG hash of the draw's counter (fixed seed), at
-//! most 1 − 2⁻²⁴. Each kernel invocation makes one draw (two binary searches), far below llvmpipe's loop
-//! limit; cdf_reduce loops at most max(rows, row_length) = 2048 times per invocation.
+//! The random numbers are `rand01` of a PCG hash of the draw's counter (fixed seed), at most 1 − 2⁻²⁴:
+//! independent draws, so the χ² test applies (the gather's own points are stratified, 24 bits too). Each
+//! kernel invocation makes one draw (two binary searches), far below llvmpipe's loop limit; cdf_reduce
+//! loops at most max(rows, row_length) = 2048 times per invocation.
 
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};

@@ -23,8 +23,9 @@
 //! [`prob_rows`] agree to within two such steps per texel (unit test below), not relatively. Texels
 //! lighter than that are drawn with a quantised probability, or never.
 //!
-//! The stream of random numbers the gather feeds to the sampling is mirrored too ([`pcg_hash`],
-//! [`rand01`] of `glsl/shared/common.glsl`): at most 1 − 2⁻²⁴, with 24 bits.
+//! The stream of random numbers the CDF tests feed to the sampling is mirrored too ([`pcg_hash`],
+//! [`rand01`] of `glsl/shared/common.glsl`): at most 1 − 2⁻²⁴, with 24 bits, as the gather's stratified
+//! points (`glsl/shared/owen_sobol.glsl`).
 
 /// Floats in the CDF header (`CDF_HEADER` of `glsl/shared/bindings.glsl`).
 pub const HEADER: usize = bounce_graph::bindings::CDF_HEADER as usize;

@@ -1,7 +1,8 @@
 //! psm: per-VPL paraboloid shadow maps, the visibility of the thesis's chapter 6 (`--visibility psm`).
 //!
 //! A shadow map per (pixel, sample) is impossible, so the frame draws one shared set of N VPLs
-//! (`psm.comp`: sample k from the method's CDF mixture with a stream of (seed, k) only; N = `--vpls`),
+//! (`psm.comp`: sample k from the method's CDF mixture, point k of one stratified set per seed, not per
+//! pixel; N = `--vpls`),
 //! renders one paraboloid depth map per VPL (`dprsm.psm.geom`: the light maps' exact geometry shader
 //! with the VPL as viewpoint and its normal as the axis; `dprsm.frag`), and every pixel gathers those N VPLs:
 //!
