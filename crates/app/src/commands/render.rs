@@ -21,8 +21,11 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
     renderer.check(&settings)?;
-    if a.time_limit.is_some() {
-        bounce_graph::frame::progressive::check_progressive(&settings)?;
+    if a.time_limit.is_some() && !bounce_graph::frame::progressive::averages(&settings) {
+        writeln!(
+            err,
+            "note: this frame is the same for every seed (`all` or direct light): one frame, whatever the time limit"
+        )?;
     }
     let t0 = Instant::now();
     let (frame, frames) = match a.time_limit {

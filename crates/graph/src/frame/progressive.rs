@@ -6,13 +6,15 @@
 //! seed is `--cdf-seed`, else the first frame's seed), as the viewer's do: the importance and CDF are
 //! built once and kept by the graph, and each later frame records only the gather.
 //!
+//! `all` and the direct component are the same every frame: they render one frame, whatever the budget.
+//!
 //! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
 //! upload). A frame is started only if it should end within the budget, judged by the last frame's time;
 //! the first frame always runs, and so does a second while time is left (the first also built what the
 //! others reuse, so only the second tells what a frame costs).
 
 use super::renderer::{FrameOutput, Renderer};
-use super::settings::{FrameSettings, Method, SettingsError};
+use super::settings::{Component, FrameSettings, Method};
 use anyhow::Result;
 use std::time::{Duration, Instant};
 
@@ -29,15 +31,10 @@ pub struct Progressive {
     pub gpu_ms: Option<f64>,
 }
 
-/// Whether `s` can be rendered progressively: `all` is exact per frame (nothing to average).
-pub fn check_progressive(s: &FrameSettings) -> Result<(), SettingsError> {
-    if s.method == Method::All && s.component != super::settings::Component::Direct {
-        return Err(SettingsError(
-            "a time limit averages frames with new seeds, but `all` is the same every frame: use a sampled method or `reference`"
-                .into(),
-        ));
-    }
-    Ok(())
+/// Whether more than one frame can change the mean: `all` (every VPL) and the direct component are the
+/// same every frame, so one frame is their converged result.
+pub fn averages(s: &FrameSettings) -> bool {
+    s.method != Method::All && s.component != Component::Direct
 }
 
 /// Render frames of `s` (seeds `s.seed`, `s.seed + 1`, …) until `budget`, and average them.
@@ -48,7 +45,6 @@ pub fn render_for(
     budget: Duration,
     progress: &mut dyn FnMut(u32, Duration),
 ) -> Result<Progressive> {
-    check_progressive(s)?;
     let t0 = Instant::now();
     let mut sum: Vec<[f64; 4]> = vec![];
     let (mut frames, mut gpu_ms) = (0u32, Some(0.0));
@@ -75,7 +71,7 @@ pub fn render_for(
         let this_frame = elapsed - previous;
         previous = elapsed;
         let next_ends_late = if frames == 1 { elapsed >= budget } else { elapsed + this_frame > budget };
-        if next_ends_late {
+        if next_ends_late || !averages(s) {
             break f;
         }
     };
