@@ -366,9 +366,10 @@ fn cell(samples: &[Sample], m: Method, c: Column) -> Cell {
 /// bench.md's heading and its first table: methods in rows, VPL counts in columns.
 fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str) -> String {
     let b = &plan.base;
+    let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
     let mut md = format!(
         "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {} repeat(s) \
-         (seeds 1..={}); medians over repeats. Reference: {}. GPU time: the sum of the frame's pass timestamps.\n\n## GPU time (ms), relMSE and mean FLIP against the reference\n\n| method |",
+         (seeds 1..={}); medians over repeats. Reference: {}. {}\n\n## {} and mean FLIP against the reference\n\n| method |",
         b.width,
         b.height,
         b.dprsm_res,
@@ -379,9 +380,14 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
         match plan.reference {
             Reference::Path { spp } => format!("the path-traced ground truth (`--method reference`, {spp} spp)"),
             Reference::All => "the exhaustive VPL sum on the same VPL set (`--method all`)".to_string(),
-        }
+        },
+        if equal_time {
+            "Each column is a wall-time budget: every method averages the progressive frames that fit in it."
+        } else {
+            "GPU time: the sum of the frame's pass timestamps."
+        },
+        if equal_time { "Frames averaged, relMSE" } else { "GPU time (ms), relMSE" },
     );
-    let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
     for c in &plan.columns {
         let first = if equal_time { "frames" } else { "ms" };
         md.push_str(&format!(" {}: {first} | relMSE | FLIP |", c.label()));
