@@ -2,6 +2,7 @@
 //! and a legend. Text uses the embedded DejaVu Sans (assets/fonts), so no system font is needed.
 
 use anyhow::{anyhow, Result};
+use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -39,6 +40,22 @@ pub fn tick(v: f64) -> String {
     }
 }
 
+/// Log-axis ticks at 1, 2 and 5 times the powers of ten inside [lo, hi], or at the decades alone when
+/// the range spans more than three of them (so a narrow range still gets several labelled ticks).
+pub fn key_points(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return vec![];
+    }
+    let steps: &[f64] = if (hi / lo).log10() > 3.0 { &[1.0] } else { &[1.0, 2.0, 5.0] };
+    let mut v = vec![];
+    let mut decade = 10f64.powf(lo.log10().floor());
+    while decade <= hi {
+        v.extend(steps.iter().map(|m| m * decade).filter(|x| (lo..=hi).contains(x)));
+        decade *= 10.0;
+    }
+    v
+}
+
 /// `series`: (method, [(time, relMSE)]) in column order. Points with a non-positive or non-finite value
 /// cannot go on log axes and are left out.
 pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle: &str, axes: &Axes) -> Result<()> {
@@ -64,7 +81,10 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(96)
-            .build_cartesian_2d((tmin / 1.5..tmax * 1.5).log_scale(), (emin / 1.5..emax * 1.5).log_scale())
+            .build_cartesian_2d(
+                (tmin / 1.5..tmax * 1.5).log_scale().with_key_points(key_points(tmin / 1.5, tmax * 1.5)),
+                (emin / 1.5..emax * 1.5).log_scale().with_key_points(key_points(emin / 1.5, emax * 1.5)),
+            )
             .map_err(|e| anyhow!("plot: {e}"))?;
         chart
             .configure_mesh()
@@ -115,5 +135,12 @@ mod tests {
         assert_eq!(tick(0.0043), "0.0043");
         assert_eq!(tick(1.5e4), "1.5e4");
         assert_eq!(tick(2e-5), "2e-5");
+    }
+
+    #[test]
+    fn narrow_log_ranges_get_1_2_5_ticks_and_wide_ones_decades() {
+        assert_eq!(super::key_points(0.3, 3.0), vec![0.5, 1.0, 2.0]);
+        assert_eq!(super::key_points(1e-5, 1.0), vec![1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0]);
+        assert!(super::key_points(0.0, 1.0).is_empty());
     }
 }
