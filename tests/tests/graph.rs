@@ -294,8 +294,8 @@ fn cached_products_are_kept_across_graphs_until_their_key_changes() {
     assert_eq!(kept.product_names(), ["x"]);
 }
 
-/// A temporal image keeps its contents across graphs and says when they are undefined (first use, a new
-/// key); a history image gives last frame's version after `next_frame`.
+/// A temporal image (or buffer) keeps its contents across graphs and says when they are undefined (first
+/// use, a new key); a history image gives last frame's version after `next_frame`.
 #[test]
 fn temporal_and_history_images_live_across_graphs() {
     use bounce_graph::graph::Retained;
@@ -317,6 +317,23 @@ fn temporal_and_history_images_live_across_graphs() {
         g.add_pass("write").write(&mut h, Access::TransferWrite).record(move |ctx| clear(ctx, &hh, value));
         g.export(&h);
         assert!(read(&g.execute().unwrap(), &h).iter().all(|&v| v == value));
+    }
+    // A temporal buffer keeps what the first graph wrote; a second graph only reads it.
+    for (fresh, fill) in [(true, Some(7u32)), (false, None)] {
+        let mut g = Graph::with_retained(&gpu, &mut kept);
+        let t = g.temporal_buffer("counts", bounce_device::BufferDesc::storage("counts", 64), &());
+        assert_eq!(t.fresh, fresh);
+        let mut h = t.handle;
+        if let Some(v) = fill {
+            let hh = h;
+            g.add_pass("fill").overwrite(&mut h, Access::TransferWrite).record(move |ctx| unsafe {
+                ctx.gpu.device.cmd_fill_buffer(ctx.cmd, ctx.buffer(&hh).raw, 0, vk::WHOLE_SIZE, v);
+            });
+        }
+        g.export(&h);
+        let done = g.execute().unwrap();
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&done.read_buffer(&h).unwrap());
+        assert!(words.iter().all(|&w| w == 7), "{words:?}");
     }
     for frame in 0..3u32 {
         let mut g = Graph::with_retained(&gpu, &mut kept);

@@ -126,10 +126,6 @@ impl Retained {
     pub fn next_frame(&mut self) {
         self.frame += 1;
     }
-    /// The frame counter ([`Retained::next_frame`] calls).
-    pub fn frame(&self) -> u64 {
-        self.frame
-    }
     /// Names of the cached products held now (diagnostics and tests).
     pub fn product_names(&self) -> Vec<&'static str> {
         let mut v: Vec<_> = self.products.keys().copied().collect();

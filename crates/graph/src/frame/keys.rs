@@ -43,7 +43,7 @@ impl Keys {
         let voxels = fingerprint(&(bits(&spec.origin.to_array()), spec.cell.to_bits(), spec.dims.to_array()));
         let shadow = fingerprint(&s.shadow_res);
         let per_pixel = (p.kind != ImportanceKind::Uniform).then_some((gbuffer, p.seed));
-        let params = (format!("{:?}", p.kind), p.samples, p.min_d2.to_bits(), p.fixed_scale.to_bits());
+        let params = (p.kind, p.samples, p.min_d2.to_bits(), p.fixed_scale.to_bits());
         Keys {
             voxels,
             vpls,

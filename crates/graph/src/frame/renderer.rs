@@ -92,10 +92,6 @@ impl Renderer {
         Ok(Renderer { ctx, state: FrameState { camera: scene.camera, retained: Retained::default() } })
     }
 
-    pub fn camera(&self) -> Camera {
-        self.state.camera
-    }
-
     /// Moves the camera (the viewer's fly camera). The next frame re-records what depends on it.
     pub fn set_camera(&mut self, camera: Camera) {
         self.state.camera = camera;
@@ -105,11 +101,6 @@ impl Renderer {
     /// before each timed frame, so that every method pays for its full frame.
     pub fn clear_frame_cache(&mut self) {
         self.state.retained.clear();
-    }
-
-    /// Names of the products kept for the next frame (diagnostics and tests).
-    pub fn kept_products(&self) -> Vec<&'static str> {
-        self.state.retained.product_names()
     }
 
     /// The per-frame constants for `s` with the current camera.

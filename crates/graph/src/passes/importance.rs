@@ -32,7 +32,7 @@ use bounce_device::sync::Access;
 use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Sampler};
 
 /// Which weights the method sections hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ImportanceKind {
     /// No method section: uniform over the VPLs.
     Uniform,
