@@ -3,8 +3,8 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 // importance (gathering-based global CDF, thesis §7.3.4), two stages:
 //   IMP_GBG_SCATTER (one invocation per pixel): R cosine-distributed rays from the gather point (a
-//     stratified set per pixel), each marched through the voxel grid to its first occupied cell; the
-//     entry point P is projected into each light's DPRSM, and when that texel's VPL is the surface at P
+//     stratified set per pixel), each marched through the voxel grid to its first occupied cell (the
+//     exact and hybrid variants: to the surface it really hits); that point P is projected into each light's DPRSM, and when that texel's VPL is the surface at P
 //     (the light sees it: within 3 cells), the VPL's unshadowed contribution (luminance) is added to its
 //     sum and its hit count raised.
 //     Sums are u64 fixed point (atomic adds of integers commute: the result does not depend on thread
@@ -31,6 +31,30 @@ layout(std430, set = 0, binding = B_GBG_COUNT) buffer Counts { uint counts[]; };
 #include "shared/vpl.glsl"
 #include "shared/gathering.glsl"
 #include "shared/owen_sobol.glsl"
+#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
+// importance_gbg.exact.comp and .hybrid.comp (`--visibility exact`, `hybrid`): each ray's first hit is the
+// real surface it meets (the BVH, or shared/hybrid.glsl: the same answer), from x lifted off its surface,
+// instead of the entry point of the first occupied cell 2 cells off the surface.
+#include "shared/bvh.glsl"
+#ifdef HYBRID_VISIBILITY
+#include "shared/hybrid.glsl"
+#define FIRST_HIT_TRACE hybrid_trace
+#else
+#define FIRST_HIT_TRACE bvh_trace
+#endif
+bool first_hit(vec3 x, vec3 n, vec3 d, out vec3 hit) {
+    uint tri;
+    vec2 bary;
+    vec3 o = x + n * surface_lift(x, frame.scene_min.w);
+    float t = FIRST_HIT_TRACE(o, d, 0.0, 1e30, false, tri, bary);
+    hit = o + d * max(t, 0.0);
+    return t > 0.0;
+}
+#else
+bool first_hit(vec3 x, vec3 n, vec3 d, out vec3 hit) {
+    return gathering_hit(x, n, d, hit);
+}
+#endif
 
 void scatter(ivec2 px) {
     vec4 gp = texelFetch(g_position, px, 0);
@@ -41,12 +65,14 @@ void scatter(ivec2 px) {
     // The rays are the pixel's stratified set (shared/owen_sobol.glsl): R directions spread over the
     // hemisphere rather than clumped, so each pixel's few rays cover more of what it sees.
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x5bd1e995u;
-    for (uint r = 0u; r < pc.samples; r++) {
+    // Rays [first, first + regions) of the pixel's R (a dispatch's share under the loop limit).
+    uint last = min(pc.samples, pc.first + pc.regions);
+    for (uint r = pc.first; r < last; r++) {
         vec2 u = owen_sobol2(r, seed);
         vec3 d = cosine_direction(n, u.x, u.y);
         // One march per ray (2 cells off the surface, the march's rule), then each light's VPL there.
         vec3 p;
-        if (!gathering_hit(x, n, d, p)) continue;
+        if (!first_hit(x, n, d, p)) continue;
         for (uint l = 0u; l < frame.size.z; l++) {
             uint v = vpl_at_point(p, l);
             if (v == NO_VPL) continue;

@@ -52,6 +52,8 @@ const SHADERS: &[Shader] = &[
     file("voxelize.comp"),
     file("importance.comp"),
     file("importance_gbg.comp"),
+    variant("importance_gbg.exact.comp", "importance_gbg.comp", &["EXACT_VISIBILITY"]),
+    variant("importance_gbg.hybrid.comp", "importance_gbg.comp", &["HYBRID_VISIBILITY"]),
     file("cdf_reduce.comp"),
     file("psm.comp"),
     // gather and mis, each with its visibility variants: `--visibility exact` (shadow rays against the BVH

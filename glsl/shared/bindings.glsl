@@ -103,9 +103,14 @@ const uint CDF_HEADER = 4u;
 #define BVH_NO_TRI 0xFFFFFFFFu
 // Relative end epsilon of bvh_occluded (the CPU reference uses the same value in f64: bounce_oracles::cpu_ref::SHADOW_EPS).
 const float BVH_SHADOW_EPS = 1e-4;
-// `--visibility hybrid` (shared/hybrid.glsl): most BVH traversals one trace makes, one per run of occupied
-// cells, the last one covering every run left (Renderer::vpls_per_dispatch counts them).
-#define HYBRID_MAX_TRACES 4
+// `--visibility hybrid` (shared/hybrid.glsl, crates/graph/src/bvh/cells.rs): triangle lists over a grid of
+// about CELL_DENSITY cells per triangle (never finer than the voxels). A trace tests at most HYBRID_MAX_TESTS
+// listed triangles, then finishes with one BVH traversal from where it stands (Renderer::vpls_per_dispatch
+// counts both).
+#define B_CELL_OFFSETS 41
+#define B_CELL_TRIS 42
+#define CELL_DENSITY 8
+#define HYBRID_MAX_TESTS 96
 
 // ---- reference: the exact one-bounce integrator --------------------------------------------------------
 #define B_REF_SQ 28

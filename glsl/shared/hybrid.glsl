@@ -1,110 +1,137 @@
-// `--visibility hybrid`: exact visibility (the BVH's answer, bit for bit) that traverses the BVH only where
-// the voxel grid says a triangle may be. Include after voxel.glsl and bvh.glsl.
+// `--visibility hybrid` (the default): exact visibility, the BVH's answer bit for bit, found by a march through
+// a grid of triangle lists. Include after voxel.glsl and bvh.glsl.
 //
 // hybrid_trace(o, d, tmin, tmax, any_hit, tri, bary) answers what bvh_trace(o, d, tmin, tmax, ...) answers.
-// It marches the grid along o + t·d (Amanatides–Woo, no endpoint offset, the segment clipped to the grid
-// box) and collects the *runs* of consecutive occupied cells; each run, as a parameter interval grown by
-// half a cell on both sides, is traced against the real triangles with bvh_trace, in order along the ray.
-// Why this is bvh_trace's answer: the voxelization is conservative (a cell is marked when a triangle comes
-// within VOXEL_EPS of it), so every point where the ray meets a triangle lies in an occupied cell the march
-// visits, inside one run's interval (the half-cell growth absorbs the rounding of the march's parameters
-// against the world-space ray). The BVH is traced with the same o and d as bvh_trace, so every triangle
-// gives the same t; an interval only narrows which t count. Any-hit: occluded iff some run holds a hit.
-// Closest: the runs come in order of t, so the first run with a hit holds the closest one (a hit in an
-// earlier interval would have been found there). Outside the grid box there is no geometry (the grid's
-// margin, passes/voxelize.rs). Empty cells cost one bit test; the voxel march's biases (the 2-cell end skip,
-// which leaks, and conservative cells, which darken junctions) are gone, because cells only decide where to
-// look, never what is hit.
+// Structure (crates/graph/src/bvh/cells.rs): over the voxel grid's box, a grid of cells frame.cells.w voxels
+// wide (about CELL_DENSITY cells per triangle: a coarse grid for a small scene, a fine one for a large); cell c lists the BVH triangles that come within CELL_MARGIN (1/64 of a cell) of it. The march (Amanatides–
+// Woo in list-grid units along o + t·d, clipped to the grid box and to [tmin, tmax]) tests, in each cell it
+// enters, that cell's triangles with bvh_hit_triangle: the same watertight test and the same ray as bvh_trace,
+// so every triangle gives the same t.
+// Why this is bvh_trace's answer: a hit of the exact test lies in a cell the march enters, up to the march's
+// f32 rounding (~1e-4 cell), and every triangle within 1/64 cell of a cell is in its list. Any-hit: occluded
+// iff some tested triangle has t in (tmin, tmax). Closest: a hit found before the march leaves a cell by more
+// than HYBRID_STOP cells is the closest (every closer hit lies in this or an earlier cell, whose triangles are
+// tested); otherwise the march goes on. No end skip, no thickening: cells only decide where to look, never
+// what is hit, so the voxel march's biases (the 2-cell end skip, which leaks, and conservative cells, which
+// darken junctions) are gone.
 //
-// Work bound (llvmpipe's per-invocation loop limit): the march takes at most dims.x + dims.y + dims.z + 3
-// iterations in all, plus at most HYBRID_MAX_TRACES iterations of the loop over runs, and at most
-// HYBRID_MAX_TRACES traversals of at most max_iterations_per_ray each: once HYBRID_MAX_TRACES − 1 runs are
-// traced, the last traversal covers everything from the next occupied cell to tmax.
+// Work bound (llvmpipe's per-invocation loop limit): at most ldims.x + ldims.y + ldims.z + 3 march steps (each
+// crosses one grid plane) and HYBRID_MAX_TESTS triangle tests in all; a cell whose list would pass that budget
+// hands the rest of the ray, from where it entered that cell, to one bvh_trace (at most
+// max_iterations_per_ray): Renderer::vpls_per_dispatch adds the three.
 #ifndef BOUNCE_HYBRID_GLSL
 #define BOUNCE_HYBRID_GLSL
 
-// The march's state along the ray, in grid units: a + t·gd, t clipped to [t0, t1]; `cell` the current cell,
-// entered at parameter `enter`; `n` the cells tested so far (bounded by dims.x + dims.y + dims.z + 3 over
-// all calls, as voxel_visibility's march); `ended` once the march has left the grid or passed t1.
-struct HybridMarch {
-    vec3 a, gd, invd;
-    bvec3 moving;
-    float t1, enter;
-    ivec3 cell, step;
-    int n;
-    bool ended;
-};
+layout(std430, set = 0, binding = B_CELL_OFFSETS) readonly buffer CellOffsets { uint cell_offsets[]; };
+layout(std430, set = 0, binding = B_CELL_TRIS) readonly buffer CellTris { uint cell_tris[]; };
 
-// Advance to the end of the next run of occupied cells (to the end of the march when `to_end`): its
-// interval [lo, hi] (hi is where the run was left, or t1), or false when no occupied cell is left.
-bool hybrid_next_run(inout HybridMarch m, bool to_end, out float lo, out float hi) {
-    ivec3 dims = ivec3(frame.voxel_dims.xyz);
-    int max_steps = dims.x + dims.y + dims.z + 3;
-    lo = -1.0;
-    hi = m.t1;
-    for (; !m.ended && m.n < max_steps; m.n++) {
-        bool occupied = voxel_occupied(m.cell);
-        if (occupied && lo < 0.0) lo = m.enter;
-        if (!occupied && lo >= 0.0 && !to_end) {
-            hi = m.enter;
-            return true;
-        }
-        // Step through the nearest exit plane (x before y before z on ties), as voxel_visibility does.
-        float tx = voxel_exit_t(m.cell.x, m.a.x, m.gd.x, m.invd.x, m.moving.x);
-        float ty = voxel_exit_t(m.cell.y, m.a.y, m.gd.y, m.invd.y, m.moving.y);
-        float tz = voxel_exit_t(m.cell.z, m.a.z, m.gd.z, m.invd.z, m.moving.z);
-        float best = min(tx, min(ty, tz));
-        int k = tx <= ty && tx <= tz ? 0 : (ty <= tz ? 1 : 2);
-        m.enter = best;
-        m.cell[k] += m.step[k];
-        if (best > m.t1 || m.cell[k] < 0 || m.cell[k] >= dims[k]) m.ended = true;
-    }
-    m.ended = true;
-    return lo >= 0.0;
-}
+// Distance (cells) by which the march's rounding may misplace a point: the closest-hit stop and the start of a
+// BVH hand-over keep this much ray on the safe side. Far below CELL_MARGIN's 1/64, far above f32 rounding.
+const float HYBRID_STOP = 1.0 / 256.0;
+
+// What the last hybrid_trace did: march steps, triangle tests, and whether the BVH finished it.
+uint hybrid_steps = 0u;
+uint hybrid_tests = 0u;
+bool hybrid_handed_over = false;
 
 float hybrid_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint tri, out vec2 bary) {
     tri = BVH_NO_TRI;
     bary = vec2(0.0);
-    if (!voxel_finite(o) || !voxel_finite(d) || isnan(tmin) || isnan(tmax) || !(tmax > tmin)) return -1.0;
-    uvec3 du = frame.voxel_dims.xyz;
-    float inv = voxel_rcp(frame.voxel_origin.w);
-    HybridMarch m;
-    m.a = voxel_to_grid(o, inv);
-    m.gd = d * inv;
-    float len = length(m.gd);
-    // No grid, or a ray the grid cannot step along: one traversal of the whole interval.
-    bool whole = du.x == 0u || du.y == 0u || du.z == 0u || !(len > 0.0) || isinf(len);
-    // Half a cell of ray parameter: the growth of each run's interval.
-    float margin = 0.5 / len;
-    float t0 = tmin;
-    m.t1 = tmax;
+    hybrid_steps = 0u;
+    hybrid_tests = 0u;
+    hybrid_handed_over = false;
+    float dmax = max(abs(d.x), max(abs(d.y), abs(d.z)));
+    if (!voxel_finite(o) || !voxel_finite(d) || !(dmax >= BVH_MIN_DIR) || isnan(tmin) || isnan(tmax) || !(tmax > tmin))
+        return -1.0;
+    // The list grid: the voxel grid's box in cells CELL_BRICK voxels wide.
+    uvec3 du = frame.cells.xyz;
+    ivec3 dims = ivec3(du);
+    float inv = voxel_rcp(frame.voxel_origin.w * float(frame.cells.w));
+    vec3 a = voxel_to_grid(o, inv);
+    vec3 gd = d * inv;
+    float len = length(gd);
+    float stop = HYBRID_STOP / len;
+    // The ray parameter from which one BVH traversal finishes the trace, or −1: the whole ray when the grid
+    // cannot be stepped along it.
+    float handover = (du.x == 0u || du.y == 0u || du.z == 0u || !(len > 0.0) || isinf(len)) ? tmin : -1.0;
+    float t0 = tmin, t1 = tmax;
+    vec3 invd;
+    bvec3 moving;
     bool outside = false;
     vec3 dimsf = vec3(du);
-    voxel_clip_axis(m.a.x, m.gd.x, dimsf.x, t0, m.t1, m.invd.x, m.moving.x, outside);
-    voxel_clip_axis(m.a.y, m.gd.y, dimsf.y, t0, m.t1, m.invd.y, m.moving.y, outside);
-    voxel_clip_axis(m.a.z, m.gd.z, dimsf.z, t0, m.t1, m.invd.z, m.moving.z, outside);
-    m.ended = outside || t0 > m.t1;
-    if (!whole && m.ended) return -1.0;
-    m.enter = t0;
-    m.cell = ivec3(clamp(floor(m.a + m.gd * t0), vec3(0.0), max(dimsf - 1.0, vec3(0.0))));
-    m.step = ivec3(m.gd.x > 0.0 ? 1 : -1, m.gd.y > 0.0 ? 1 : -1, m.gd.z > 0.0 ? 1 : -1);
-    m.n = 0;
-    // One traversal per run, the last one allowed covering every run left: one call site of bvh_trace
-    // (each inlined copy of its loop and stack costs llvmpipe registers and time).
-    for (uint k = 0u; k < uint(HYBRID_MAX_TRACES); k++) {
-        float lo = tmin, hi = tmax;
-        if (!whole) {
-            bool last = k + 1u == uint(HYBRID_MAX_TRACES);
-            if (!hybrid_next_run(m, last, lo, hi)) return -1.0;
-            lo = max(lo - margin, tmin);
-            hi = last || m.ended ? tmax : min(hi + margin, tmax);
+    voxel_clip_axis(a.x, gd.x, dimsf.x, t0, t1, invd.x, moving.x, outside);
+    voxel_clip_axis(a.y, gd.y, dimsf.y, t0, t1, invd.y, moving.y, outside);
+    voxel_clip_axis(a.z, gd.z, dimsf.z, t0, t1, invd.z, moving.z, outside);
+    BvhRay r = bvh_make_ray(o, d);
+    bool found = false;
+    float best_t = tmax;
+    uint best_tri = BVH_NO_TRI;
+    vec2 best_bary = vec2(0.0);
+    if (handover < 0.0 && !outside && t0 <= t1) {
+        precise vec3 start = a + gd * t0;
+        ivec3 cell = ivec3(clamp(floor(start), vec3(0.0), dimsf - 1.0));
+        ivec3 step = ivec3(gd.x > 0.0 ? 1 : -1, gd.y > 0.0 ? 1 : -1, gd.z > 0.0 ? 1 : -1);
+        float enter = t0;
+        uint tests = 0u;
+        int max_steps = dims.x + dims.y + dims.z + 3;
+        for (int n = 0; n < max_steps; n++) {
+            hybrid_steps++;
+            uint c = uint(cell.x) + du.x * (uint(cell.y) + du.y * uint(cell.z));
+            uint j = cell_offsets[c], jend = cell_offsets[c + 1u];
+            if (jend > j) {
+                if (jend - j > uint(HYBRID_MAX_TESTS) - tests) {
+                    handover = max(enter - stop, tmin);
+                    break;
+                }
+                tests += jend - j;
+                for (; j < jend; j++) {
+                    BvhTri tr = bvh_tris[cell_tris[j]];
+                    float t;
+                    vec2 b;
+                    if (!bvh_hit_triangle(r, tr, t, b) || !(t > tmin)) continue;
+                    bool take = any_hit ? t < tmax : (t < best_t || (t == best_t && (!found || tr.tri < best_tri)));
+                    if (take) {
+                        found = true;
+                        best_t = t;
+                        best_tri = tr.tri;
+                        best_bary = b;
+                        if (any_hit) break;
+                    }
+                }
+                if (found && any_hit) break;
+            }
+            float tx = voxel_exit_t(cell.x, a.x, gd.x, invd.x, moving.x);
+            float ty = voxel_exit_t(cell.y, a.y, gd.y, invd.y, moving.y);
+            float tz = voxel_exit_t(cell.z, a.z, gd.z, invd.z, moving.z);
+            float exit_t = tx;
+            int m = 0;
+            if (ty < exit_t) { exit_t = ty; m = 1; }
+            if (tz < exit_t) { exit_t = tz; m = 2; }
+            if (found && best_t < exit_t - stop) break;
+            if (exit_t > t1) break;
+            cell[m] += step[m];
+            if (cell[m] < 0 || cell[m] >= dims[m]) break;
+            enter = exit_t;
         }
-        float t = -1.0;
-        if (hi > lo) t = bvh_trace(o, d, lo, hi, any_hit, tri, bary);
-        if (t >= 0.0 || whole || m.ended) return t;
+        hybrid_tests = tests;
     }
-    return -1.0;
+    if (handover >= 0.0 && !(found && any_hit)) {
+        // One call site of bvh_trace (each inlined copy costs llvmpipe registers and time).
+        hybrid_handed_over = true;
+        uint t2;
+        vec2 b2;
+        float t = bvh_trace(o, d, handover, any_hit || !found ? tmax : best_t, any_hit, t2, b2);
+        if (t >= 0.0 && (!found || t < best_t || (t == best_t && t2 < best_tri))) {
+            found = true;
+            best_t = t;
+            best_tri = t2;
+            best_bary = b2;
+        }
+    }
+    if (!found) return -1.0;
+    tri = best_tri;
+    bary = best_bary;
+    return best_t;
 }
 
 // Occlusion between two lifted points, as bvh_occluded_lifted.

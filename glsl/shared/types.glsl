@@ -41,6 +41,8 @@ struct FrameUniforms {
     uvec4 voxel_dims;        // xyz cells per axis, w total cells
     uvec4 light_map;         // the VPL map of each light (shared/lightmap.glsl): x kind (LIGHT_MAP_*),
                              // y faces per light, z tan(fov/2) of a perspective face (float bits), w unused
+    uvec4 cells;             // `--visibility hybrid`'s list grid (shared/hybrid.glsl): xyz cells per axis over the
+                             // voxel grid's box, w voxel cells per list cell (crates/graph/src/bvh/cells.rs)
 };
 
 // gather push constants.
@@ -74,11 +76,11 @@ struct ImportancePush {
     uint mode;        // IMP_UNIFORM, IMP_GLOBAL, IMP_STRATIFIED, IMP_LOCAL, IMP_GBG_SCATTER, IMP_GBG_RESOLVE
     uint samples;     // gather points per CDF (global/stratified/local) or rays per pixel (gbg)
     uint seed;
-    uint regions;     // local: regions per side (regions = side²)
+    uint regions;     // local: regions per side (regions = side²); gbg scatter: rays per dispatch
     float min_d2;     // importance only: 1/d² is clamped below this squared distance
     float fixed_scale;// gbg: fixed-point units per unit of contribution (u64 atomics: deterministic sums)
     uint section;     // the section written (IMP_LOCAL: first region's section; one dispatch z per region)
-    uint pad;
+    uint first;       // gbg scatter: this dispatch's first ray (rays [first, min(first + regions, samples)))
 };
 
 // cdf_reduce push constants.

@@ -43,6 +43,7 @@ void main() {
     put4(f.voxel_origin);
     put4u(f.voxel_dims);
     put4u(f.light_map);
+    put4u(f.cells);
     put4u(uvec4(gp.mode, gp.samples, gp.seed, gp.first));
     put4u(uvec4(gp.last, gp.accumulate, gp.add_direct, floatBitsToUint(gp.clamp_d2)));
     put4u(uvec4(gp.sections, floatBitsToUint(gp.defensive), gp.face_mode, gp.cdf_len));
@@ -50,7 +51,7 @@ void main() {
     put4(pv.position_v);
     put4(pv.normal_p);
     put4u(uvec4(ip.mode, ip.samples, ip.seed, ip.regions));
-    put4u(uvec4(floatBitsToUint(ip.min_d2), floatBitsToUint(ip.fixed_scale), ip.section, ip.pad));
+    put4u(uvec4(floatBitsToUint(ip.min_d2), floatBitsToUint(ip.fixed_scale), ip.section, ip.first));
     put4u(uvec4(cp.stage, cp.row_length, cp.rows, cp.section));
     put4u(uvec4(vp.cells_per_invocation, vp.first_triangle, pp.map_res, pp.light_map));
 }

@@ -33,6 +33,7 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     f.voxel_origin = [next(), next(), next(), next()];
     f.voxel_dims = [3001, 3002, 3003, 3004];
     f.light_map = [3501, 3502, 3503, 3504];
+    f.cells = [3601, 3602, 3603, 3604];
     let gp = GatherPush {
         mode: 4001,
         samples: 4002,
@@ -58,7 +59,7 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
         min_d2: next(),
         fixed_scale: next(),
         section: 5007,
-        pad: 5008,
+        first: 5008,
     };
     let cp = CdfPush { stage: 6001, row_length: 6002, rows: 6003, section: 6004 };
     let vp = VoxelizePush { cells_per_invocation: 7001, first_triangle: 7002 };

@@ -80,8 +80,10 @@ pub struct FrameUniforms {
     pub voxel_dims: [u32; 4],
     /// The VPL map kind (`LIGHT_MAP_*`), faces per light, tan(fov/2) bits (perspective faces), unused.
     pub light_map: [u32; 4],
+    /// `--visibility hybrid`'s list grid: cells per axis, voxel cells per list cell.
+    pub cells: [u32; 4],
 }
-const _: () = assert!(size_of::<FrameUniforms>() == 208);
+const _: () = assert!(size_of::<FrameUniforms>() == 224);
 const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 160);
 const _: () = assert!(offset_of!(FrameUniforms, eye) == 64);
 const _: () = assert!(offset_of!(FrameUniforms, size) == 112);
@@ -132,7 +134,7 @@ pub struct ImportancePush {
     pub min_d2: f32,
     pub fixed_scale: f32,
     pub section: u32,
-    pub pad: u32,
+    pub first: u32,
 }
 const _: () = assert!(size_of::<ImportancePush>() == 32);
 

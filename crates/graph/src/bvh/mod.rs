@@ -8,6 +8,7 @@
 //!   shaders share.
 
 pub mod build;
+pub mod cells;
 pub mod gpu;
 
 pub use build::{Bvh, BvhNode, BvhTri, MEDIAN_DEPTH};

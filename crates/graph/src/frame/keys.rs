@@ -29,7 +29,8 @@ pub struct Keys {
     /// The direct light: the G-buffer, the shadow map and the biases.
     pub direct: u64,
     /// Importance and CDF: the VPLs, the grid, the importance parameters, and for every kind that draws
-    /// gather points the G-buffer and the seed (`uniform`'s validity depends on the maps alone).
+    /// gather points the G-buffer and the seed (`uniform`'s validity depends on the maps alone), and for
+    /// gbg whether its rays are traced (`exact`, `hybrid`).
     pub cdf: u64,
 }
 
@@ -44,13 +45,15 @@ impl Keys {
         let shadow = fingerprint(&s.shadow_res);
         let per_pixel = (p.kind != ImportanceKind::Uniform).then_some((gbuffer, p.seed));
         let params = (p.kind, p.samples, p.min_d2.to_bits(), p.fixed_scale.to_bits());
+        // gbg's rays find their hits through the visibility's structure: the hybrid's exact hits differ.
+        let traced = matches!(p.kind, ImportanceKind::Gbg { .. }) && s.visibility.uses_bvh();
         Keys {
             voxels,
             vpls,
             shadow,
             gbuffer,
             direct: fingerprint(&(gbuffer, shadow, s.shadow_bias.to_bits(), s.shadow_slope_bias.to_bits())),
-            cdf: fingerprint(&(vpls, voxels, params, per_pixel)),
+            cdf: fingerprint(&(vpls, voxels, params, per_pixel, traced)),
         }
     }
 }

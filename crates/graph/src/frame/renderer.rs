@@ -9,7 +9,8 @@ use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
 use super::recipe::{build_frame, seed32, RecipeInputs};
 use super::settings::{reject, Component, FrameSettings, LightMap, Method, SettingsError, Visibility};
-use crate::bindings::HYBRID_MAX_TRACES;
+use crate::bindings::HYBRID_MAX_TESTS;
+use crate::bvh::cells::{CellLists, GpuCells};
 use crate::bvh::GpuBvh;
 use crate::camera::Camera;
 use crate::gpu_scene::GpuScene;
@@ -35,6 +36,10 @@ pub struct RenderContext {
     /// The scene's triangles, kept for the BVH.
     vertices: Vec<Vertex>,
     bvh: Option<GpuBvh>,
+    /// The BVH's triangles in its leaf order, kept for the cell lists (which index them).
+    bvh_tris: Vec<crate::bvh::GpuBvhTri>,
+    /// `--visibility hybrid`'s per-cell triangle lists, for the last grid asked for.
+    cells: Option<GpuCells>,
 }
 
 /// What changes from frame to frame: the camera, and the resources the graph keeps across frames.
@@ -88,6 +93,8 @@ impl Renderer {
             max_intensity: scene.lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max),
             vertices: scene.vertices.clone(),
             bvh: None,
+            bvh_tris: Vec::new(),
+            cells: None,
         };
         Ok(Renderer { ctx, state: FrameState { camera: scene.camera, retained: Retained::default() } })
     }
@@ -119,8 +126,22 @@ impl Renderer {
             let cpu = crate::bvh::Bvh::from_vertices(&self.ctx.vertices);
             let flat = crate::bvh::FlatBvh::new(&cpu, &self.ctx.vertices);
             self.ctx.bvh = Some(GpuBvh::upload(&self.ctx.gpu, &flat).context("uploading the BVH")?);
+            self.ctx.bvh_tris = flat.tris;
         }
         Ok(self.ctx.bvh.as_ref().expect("set above"))
+    }
+
+    /// `--visibility hybrid`'s per-cell triangle lists over the grid of `s`, built (with the BVH) on
+    /// first use and again when the grid changes.
+    pub fn cells(&mut self, s: &FrameSettings) -> Result<&GpuCells> {
+        self.bvh()?;
+        let spec = self.ctx.voxel_spec(s);
+        if self.ctx.cells.as_ref().is_none_or(|c| c.spec != spec) {
+            self.ctx.cells = None;
+            let lists = CellLists::build(&self.ctx.bvh_tris, &spec);
+            self.ctx.cells = Some(GpuCells::upload(&self.ctx.gpu, &lists, spec).context("uploading the cell lists")?);
+        }
+        Ok(self.ctx.cells.as_ref().expect("set above"))
     }
 
     /// Build, execute and read back one frame.
@@ -138,6 +159,9 @@ impl Renderer {
         let reference = s.method == Method::Reference && s.component != Component::Direct;
         if s.visibility.uses_bvh() || reference {
             self.bvh()?;
+        }
+        if s.visibility == Visibility::Hybrid {
+            self.cells(s)?;
         }
         let uniforms = self.uniform_buffer(s)?;
         let (ctx, state) = (&self.ctx, &mut self.state);
@@ -224,13 +248,7 @@ impl RenderContext {
         let sections = 1 + self.importance_params(s).kind.method_sections();
         let faces = s.light_map.faces() * self.scene.light_count;
         let grid_march = dims.x + dims.y + dims.z + 3;
-        let march = match (s.visibility, self.bvh.as_ref()) {
-            // The grid march, then at most HYBRID_MAX_TRACES runs, each one loop iteration to find (besides
-            // the march's cells), one of the loop over runs and one traversal (glsl/shared/hybrid.glsl).
-            (Visibility::Hybrid, Some(b)) => grid_march + HYBRID_MAX_TRACES * (2 + b.max_iterations_per_ray()),
-            (v, Some(b)) if v.uses_bvh() => b.max_iterations_per_ray(),
-            _ => grid_march,
-        };
+        let march = self.trace_iterations(s).unwrap_or(grid_march);
         let per_vpl = march + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
         // MIS: a CDF sample adds one march (its gathering indicator); a gathering ray marches once to
         // its hit and then, per light, does a CDF sample's work (visibility march, probability look-up).
@@ -240,6 +258,29 @@ impl RenderContext {
             per_vpl
         };
         ((limit.saturating_sub(64)) / per_vpl).max(1)
+    }
+
+    /// Loop iterations of one traced ray (exact or hybrid visibility), `None` for the voxel march. Hybrid:
+    /// the march over the list grid (one iteration per plane crossed), at most HYBRID_MAX_TESTS triangle tests, and one
+    /// BVH traversal that finishes a ray whose cells hold more (glsl/shared/hybrid.glsl).
+    fn trace_iterations(&self, s: &FrameSettings) -> Option<u32> {
+        let b = self.bvh.as_ref()?;
+        let spec = self.voxel_spec(s);
+        let d = CellLists::list_grid(&spec, CellLists::factor(&spec, self.bvh_tris.len())).dims;
+        match s.visibility {
+            Visibility::Hybrid => Some(d.x + d.y + d.z + 3 + HYBRID_MAX_TESTS + b.max_iterations_per_ray()),
+            v if v.uses_bvh() => Some(b.max_iterations_per_ray()),
+            _ => None,
+        }
+    }
+
+    /// Traced rays per invocation and dispatch under the loop limit (gbg's importance rays), each with
+    /// a look-up per light.
+    fn traces_per_dispatch(&self, s: &FrameSettings) -> u32 {
+        match (self.gpu.loop_iteration_limit, self.trace_iterations(s)) {
+            (Some(limit), Some(per)) => (limit.saturating_sub(64) / (per + 16 * self.scene.light_count + 16)).max(1),
+            _ => u32::MAX,
+        }
     }
 
     /// What the recipe reads besides the settings, for settings `s` seen from `camera`.
@@ -359,6 +400,7 @@ impl RenderContext {
             shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
             voxel_origin,
             voxel_dims,
+            cells: self.cells.as_ref().filter(|c| c.spec == self.voxel_spec(s)).map_or([0; 4], |c| c.grid),
         }
     }
 
@@ -367,7 +409,9 @@ impl RenderContext {
         let traced = s.visibility.uses_bvh() || (s.method == Method::Reference && s.component != Component::Direct);
         FrameInputs {
             bvh: if traced { self.bvh.as_ref() } else { None },
-            hybrid: s.visibility == Visibility::Hybrid,
+            cells: if s.visibility == Visibility::Hybrid { self.cells.as_ref() } else { None },
+            traces_per_dispatch: self.traces_per_dispatch(s),
+            exact_rays: s.visibility.uses_bvh(),
             scene: &self.scene,
             uniforms,
             width: s.width,

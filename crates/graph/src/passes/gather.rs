@@ -5,8 +5,8 @@
 //! Φ_v is the VPL's reflected flux (see `dprsm.rs`); Φ_v · cos θ_v / π is its radiant intensity toward
 //! x (a Lambertian emitter). V comes from an Amanatides–Woo march through the voxel grid
 //! (`glsl/shared/voxel.glsl` states where the march starts and stops), or from shadow rays against the
-//! BVH: everywhere (`--visibility exact`) or only through the grid's occupied cells (`hybrid`,
-//! `glsl/shared/hybrid.glsl`). Modes:
+//! BVH: everywhere (`--visibility exact`), or found by a march through the grid that tests each cell's
+//! own triangles (`hybrid`, the default: `glsl/shared/hybrid.glsl`, the same answer). Modes:
 //! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
 //! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
 //!   (converged) VPL estimate, against which every sampling method is judged.
@@ -37,7 +37,8 @@ pub struct Gather {
     psm: ComputePipeline,
     /// The `--visibility psm-exact` variant (the shared set with exact rays; binds the BVH).
     psm_exact: ComputePipeline,
-    /// The `--visibility hybrid` variant (exact rays through the grid's occupied cells; binds the BVH).
+    /// The `--visibility hybrid` variant (exact rays through the grid's per-cell triangle lists; binds the
+    /// BVH and the lists).
     hybrid: ComputePipeline,
     sampler: Sampler,
 }
@@ -129,7 +130,8 @@ impl Gather {
 
     /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. The five
     /// SPIR-V variants: voxel visibility; exact visibility (also binds the BVH); `psm` (also binds the
-    /// shared set and its maps); `psm-exact` (the shared set and the BVH); `hybrid` (binds the BVH).
+    /// shared set and its maps); `psm-exact` (the shared set and the BVH); `hybrid` (binds the BVH and
+    /// the per-cell triangle lists).
     pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 5]) -> Result<Self> {
         let [spirv, exact, psm, psm_exact, hybrid] = spirv;
         let (mut bindings, push) = Self::bindings();
@@ -143,6 +145,7 @@ impl Gather {
         let pipeline = ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &[])?;
         bindings.extend(crate::bvh::GpuBvh::bindings());
         let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
+        bindings.extend(crate::bvh::cells::GpuCells::bindings());
         let hybrid = ComputePipeline::new(gpu, name, &crate::spirv(hybrid), &bindings, push, &[])?;
         Ok(Gather { name, pipeline, exact, psm, psm_exact, hybrid, sampler: Sampler::nearest(gpu)? })
     }
@@ -205,7 +208,10 @@ impl Gather {
                         s,
                     ),
                 ),
-                (None, Some(bvh)) => (if f.hybrid { &self.hybrid } else { &self.exact }, bvh.writes(writes)),
+                (None, Some(bvh)) => match f.cells {
+                    Some(cells) => (&self.hybrid, cells.writes(bvh.writes(writes))),
+                    None => (&self.exact, bvh.writes(writes)),
+                },
                 (None, None) => (&self.pipeline, writes),
             };
             let chunk = f.vpls_per_dispatch.max(1);

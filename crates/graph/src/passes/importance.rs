@@ -74,6 +74,10 @@ pub struct ImportanceParams {
 pub struct Importance {
     pipeline: ComputePipeline,
     gbg: ComputePipeline,
+    /// gbg's scatter with `--visibility exact`: each ray's real first hit (binds the BVH).
+    gbg_exact: ComputePipeline,
+    /// The same with `--visibility hybrid` (binds the BVH and the cell lists).
+    gbg_hybrid: ComputePipeline,
     sampler: Sampler,
 }
 
@@ -107,7 +111,13 @@ impl Importance {
             push,
             &[],
         )?;
-        Ok(Importance { pipeline, gbg, sampler: Sampler::nearest(gpu)? })
+        bindings.extend(crate::bvh::GpuBvh::bindings());
+        let spirv = crate::spirv(shaders::IMPORTANCE_GBG_EXACT_COMP);
+        let gbg_exact = ComputePipeline::new(gpu, "importance_gbg", &spirv, &bindings, push, &[])?;
+        bindings.extend(crate::bvh::cells::GpuCells::bindings());
+        let spirv = crate::spirv(shaders::IMPORTANCE_GBG_HYBRID_COMP);
+        let gbg_hybrid = ComputePipeline::new(gpu, "importance_gbg", &spirv, &bindings, push, &[])?;
+        Ok(Importance { pipeline, gbg, gbg_exact, gbg_hybrid, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Number of texels (VPL slots) of the reflective DPRSM.
@@ -182,7 +192,7 @@ impl Importance {
             min_d2: p.min_d2,
             fixed_scale: p.fixed_scale,
             section,
-            pad: 0,
+            first: 0,
         };
         let dispatch = |pipeline: &ComputePipeline, writes: &DescriptorWrites, push: ImportancePush, size| {
             pipeline.dispatch(ctx.cmd, writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
@@ -204,13 +214,27 @@ impl Importance {
                 .storage_buffer(B_GBG_SUM, ctx.buffer(sums))
                 .storage_buffer(B_GBG_COUNT, ctx.buffer(counts));
             ctx.serialize(&out);
-            let scatter = ImportancePush { samples: rays, ..push(IMP_GBG_SCATTER, 1) };
-            dispatch(&self.gbg, &writes, scatter, [f.width, f.height, 1]);
+            // The voxel march's rays all fit one dispatch; traced rays go in shares under the loop limit.
+            let chunk = f.traces_per_dispatch.max(1);
+            let (scatter, chunk, writes) = match (f.cells, f.bvh) {
+                (Some(cells), Some(bvh)) => (&self.gbg_hybrid, chunk, cells.writes(bvh.writes(writes))),
+                (None, Some(bvh)) if f.exact_rays => (&self.gbg_exact, chunk, bvh.writes(writes)),
+                _ => (&self.gbg, rays.max(1), writes),
+            };
+            for first in (0..rays).step_by(chunk as usize) {
+                if first > 0 {
+                    // The next share adds to the same sums (atomics: the order does not matter, the hazard does).
+                    ctx.serialize(sums);
+                    ctx.serialize(counts);
+                }
+                let p = ImportancePush { samples: rays, regions: chunk, first, ..push(IMP_GBG_SCATTER, 1) };
+                dispatch(scatter, &writes, p, [f.width, f.height, 1]);
+            }
             // The resolve reads the scattered sums and counts and writes section 1.
             ctx.serialize(sums);
             ctx.serialize(counts);
             ctx.serialize(&out);
-            dispatch(&self.gbg, &writes, push(IMP_GBG_RESOLVE, 1), [res, res, layers]);
+            dispatch(scatter, &writes, push(IMP_GBG_RESOLVE, 1), [res, res, layers]);
         }
     }
 }

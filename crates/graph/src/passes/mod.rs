@@ -66,8 +66,14 @@ pub struct FrameInputs<'a> {
     /// The scene's BVH when the gather tests visibility with exact shadow rays (`--visibility exact`,
     /// `hybrid`); `None`: the voxel march.
     pub bvh: Option<&'a crate::bvh::GpuBvh>,
-    /// With `bvh`: trace it only through the voxel grid's occupied cells (`--visibility hybrid`).
-    pub hybrid: bool,
+    /// With `bvh`: the per-cell triangle lists of `--visibility hybrid` (the rays march the grid and test
+    /// each cell's own triangles; crates/graph/src/bvh/cells.rs).
+    pub cells: Option<&'a crate::bvh::cells::GpuCells>,
+    /// Exact or hybrid rays one invocation may trace in one dispatch under the device's loop limit (gbg's
+    /// importance rays are split over dispatches by it).
+    pub traces_per_dispatch: u32,
+    /// Visibility is exact rays (`--visibility exact`, `psm-exact`: the BVH; `hybrid`: also `cells`).
+    pub exact_rays: bool,
     /// VPLs one gather dispatch may evaluate per pixel, so that no invocation exceeds the driver's loop
     /// iteration limit (`Gpu::loop_iteration_limit`); `u32::MAX` where there is none.
     pub vpls_per_dispatch: u32,
