@@ -309,6 +309,7 @@ impl FrameArgs {
                 spatial_neighbors: self.spatial_neighbors,
                 spatial_radius: self.spatial_radius,
                 temporal_cap: self.temporal_cap,
+                candidates_chunk: None,
             },
             ..FrameSettings::default()
         }

@@ -211,7 +211,9 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
         bytemuck::bytes_of(&push),
         ris.spatial_passes,
     ));
-    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch: i.ris_candidates_per_dispatch, key }
+    let candidates_per_dispatch =
+        ris.candidates_chunk.map_or(i.ris_candidates_per_dispatch, |c| c.get().min(i.ris_candidates_per_dispatch));
+    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key }
 }
 
 /// The reference's push constants for the sample range `chunk` of `--spp`.

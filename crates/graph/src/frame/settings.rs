@@ -100,6 +100,9 @@ pub struct RisSettings {
     /// Temporal reuse across frames of one view: the history's confidence is capped at this many times
     /// M (0: no temporal reuse).
     pub temporal_cap: f32,
+    /// Candidates per initial dispatch (`None`: as many as the device's loop limit allows). The image
+    /// does not depend on it (the reservoirs' streaming state is carried between dispatches).
+    pub candidates_chunk: Option<std::num::NonZeroU32>,
 }
 
 impl Default for RisSettings {
@@ -111,6 +114,7 @@ impl Default for RisSettings {
             spatial_neighbors: 4,
             spatial_radius: 16.0,
             temporal_cap: 20.0,
+            candidates_chunk: None,
         }
     }
 }
@@ -349,8 +353,11 @@ impl FrameSettings {
         }
     }
 
-    /// `Method::Ris`'s settings against each other and the device's limits.
+    /// `Method::Ris`'s settings against each other and the device's limits (other methods ignore them).
     fn validate_ris(&self, gpu: &Gpu) -> Result<(), SettingsError> {
+        if self.method != Method::Ris {
+            return Ok(());
+        }
         let r = &self.ris;
         if self.visibility.shared_set() {
             reject!("--method ris tests visibility per pixel and sample: --visibility psm/psm-exact share one VPL set across pixels (use voxel, exact or hybrid)");
@@ -431,9 +438,7 @@ impl FrameSettings {
                 );
             }
         }
-        if self.method == Method::Ris {
-            self.validate_ris(gpu)?;
-        }
+        self.validate_ris(gpu)?;
         if self.spp == 0 {
             reject!("--spp must be at least 1");
         }

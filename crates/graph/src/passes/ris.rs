@@ -143,7 +143,7 @@ impl Ris {
         // the last stage's reservoirs are the ones kept for the next frame.
         let mut current = history.current;
         let mut scratch = (r.spatial_passes > 0).then(|| g.create_buffer(desc("ris.scratch")));
-        let target = |s: u32| (r.spatial_passes - s) % 2 == 0;
+        let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             self.add_initial(g, f, i, dst, previous, push, r);
