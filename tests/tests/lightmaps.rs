@@ -142,5 +142,5 @@ fn every_method_runs_on_every_light_map_and_psm() {
             }
         }
     }
-    assert_eq!(runs, 3 * (8 + 6));
+    assert_eq!(runs, 3 * (9 + 6));
 }
