@@ -43,7 +43,10 @@ import tomllib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = ["cornell-box", "two-rooms", "sibenik", "conference"]
-METHODS = ["uniform", "global", "stratified", "local", "gbg", "mis", "reference"]
+METHODS = ["uniform", "global", "stratified", "local", "gbg", "mis", "reference", "ris"]
+# Per-frame settings of a method where the render default does not fit a progressive frame: ris's --vpls is
+# its reservoirs per pixel, each worth --candidates VPL candidates (4 × 16 candidates per pixel and frame).
+METHOD_ARGS = {"ris": ["--vpls", "4"]}
 DEFAULT_ALBEDO = 0.5
 # Segment visibility ignores hits within this fraction of either end (bounce's BVH_SHADOW_EPS).
 SHADOW_EPS = 1e-4
@@ -407,7 +410,7 @@ def run_scene(a, mi, name):
     rows = [(f"Mitsuba MIS ({a.spp} spp)", wall, "-", mref, wall)]
     for method in a.methods:
         out_exr = os.path.join(a.out, f"{name}-{a.size}-{method}.exr")
-        extra = ["--time-limit", f"{wall:.3f}"] + (["--spp", str(a.ref_frame_spp)] if method == "reference" else [])
+        extra = ["--time-limit", f"{wall:.3f}"] + (["--spp", str(a.ref_frame_spp)] if method == "reference" else []) + METHOD_ARGS.get(method, [])
         whole, _ = run_timed(bounce_cmd(a, scene_path, out_exr, method, extra))
         meta = exr_meta(mi, out_exr)
         rows.append((f"bounce {method}", float(meta.get("bounce.wall_s", "nan")), meta.get("bounce.frames", "?"),

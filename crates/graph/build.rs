@@ -70,6 +70,12 @@ const SHADERS: &[Shader] = &[
     variant("mis.psm.comp", "mis.comp", &["PSM_VISIBILITY"]),
     variant("mis.psm_exact.comp", "mis.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
     variant("mis.hybrid.comp", "mis.comp", &["HYBRID_VISIBILITY"]),
+    // ris: its three stages, the shade with the gather's visibility variants (voxel, exact, hybrid).
+    variant("ris.initial.comp", "ris.comp", &["RIS_INITIAL"]),
+    variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
+    variant("ris.shade.comp", "ris.comp", &["RIS_SHADE"]),
+    variant("ris.shade_exact.comp", "ris.comp", &["RIS_SHADE", "EXACT_VISIBILITY"]),
+    variant("ris.shade_hybrid.comp", "ris.comp", &["RIS_SHADE", "HYBRID_VISIBILITY"]),
     // The reference: two-strategy MIS (cosine at x, light side at y), and the cosine strategy alone
     // (`--reference-estimator cosine`).
     file("reference.comp"),

@@ -119,6 +119,16 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define B_PSM_VIEWS 29
 #define B_PSM_DEPTH 30
 
+// ---- ris (resampled importance sampling over the VPLs, passes/ris.rs): reservoir buffers ---------------
+// The stage's input reservoirs, its output, and last frame's final reservoirs.
+#define B_RIS_IN 31
+#define B_RIS_OUT 32
+#define B_RIS_HISTORY 33
+// Reservoir.vpl of an empty reservoir.
+#define RIS_NONE 0xFFFFFFFFu
+// Most neighbours of one spatial pass (its loops are bounded by it).
+#define RIS_MAX_NEIGHBORS 8
+
 // ---- Test kernels (glsl/test/): their input and output buffers. Test pipelines bind nothing else at
 // these numbers, so they may repeat B_REF_SQ's and B_PSM_VIEWS's. --------------------------------------------
 #define B_TEST_IN 28

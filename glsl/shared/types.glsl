@@ -65,6 +65,28 @@ struct GatherPush {
     uint pad2;
 };
 
+// ris push constants, after a GatherPush (`draw_vpl`'s sampling fields; first/last: the candidate range
+// of ris's initial stage, the reservoir range of its shade stage).
+struct RisPush {
+    uint candidates;  // M: candidates streamed into each reservoir
+    uint reservoirs;  // R: reservoirs (shadow rays) per pixel
+    uint pass;        // the spatial pass (its neighbours' hash)
+    uint neighbors;   // k: neighbours per spatial pass
+    float radius;     // spatial radius, pixels
+    float history_cap;// the history's confidence is capped at history_cap · M
+    uint history;     // 1: last frame's reservoirs are bound at B_RIS_HISTORY
+    uint pad;
+};
+
+// One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`
+// is their Σ w; once they are in, the unbiased contribution weight W of `vpl`.
+struct Reservoir {
+    uint vpl;         // the kept VPL (RIS_NONE: none)
+    float weight;     // Σ w while streaming; then W
+    float confidence; // c: candidates behind the sample (M; sums over reuse; capped as history)
+    float target;     // p̂(vpl) at the owning pixel while streaming (0: none)
+};
+
 // One VPL of the frame's shared set under `--visibility psm`, and the viewpoint of its shadow map.
 struct PsmView {
     vec4 position_v;  // xyz: the VPL lifted off its surface (the map's centre); w: the VPL index (uint bits)

@@ -14,6 +14,7 @@ mod layout;
 mod lightmaps;
 mod psm;
 mod reference;
+mod ris;
 mod stress;
 mod validation;
 mod visibility;

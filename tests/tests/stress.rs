@@ -10,7 +10,7 @@ use bounce_graph::scene::{point_light, Scene};
 use bounce_tests::TestGpu;
 use glam::{DVec3, Vec3};
 
-const METHODS: [Method; 8] = Method::ALL;
+const METHODS: [Method; 9] = Method::ALL;
 
 fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> [[Vec3; 3]; 2] {
     [[a, b, c], [a, c, d]]

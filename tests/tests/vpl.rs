@@ -51,7 +51,14 @@ fn indirect(
     indirect_with(r, FrameSettings { method, seed, vpls, ..FrameSettings::default() }, w, h, dprsm_res, voxels)
 }
 
-fn indirect_with(r: &mut Renderer, base: FrameSettings, w: u32, h: u32, dprsm_res: u32, voxels: u32) -> Vec<[f32; 3]> {
+pub(crate) fn indirect_with(
+    r: &mut Renderer,
+    base: FrameSettings,
+    w: u32,
+    h: u32,
+    dprsm_res: u32,
+    voxels: u32,
+) -> Vec<[f32; 3]> {
     let s = FrameSettings { width: w, height: h, component: Component::Indirect, dprsm_res, voxels, ..base };
     let f = r.render(&s).unwrap();
     assert!(f.radiance.iter().all(|p| p.iter().all(|c| c.is_finite())), "non-finite radiance");
@@ -138,7 +145,7 @@ fn every_method_converges_to_all_at_the_monte_carlo_rate() {
     }
 }
 
-fn converges_to(name: &str, all: &[[f32; 3]], mut run: impl FnMut(u64) -> Vec<[f32; 3]>) {
+pub(crate) fn converges_to(name: &str, all: &[[f32; 3]], mut run: impl FnMut(u64) -> Vec<[f32; 3]>) {
     let k_max = 48usize;
     let runs: Vec<Vec<[f32; 3]>> = (0..k_max).map(|k| run(1000 + k as u64)).collect();
     let mse_of_mean = |k: usize| {

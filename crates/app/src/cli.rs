@@ -11,7 +11,8 @@
 
 use bounce_device::GpuOptions;
 use bounce_graph::frame::{
-    Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, ReferenceEstimator, Visibility,
+    Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, ReferenceEstimator, RisSettings, RisSource,
+    Visibility,
 };
 use bounce_graph::scene::Scene;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -91,6 +92,19 @@ pub const METHODS: Choices<Method> = Choices(&[
         Method::Reference,
         "The exact one-bounce integral: GPU path tracing against the triangles (BVH), --spp samples",
     ),
+    (
+        "ris",
+        Method::Ris,
+        "Resampling: --vpls reservoirs per pixel, each one of --candidates VPLs from --source by its unshadowed contribution, spatial and temporal reuse",
+    ),
+]);
+
+pub const RIS_SOURCES: Choices<RisSource> = Choices(&[
+    ("uniform", RisSource::Uniform, "Uniformly among the VPLs"),
+    ("global", RisSource::Global, "The global CDF (--cdf-samples gather points)"),
+    ("stratified", RisSource::Stratified, "The global CDF from gather points over the 4 screen quarters"),
+    ("local", RisSource::Local, "One CDF per screen region (--regions), all sampled by every pixel"),
+    ("gbg", RisSource::Gbg, "The gathering-based global CDF (--gather-rays)"),
 ]);
 
 pub const REFERENCE_ESTIMATORS: Choices<ReferenceEstimator> = Choices(&[
@@ -235,6 +249,25 @@ pub struct FrameArgs {
     /// across its progressive frames.
     #[arg(long)]
     pub cdf_seed: Option<u64>,
+    /// Candidate distribution of --method ris (the CDF methods' mixtures, --defensive included).
+    #[arg(long, value_parser = RIS_SOURCES, default_value = "gbg")]
+    pub source: RisSource,
+    /// Candidates per reservoir of --method ris (M).
+    #[arg(long, default_value_t = RisSettings::default().candidates)]
+    pub candidates: u32,
+    /// Spatial reuse passes of --method ris (0: none).
+    #[arg(long, default_value_t = RisSettings::default().spatial_passes)]
+    pub spatial_passes: u32,
+    /// Neighbours per spatial pass of --method ris.
+    #[arg(long, default_value_t = RisSettings::default().spatial_neighbors)]
+    pub spatial_neighbors: u32,
+    /// Radius of the spatial neighbourhood of --method ris, pixels.
+    #[arg(long, default_value_t = RisSettings::default().spatial_radius)]
+    pub spatial_radius: f32,
+    /// Temporal reuse of --method ris over progressive frames of one view: last frame's reservoirs count
+    /// at most this many times --candidates (0: no temporal reuse).
+    #[arg(long, default_value_t = RisSettings::default().temporal_cap)]
+    pub temporal_cap: f32,
     /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
     #[arg(long)]
     pub device: Option<String>,
@@ -269,6 +302,15 @@ impl FrameArgs {
             shadow_res: self.shadow_res,
             voxels: self.voxels,
             clamp: self.clamp,
+            ris: RisSettings {
+                source: self.source,
+                candidates: self.candidates,
+                spatial_passes: self.spatial_passes,
+                spatial_neighbors: self.spatial_neighbors,
+                spatial_radius: self.spatial_radius,
+                temporal_cap: self.temporal_cap,
+                candidates_chunk: None,
+            },
             ..FrameSettings::default()
         }
     }

@@ -218,10 +218,10 @@ pub struct Temporal<T> {
 
 /// This frame's and last frame's version of a temporal image.
 #[derive(Clone, Copy, Debug)]
-pub struct History {
-    pub current: Handle<Image>,
-    /// Last frame's image, `None` when there is none with the same description (first frame, resize).
-    pub previous: Option<Handle<Image>>,
+pub struct History<T = Image> {
+    pub current: Handle<T>,
+    /// Last frame's version, `None` when there is none with the same description (first frame, resize).
+    pub previous: Option<Handle<T>>,
 }
 
 enum Storage<'a> {
@@ -541,6 +541,15 @@ impl<'a> Graph<'a> {
         let slot = |parity: u64| format!("{name}#{}", parity % 2);
         let current = self.temporal_image(&slot(frame), desc.clone(), key).handle;
         let previous = self.temporal_image(&slot(frame + 1), desc, key);
+        History { current, previous: (!previous.fresh).then_some(previous.handle) }
+    }
+
+    /// This frame's and last frame's version of a buffer (see [`Graph::history_image`]).
+    pub fn history_buffer(&mut self, name: &str, desc: BufferDesc, key: &impl Hash) -> History<Buffer> {
+        let frame = self.retained.as_ref().map_or(0, |st| st.frame);
+        let slot = |parity: u64| format!("{name}#{}", parity % 2);
+        let current = self.temporal_buffer(&slot(frame), desc.clone(), key).handle;
+        let previous = self.temporal_buffer(&slot(frame + 1), desc, key);
         History { current, previous: (!previous.fresh).then_some(previous.handle) }
     }
 

@@ -111,6 +111,43 @@ pub struct GatherPush {
 }
 const _: () = assert!(size_of::<GatherPush>() == 64);
 
+/// ris push constants, after a [`GatherPush`] (`RisPush` in `glsl/shared/types.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RisPush {
+    pub candidates: u32,
+    pub reservoirs: u32,
+    pub pass: u32,
+    pub neighbors: u32,
+    pub radius: f32,
+    pub history_cap: f32,
+    pub history: u32,
+    pub pad: u32,
+}
+const _: () = assert!(size_of::<RisPush>() == 32);
+
+/// ris's push constant block: the gather's sampling fields, then ris's own.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RisPushBlock {
+    pub gather: GatherPush,
+    pub ris: RisPush,
+}
+const _: () = assert!(size_of::<RisPushBlock>() == 96);
+const _: () = assert!(offset_of!(RisPushBlock, ris) == 64);
+
+/// One reservoir of ris (`Reservoir` in `glsl/shared/types.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Reservoir {
+    pub vpl: u32,
+    /// Σ w while streaming; then the unbiased contribution weight W.
+    pub weight: f32,
+    pub confidence: f32,
+    pub target: f32,
+}
+const _: () = assert!(size_of::<Reservoir>() == 16);
+
 /// One VPL of the frame's shared set under `--visibility psm` and its shadow map's viewpoint
 /// (`PsmView` in `glsl/shared/types.glsl`).
 #[repr(C)]

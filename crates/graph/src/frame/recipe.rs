@@ -23,9 +23,10 @@ use crate::passes::cdf_reduce::CdfReduce;
 use crate::passes::gather::GatherInputs;
 use crate::passes::importance::{ImportanceKind, ImportanceParams};
 use crate::passes::reference::ReferenceIo;
+use crate::passes::ris::RisFrame;
 use crate::passes::voxelize::VoxelGridSpec;
 use crate::passes::{FrameInputs, Passes};
-use crate::shader_types::GatherPush;
+use crate::shader_types::{GatherPush, RisPush};
 use bounce_device::{vk, Buffer, Image, ImageDesc};
 use std::ops::Range;
 
@@ -56,6 +57,8 @@ pub struct RecipeInputs<'a> {
     pub grid: VoxelGridSpec,
     /// The reference's samples per dispatch under the loop limit.
     pub reference_per_dispatch: u32,
+    /// ris's candidates per initial dispatch under the loop limit.
+    pub ris_candidates_per_dispatch: u32,
 }
 
 /// The frame recipe, for the part `chunk` of the frame's work: the VPL tile of `all`, the sample range
@@ -107,6 +110,10 @@ pub fn build_frame<'a>(
         // One shared VPL set (and its shadow maps) for every pixel: passes/psm.rs. Under `mis` it is the
         // CDF strategy's samples; the gathering rays stay per pixel.
         inputs.psm = Some(r.psm.add(g, f, &vpls, cdf.importance, cdf.cdf, s.psm_res, push));
+    }
+    if s.method == Method::Ris {
+        r.ris.add(g, f, &inputs, &mut out, push, ris_frame(s, i, push));
+        return FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) };
     }
     let pass = if s.method == Method::Mis { &r.mis } else { &r.gather };
     pass.add(g, f, &inputs, &mut out, push);
@@ -165,7 +172,7 @@ fn gather_push(s: &FrameSettings, f: FrameInputs, p: ImportanceParams, chunk: Ra
         first: 0,
         last: s.vpls,
         sections: p.kind.method_sections(),
-        defensive: if s.method == Method::Uniform { 0.0 } else { s.defensive },
+        defensive: if s.sampling_method() == Method::Uniform { 0.0 } else { s.defensive },
         face_mode: match s.face {
             FaceMode::RussianRoulette => FACE_RR,
             FaceMode::Uniform => FACE_UNIFORM,
@@ -182,6 +189,31 @@ fn gather_push(s: &FrameSettings, f: FrameInputs, p: ImportanceParams, chunk: Ra
         },
         _ => push,
     }
+}
+
+/// ris's stages' parameters. The history's key is everything the reservoirs depend on but the seed: the
+/// camera and size (G-buffer key), the CDF, and every sampling and reuse setting.
+fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFrame {
+    let ris = &s.ris;
+    let push = RisPush {
+        candidates: ris.candidates,
+        reservoirs: s.vpls,
+        neighbors: ris.spatial_neighbors,
+        radius: ris.spatial_radius,
+        history_cap: ris.temporal_cap,
+        ..RisPush::default()
+    };
+    let sampling = GatherPush { seed: 0, ..gather };
+    let key = crate::graph::fingerprint(&(
+        i.keys.gbuffer,
+        i.keys.cdf,
+        bytemuck::bytes_of(&sampling),
+        bytemuck::bytes_of(&push),
+        ris.spatial_passes,
+    ));
+    let candidates_per_dispatch =
+        ris.candidates_chunk.map_or(i.ris_candidates_per_dispatch, |c| c.get().min(i.ris_candidates_per_dispatch));
+    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key }
 }
 
 /// The reference's push constants for the sample range `chunk` of `--spp`.

@@ -292,6 +292,11 @@ impl RenderContext {
             keys: Keys::new(s, camera, &grid, &importance),
             importance,
             grid,
+            ris_candidates_per_dispatch: crate::passes::ris::candidates_per_dispatch(
+                self.gpu.loop_iteration_limit,
+                importance.kind.method_sections(),
+                s.light_map.faces() * self.scene.light_count,
+            ),
             reference_per_dispatch: self
                 .bvh
                 .as_ref()
@@ -339,8 +344,8 @@ impl RenderContext {
         let i_max = self.max_intensity.max(1e-30);
         let c_ref = i_max * 4.0 * (2.0 / s.dprsm_res as f32).powi(2) / (std::f32::consts::PI.powi(2) * min_d * min_d);
         ImportanceParams {
-            kind: match s.method {
-                Method::Uniform | Method::All | Method::Reference => ImportanceKind::Uniform,
+            kind: match s.sampling_method() {
+                Method::Uniform | Method::All | Method::Reference | Method::Ris => ImportanceKind::Uniform,
                 Method::Global => ImportanceKind::Global,
                 Method::Stratified => ImportanceKind::Stratified,
                 Method::Local => ImportanceKind::Local { side: (s.regions as f64).sqrt().round() as u32 },

@@ -56,6 +56,67 @@ pub enum Method {
     Mis,
     /// The exact one-bounce integral (BVH path tracing, `spp` samples): the ground truth.
     Reference,
+    /// Resampled importance sampling: `vpls` reservoirs per pixel, each keeping one of `candidates`
+    /// VPLs from a source CDF by their unshadowed contribution there, with spatial and temporal reuse
+    /// (`passes/ris.rs`).
+    Ris,
+}
+
+/// The source distribution of `Method::Ris`'s candidates: one of the CDF methods' mixtures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RisSource {
+    Uniform,
+    Global,
+    Stratified,
+    Local,
+    Gbg,
+}
+
+impl RisSource {
+    /// The method that samples this distribution.
+    pub fn method(self) -> Method {
+        match self {
+            RisSource::Uniform => Method::Uniform,
+            RisSource::Global => Method::Global,
+            RisSource::Stratified => Method::Stratified,
+            RisSource::Local => Method::Local,
+            RisSource::Gbg => Method::Gbg,
+        }
+    }
+}
+
+/// `Method::Ris`'s parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RisSettings {
+    pub source: RisSource,
+    /// Candidates M per reservoir.
+    pub candidates: u32,
+    /// Spatial reuse passes (0: none).
+    pub spatial_passes: u32,
+    /// Neighbours per spatial pass.
+    pub spatial_neighbors: u32,
+    /// Radius of the neighbourhood, pixels.
+    pub spatial_radius: f32,
+    /// Temporal reuse across frames of one view: the history's confidence is capped at this many times
+    /// M (0: no temporal reuse).
+    pub temporal_cap: f32,
+    /// Candidates per initial dispatch (`None`: as many as the device's loop limit allows). The image
+    /// does not depend on it (the reservoirs' streaming state is carried between dispatches).
+    pub candidates_chunk: Option<std::num::NonZeroU32>,
+}
+
+impl Default for RisSettings {
+    fn default() -> Self {
+        RisSettings {
+            source: RisSource::Gbg,
+            candidates: 16,
+            spatial_passes: 1,
+            spatial_neighbors: 4,
+            spatial_radius: 16.0,
+            temporal_cap: 20.0,
+            candidates_chunk: None,
+        }
+    }
 }
 
 /// How the VPL gather tests visibility.
@@ -145,7 +206,7 @@ pub enum MisWeights {
 
 impl Method {
     /// Every method, in declaration order.
-    pub const ALL: [Method; 8] = [
+    pub const ALL: [Method; 9] = [
         Method::Uniform,
         Method::All,
         Method::Global,
@@ -154,6 +215,7 @@ impl Method {
         Method::Gbg,
         Method::Mis,
         Method::Reference,
+        Method::Ris,
     ];
 
     pub fn name(self) -> &'static str {
@@ -166,6 +228,7 @@ impl Method {
             Method::Gbg => "gbg",
             Method::Mis => "mis",
             Method::Reference => "reference",
+            Method::Ris => "ris",
         }
     }
 }
@@ -241,6 +304,8 @@ pub struct FrameSettings {
     pub shadow_bias: f32,
     /// Slope shadow bias, in texels.
     pub shadow_slope_bias: f32,
+    /// `Method::Ris`'s source, candidates and reuse.
+    pub ris: RisSettings,
 }
 
 impl Default for FrameSettings {
@@ -272,11 +337,58 @@ impl Default for FrameSettings {
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
+            ris: RisSettings::default(),
         }
     }
 }
 
 impl FrameSettings {
+    /// The method whose CDF and source mixture the frame samples: `Method::Ris`'s source, else the
+    /// method itself.
+    pub fn sampling_method(&self) -> Method {
+        if self.method == Method::Ris {
+            self.ris.source.method()
+        } else {
+            self.method
+        }
+    }
+
+    /// `Method::Ris`'s settings against each other and the device's limits (other methods ignore them).
+    fn validate_ris(&self, gpu: &Gpu) -> Result<(), SettingsError> {
+        if self.method != Method::Ris {
+            return Ok(());
+        }
+        let r = &self.ris;
+        if self.visibility.shared_set() {
+            reject!("--method ris tests visibility per pixel and sample: --visibility psm/psm-exact share one VPL set across pixels (use voxel, exact or hybrid)");
+        }
+        if !(1..=1024).contains(&r.candidates) {
+            reject!("--candidates must be between 1 and 1024 (got {})", r.candidates);
+        }
+        let max_k = crate::bindings::RIS_MAX_NEIGHBORS;
+        if r.spatial_neighbors > max_k {
+            reject!("--spatial-neighbors must be at most {max_k} (got {})", r.spatial_neighbors);
+        }
+        if r.spatial_passes > 8 {
+            reject!("--spatial-passes must be at most 8 (got {})", r.spatial_passes);
+        }
+        if r.spatial_passes > 0 && r.spatial_neighbors == 0 {
+            reject!("--spatial-passes {} needs --spatial-neighbors of at least 1", r.spatial_passes);
+        }
+        if !(r.spatial_radius.is_finite() && r.spatial_radius >= 1.0 && r.spatial_radius <= 1024.0) {
+            reject!("--spatial-radius must be between 1 and 1024 pixels (got {})", r.spatial_radius);
+        }
+        if !(r.temporal_cap.is_finite() && r.temporal_cap >= 0.0) {
+            reject!("--temporal-cap must be finite and non-negative (got {})", r.temporal_cap);
+        }
+        let bytes = crate::passes::ris::Ris::layer_bytes(self.width, self.height) * self.vpls as u64;
+        let range = gpu.limits().max_storage_buffer_range as u64;
+        if bytes > range {
+            reject!("ris keeps {} reservoirs per pixel: {bytes} bytes exceed maxStorageBufferRange ({range}); lower --vpls or the size", self.vpls);
+        }
+        Ok(())
+    }
+
     /// Reject impossible settings with a message naming the setting and the device limit.
     pub fn validate(&self, gpu: &Gpu) -> Result<(), SettingsError> {
         let max = gpu.limits().max_image_dimension2_d;
@@ -326,6 +438,7 @@ impl FrameSettings {
                 );
             }
         }
+        self.validate_ris(gpu)?;
         if self.spp == 0 {
             reject!("--spp must be at least 1");
         }

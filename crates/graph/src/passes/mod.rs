@@ -10,6 +10,7 @@ pub mod importance;
 pub mod mis;
 pub mod psm;
 pub mod reference;
+pub mod ris;
 pub mod voxelize;
 
 use crate::gpu_scene::GpuScene;
@@ -29,6 +30,7 @@ pub struct Passes {
     pub mis: gather::Gather,
     pub psm: psm::Psm,
     pub reference: reference::Reference,
+    pub ris: ris::Ris,
 }
 
 impl Passes {
@@ -46,6 +48,7 @@ impl Passes {
             mis: mis::create(gpu).context("creating the mis pass")?,
             psm: psm::Psm::new(gpu).context("creating the psm pass")?,
             reference: reference::Reference::new(gpu, textured).context("creating the reference pass")?,
+            ris: ris::Ris::new(gpu).context("creating the ris pass")?,
         })
     }
 }

@@ -1,0 +1,313 @@
+//! ris: resampled importance sampling over the VPLs (Talbot et al. 2005) with spatial and temporal
+//! reuse (ReSTIR, Bitterli et al. 2020; generalized RIS, Lin et al. 2022). `glsl/ris.comp`, three
+//! graph passes:
+//!
+//! - `ris_initial` (W × H × R invocations): each of a pixel's R reservoirs streams M candidates
+//!   v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
+//!   stratified set) with weights w_i = p̂(v_i) / p(v_i), where the target p̂(v) is the luminance of the
+//!   unshadowed contribution at the pixel (flux, both cosines, 1/d², albedo: `vpl_unshadowed`). It keeps
+//!   y with probability w_y / Σw and sets W = Σw / (M p̂(y)), the unbiased contribution weight, with
+//!   confidence c = M. With a history (temporal reuse), it then combines that reservoir with last frame's
+//!   final one at the same pixel and layer, whose confidence is capped at `history_cap` · M.
+//! - `ris_spatial` (P passes of W × H × R): each reservoir is combined with those of up to k neighbours
+//!   of the same layer within `radius` pixels, picked by a hash of (pixel, seed, pass, layer) and kept
+//!   only if their normal and eye distance are close (a deterministic function of the two G-buffer
+//!   texels).
+//! - `ris_shade` (W × H): L(x) = 1/R Σ_r f(y_r) V(y_r) W_r, f the unshadowed RGB contribution and V the
+//!   gather's visibility (`contribution()`: voxel march, exact or hybrid shadow rays).
+//!
+//! **Why this is unbiased with respect to `all`.** A combination of reservoirs (y_i, W_i, c_i), each with
+//! E[g(y_i) W_i] = Σ_v g(v) for every g vanishing outside {p̂_i > 0} (its target p̂_i, i.e. the pixel it
+//! was made at), picks y_i with probability ∝ w_i = m_i(y_i) p̂_x(y_i) W_i and sets W = Σ w / p̂_x(y), so
+//! E[g(y) W | inputs] = Σ_i m_i(y_i) g(y_i) W_i and, by linearity alone (the inputs may be correlated:
+//! neighbours share histories), E[g(y) W] = Σ_v g(v) Σ_i m_i(v). The generalized balance weights
+//! m_i(v) = c_i p̂_i(v) / Σ_j c_j p̂_j(v) are deterministic given the neighbour choice (confidences count
+//! candidates, never samples) and sum to 1 wherever p̂_x(v) > 0 (the pixel's own reservoir is an
+//! input); an input is only weighted where its own p̂_i > 0, which its sample covers. So W is an
+//! unbiased contribution weight for the target support {p̂_x > 0} ⊇ {f_x ≠ 0}, and because the target
+//! has no visibility, the visibility tested at the receiving pixel in the shade is just part of the
+//! integrand: E[f(y) V(y) W] = Σ_v f(v) V(v), the `all` sum. (A target with visibility would need it
+//! re-evaluated at the receiving pixel for every neighbour sample; the unshadowed one needs no ray.)
+//! The source needs p_v > 0 wherever p̂ > 0: the defensive share ε > 0 of the CDF sources, or `uniform`.
+//! The temporal input is last frame's final reservoir at the same pixel, valid for the same camera and
+//! settings (the history's key), so its target is this frame's and the weights reduce to c_i / Σ c_j.
+//!
+//! Loop bounds: the initial stage's candidates are split over dispatches ([`candidates_per_dispatch`]),
+//! its streaming state (y, Σw, p̂(y)) carried in the output; the shade's reservoirs too (the gather's
+//! `vpls_per_dispatch`); a spatial pass loops over at most (k + 1)² target evaluations, k ≤
+//! `RIS_MAX_NEIGHBORS`. Reservoirs: one `Reservoir` (16 bytes) per pixel and layer, the final ones in a
+//! history buffer (this frame's and last frame's version), the spatial passes ping-ponging with a
+//! transient one.
+
+use super::gather::GatherInputs;
+use super::FrameInputs;
+use crate::bindings::*;
+use crate::gpu_scene::scene_bindings;
+use crate::graph::{Graph, Handle, PassBuilder, PassContext};
+use crate::shader_types::{GatherPush, Reservoir, RisPush, RisPushBlock};
+use crate::shaders;
+use anyhow::Result;
+use bounce_device::sync::Access;
+use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
+
+pub struct Ris {
+    initial: ComputePipeline,
+    spatial: ComputePipeline,
+    shade: ComputePipeline,
+    /// The shade with `--visibility exact` (binds the BVH).
+    shade_exact: ComputePipeline,
+    /// The shade with `--visibility hybrid` (binds the BVH and the triangle lists).
+    shade_hybrid: ComputePipeline,
+    sampler: Sampler,
+}
+
+/// What a ris frame does besides the gather's sampling fields.
+#[derive(Clone, Copy, Debug)]
+pub struct RisFrame {
+    /// The stages' push constants (`pass` and `history` are set per stage).
+    pub push: RisPush,
+    /// Spatial passes P.
+    pub spatial_passes: u32,
+    /// Candidates one initial dispatch may stream per reservoir under the loop limit.
+    pub candidates_per_dispatch: u32,
+    /// What the history depends on (camera, CDF, every setting but the seed): reservoirs are carried to
+    /// the next frame only while it is unchanged.
+    pub key: u64,
+}
+
+/// Candidates per initial dispatch under a loop iteration `limit`: per candidate `draw_vpl`'s loops (two
+/// binary searches ≤ 2 · 32, the sections 3 · `sections`, the faces 2 · `faces` · (`sections` + 1)) and
+/// 64 for the rest; 128 kept for the history's combination and the code outside.
+pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32) -> u32 {
+    let Some(limit) = limit else { return u32::MAX };
+    let per = 64 + 2 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2);
+    (limit.saturating_sub(128) / per).max(1)
+}
+
+impl Ris {
+    pub fn new(gpu: &Gpu) -> Result<Self> {
+        use shaders::*;
+        let base = || {
+            let mut b = scene_bindings();
+            b.extend(super::gbuffer_bindings());
+            b.extend(super::vpl_bindings());
+            b.extend([
+                Binding::storage_buffer(B_VOXELS),
+                Binding::storage_buffer(B_IMPORTANCE),
+                Binding::storage_buffer(B_CDF),
+            ]);
+            b
+        };
+        let push = std::mem::size_of::<RisPushBlock>() as u32;
+        let mut b = base();
+        b.extend([Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_HISTORY)]);
+        let initial = ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_COMP), &b, push, &[])?;
+        let mut b = base();
+        b.extend([Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)]);
+        let spatial = ComputePipeline::new(gpu, "ris_spatial", &crate::spirv(RIS_SPATIAL_COMP), &b, push, &[])?;
+        let mut b = base();
+        b.extend([
+            Binding::storage_buffer(B_RIS_IN),
+            Binding::sampled_image(B_GATHER_DIRECT),
+            Binding::storage_image(B_GATHER_OUT),
+        ]);
+        let shade = ComputePipeline::new(gpu, "ris_shade", &crate::spirv(RIS_SHADE_COMP), &b, push, &[])?;
+        b.extend(crate::bvh::GpuBvh::bindings());
+        let shade_exact = ComputePipeline::new(gpu, "ris_shade", &crate::spirv(RIS_SHADE_EXACT_COMP), &b, push, &[])?;
+        b.extend(crate::bvh::cells::GpuCells::bindings());
+        let shade_hybrid = ComputePipeline::new(gpu, "ris_shade", &crate::spirv(RIS_SHADE_HYBRID_COMP), &b, push, &[])?;
+        Ok(Ris { initial, spatial, shade, shade_exact, shade_hybrid, sampler: Sampler::nearest(gpu)? })
+    }
+
+    /// Bytes of one layer of reservoirs for a `w` × `h` image.
+    pub fn layer_bytes(w: u32, h: u32) -> u64 {
+        w as u64 * h as u64 * std::mem::size_of::<Reservoir>() as u64
+    }
+
+    /// Record a ris frame into `out` (overwritten; the direct image added when `push.add_direct`):
+    /// initial (+ temporal), `spatial_passes` spatial passes, shade. `push` holds the gather's sampling
+    /// fields (`samples` = R).
+    pub fn add<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        i: &GatherInputs,
+        out: &mut Handle<Image>,
+        push: GatherPush,
+        r: RisFrame,
+    ) {
+        let reservoirs = r.push.reservoirs;
+        let desc = |name: &str| BufferDesc::storage(name, Self::layer_bytes(f.width, f.height) * reservoirs as u64);
+        let history = g.history_buffer("ris.reservoirs", desc("ris.reservoirs"), &r.key);
+        let previous = history.previous.filter(|_| r.push.history_cap > 0.0);
+        // Stage s (0: initial, 1..=P: spatial) writes the history's current buffer when P − s is even, so
+        // the last stage's reservoirs are the ones kept for the next frame.
+        let mut current = history.current;
+        let mut scratch = (r.spatial_passes > 0).then(|| g.create_buffer(desc("ris.scratch")));
+        let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
+        {
+            let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
+            self.add_initial(g, f, i, dst, previous, push, r);
+        }
+        for pass in 0..r.spatial_passes {
+            let s = pass + 1;
+            let (src, dst) = match (target(s), scratch.as_mut()) {
+                (true, Some(t)) => (*t, &mut current),
+                (false, Some(t)) => (current, t),
+                (_, None) => unreachable!("spatial passes have a scratch buffer"),
+            };
+            self.add_spatial(g, f, i, src, dst, push, RisPush { pass, ..r.push });
+        }
+        self.add_shade(g, f, i, current, out, push, r.push);
+    }
+
+    /// The descriptor writes every stage shares: scene, G-buffer, VPLs, voxels, importance, CDF.
+    fn base_writes(&self, f: FrameInputs, ctx: &PassContext, i: &GatherInputs) -> DescriptorWrites {
+        let s = self.sampler.raw;
+        let w = super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&i.g_position, &i.g_normal, &i.g_albedo], s);
+        super::vpl_writes(w, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s)
+            .storage_buffer(B_VOXELS, ctx.buffer(&i.voxels))
+            .storage_buffer(B_IMPORTANCE, ctx.buffer(&i.importance))
+            .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
+    }
+
+    /// Declare the reads every stage shares.
+    fn reads<'g, 'a>(mut b: PassBuilder<'g, 'a>, i: &GatherInputs) -> PassBuilder<'g, 'a> {
+        for h in [i.g_position, i.g_normal, i.g_albedo, i.vpl_position, i.vpl_normal, i.vpl_flux] {
+            b = b.read(&h, Access::ComputeRead);
+        }
+        for h in i.buffers() {
+            b = b.read(&h, Access::ComputeRead);
+        }
+        b
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add_initial<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        i: &GatherInputs,
+        dst: &mut Handle<Buffer>,
+        previous: Option<Handle<Buffer>>,
+        push: GatherPush,
+        r: RisFrame,
+    ) {
+        let (i, o) = (*i, *dst);
+        let mut b = Self::reads(g.add_pass("ris_initial"), &i);
+        if let Some(p) = &previous {
+            b = b.read(p, Access::ComputeRead);
+        }
+        b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
+            // Without a history the (unread) history binding gets the output buffer.
+            let history = previous.map_or(ctx.buffer(&o), |p| ctx.buffer(&p));
+            let writes = self
+                .base_writes(f, ctx, &i)
+                .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
+                .storage_buffer(B_RIS_HISTORY, history);
+            let m = r.push.candidates;
+            let chunk = r.candidates_per_dispatch.max(1);
+            let mut first = 0;
+            while first < m {
+                let last = first.saturating_add(chunk).min(m);
+                if first > 0 {
+                    // The next candidates continue the reservoirs the previous dispatch stored.
+                    ctx.serialize(&o);
+                }
+                let block = RisPushBlock {
+                    gather: GatherPush { first, last, ..push },
+                    ris: RisPush { history: previous.is_some() as u32, ..r.push },
+                };
+                let size = [f.width, f.height, r.push.reservoirs];
+                self.initial.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
+                first = last;
+            }
+        });
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add_spatial<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        i: &GatherInputs,
+        src: Handle<Buffer>,
+        dst: &mut Handle<Buffer>,
+        push: GatherPush,
+        ris: RisPush,
+    ) {
+        let (i, o) = (*i, *dst);
+        let b = Self::reads(g.add_pass("ris_spatial"), &i).read(&src, Access::ComputeRead);
+        b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
+            let writes = self
+                .base_writes(f, ctx, &i)
+                .storage_buffer(B_RIS_IN, ctx.buffer(&src))
+                .storage_buffer(B_RIS_OUT, ctx.buffer(&o));
+            let block = RisPushBlock { gather: push, ris };
+            let size = [f.width, f.height, ris.reservoirs];
+            self.spatial.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
+        });
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add_shade<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        i: &GatherInputs,
+        reservoirs: Handle<Buffer>,
+        out: &mut Handle<Image>,
+        push: GatherPush,
+        ris: RisPush,
+    ) {
+        let (i, o) = (*i, *out);
+        let mut b = Self::reads(g.add_pass("ris_shade"), &i).read(&reservoirs, Access::ComputeRead);
+        if let Some(d) = &i.direct {
+            b = b.read(d, Access::ComputeRead);
+        }
+        b.overwrite(out, Access::ComputeWrite).record(move |ctx| {
+            let direct = match (&i.direct, push.add_direct) {
+                (Some(d), 1) => ctx.image(d),
+                _ => ctx.image(&i.g_albedo),
+            };
+            let writes = self
+                .base_writes(f, ctx, &i)
+                .storage_buffer(B_RIS_IN, ctx.buffer(&reservoirs))
+                .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
+                .storage_image(B_GATHER_OUT, ctx.image(&o));
+            // The gather's visibility variants, bound as the gather binds them.
+            let (pipeline, writes) = match f.bvh {
+                Some(bvh) => match f.cells {
+                    Some(cells) => (&self.shade_hybrid, cells.writes(bvh.writes(writes))),
+                    None => (&self.shade_exact, bvh.writes(writes)),
+                },
+                None => (&self.shade, writes),
+            };
+            let chunk = f.vpls_per_dispatch.max(1);
+            let mut first = 0;
+            while first < ris.reservoirs {
+                let last = first.saturating_add(chunk).min(ris.reservoirs);
+                if first > 0 {
+                    // The next reservoirs add to what the previous dispatch stored.
+                    ctx.serialize(&o);
+                }
+                let gather = GatherPush {
+                    first,
+                    last,
+                    accumulate: (first > 0) as u32,
+                    add_direct: if first == 0 { push.add_direct } else { 0 },
+                    ..push
+                };
+                let block = RisPushBlock { gather, ris };
+                pipeline.dispatch(
+                    ctx.cmd,
+                    &writes,
+                    bytemuck::bytes_of(&block),
+                    [f.width, f.height, 1],
+                    [WG_2D, WG_2D, 1],
+                );
+                first = last;
+            }
+        });
+    }
+}

@@ -1,0 +1,235 @@
+#version 460
+// ris: resampled importance sampling over the VPLs (Talbot et al. 2005), with spatial and temporal reuse
+// (Bitterli et al. 2020; generalized RIS, Lin et al. 2022). crates/graph/src/passes/ris.rs states the
+// estimator and why it is unbiased. The target is the unshadowed contribution's luminance at the pixel,
+//   p̂_x(v) = luminance(albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / max(d², clamp²)),
+// the source is the gather's mixture (draw_vpl, its exact probability p_v). Stages (one variant each):
+// RIS_INITIAL (dispatch W × H × R): reservoir r streams candidates [first, last) of its M: v ~ p,
+//   w = p̂(v)/p_v, v kept with probability w / Σw; after the M-th, W = Σw / (M p̂(y)), then (RIS_HISTORY)
+//   combined with last frame's reservoir at the same pixel and layer.
+// RIS_SPATIAL (W × H × R): the reservoir combined with k neighbours' of the same layer, generalized
+//   balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
+// RIS_SHADE (W × H): L = 1/R Σ_r f(y_r) V(y_r) W_r over the reservoirs [first, last), visibility as the
+//   gather's (voxel, EXACT_VISIBILITY, HYBRID_VISIBILITY).
+#include "shared/scene.glsl"
+#include "shared/voxel.glsl"
+#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
+#include "shared/bvh.glsl"
+#endif
+#ifdef HYBRID_VISIBILITY
+#include "shared/hybrid.glsl"
+#endif
+
+layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
+layout(push_constant) uniform Push {
+    GatherPush pc;
+    RisPush ris;
+};
+
+layout(set = 0, binding = B_GATHER_GPOSITION) uniform sampler2D g_position;
+layout(set = 0, binding = B_GATHER_GNORMAL) uniform sampler2D g_normal;
+layout(set = 0, binding = B_GATHER_GALBEDO) uniform sampler2D g_albedo;
+layout(set = 0, binding = B_VPL_POSITION) uniform sampler2DArray vpl_position;
+layout(set = 0, binding = B_VPL_NORMAL) uniform sampler2DArray vpl_normal;
+layout(set = 0, binding = B_VPL_FLUX) uniform sampler2DArray vpl_flux;
+layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
+layout(std430, set = 0, binding = B_CDF) readonly buffer Cdf { float cdf[]; };
+#ifdef RIS_SHADE
+layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
+layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
+layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
+#else
+#ifdef RIS_SPATIAL
+layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
+#endif
+layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
+#ifdef RIS_INITIAL
+layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Reservoir res_history[]; };
+#endif
+#endif
+
+#include "shared/cdf.glsl"
+#include "shared/vpl.glsl"
+#include "shared/sampling.glsl"
+
+// Where reservoir `layer` of pixel q lives (layer-major: one layer is one image of reservoirs).
+uint res_index(ivec2 q, uint layer) {
+    return layer * frame.size.x * frame.size.y + uint(q.y) * frame.size.x + uint(q.x);
+}
+
+// A uniform in [0, 1) that depends on (pixel, frame seed, stream, index) only: reservoir choices, apart
+// from the candidates' own stratified numbers.
+float ris_rand(ivec2 q, uint stream, uint i) {
+    uint h = pcg_hash(uint(q.x) + 65536u * uint(q.y)) ^ pcg_hash(pc.seed ^ 0x2545F491u);
+    h = pcg_hash(h ^ pcg_hash(stream * 0x9E3779B9u + i));
+    return float(h >> 8) * (1.0 / 16777216.0);
+}
+
+// The target p̂ of pixel geometry (x, n, a) for VPL v.
+float target_at(vec3 x, vec3 n, vec3 a, uint v) {
+    return luminance(vpl_unshadowed(x, n, a, vpl_fetch(v), pc.clamp_d2));
+}
+
+Reservoir empty_reservoir(float confidence) {
+    return Reservoir(RIS_NONE, 0.0, confidence, 0.0);
+}
+
+#ifdef RIS_INITIAL
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    uint layer = gl_GlobalInvocationID.z;
+    if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
+    uint idx = res_index(px, layer);
+    vec4 gp = texelFetch(g_position, px, 0);
+    if (gp.w == 0.0) {
+        res_out[idx] = empty_reservoir(0.0);
+        return;
+    }
+    vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
+    // The streaming state: (y, Σw, p̂(y)), carried in the output between dispatches.
+    Reservoir r = pc.first == 0u ? empty_reservoir(0.0) : res_out[idx];
+    if (cdf_total_at(0u) > 0.0) {
+        // Candidate i of layer r is point r·M + i of the pixel's stratified set, the gather's seed.
+        uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+        for (uint i = pc.first; i < pc.last; i++) {
+            uint k = layer * ris.candidates + i;
+            float prob;
+            uint v = draw_vpl(k, seed, prob);
+            if (!(prob > 0.0)) continue;
+            float t = target_at(x, nx, ax, v);
+            float w = t / prob;
+            if (!(w > 0.0)) continue;
+            r.weight += w;
+            if (ris_rand(px, 1u, k) * r.weight < w) {
+                r.vpl = v;
+                r.target = t;
+            }
+        }
+    }
+    if (pc.last < ris.candidates) {
+        res_out[idx] = r;
+        return;
+    }
+    float m = float(ris.candidates);
+    r.weight = r.target > 0.0 ? r.weight / (m * r.target) : 0.0;
+    r.confidence = m;
+    if (ris.history != 0u) {
+        // Last frame's final reservoir at this pixel: the same G-buffer, so the same target, and the
+        // generalized balance weights reduce to the confidences: m_i = c_i / (c_0 + c_1).
+        Reservoir h = res_history[idx];
+        float ch = min(h.confidence, ris.history_cap * m);
+        float th = h.vpl != RIS_NONE && h.weight > 0.0 ? target_at(x, nx, ax, h.vpl) : 0.0;
+        float total = m + ch;
+        float w0 = m / total * r.target * r.weight;
+        float w1 = ch / total * th * h.weight;
+        float sum = w0 + w1;
+        if (w1 > 0.0 && ris_rand(px, 2u, layer) * sum < w1) {
+            r.vpl = h.vpl;
+            r.target = th;
+        }
+        r.weight = r.target > 0.0 && sum > 0.0 ? sum / r.target : 0.0;
+        r.confidence = total;
+    }
+    if (!(r.weight > 0.0)) r = empty_reservoir(r.confidence);
+    res_out[idx] = r;
+}
+#endif
+
+#ifdef RIS_SPATIAL
+// Whether neighbour q may lend its reservoir to p: both see geometry, their normals within ~25° and their
+// distances from the eye within 10 % (a deterministic function of the two G-buffer texels).
+bool similar(vec4 gp, vec3 np, vec4 gq, vec3 nq) {
+    if (gq.w == 0.0) return false;
+    float dp = distance(gp.xyz, frame.eye.xyz), dq = distance(gq.xyz, frame.eye.xyz);
+    return dot(np, nq) >= 0.9 && abs(dq - dp) <= 0.1 * dp;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    uint layer = gl_GlobalInvocationID.z;
+    if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
+    uint idx = res_index(px, layer);
+    Reservoir canonical = res_in[idx];
+    vec4 gp = texelFetch(g_position, px, 0);
+    if (gp.w == 0.0) {
+        res_out[idx] = canonical;
+        return;
+    }
+    // The inputs: 0 the pixel itself, then the accepted neighbours (at most RIS_MAX_NEIGHBORS).
+    ivec2 q[RIS_MAX_NEIGHBORS + 1];
+    vec3 xs[RIS_MAX_NEIGHBORS + 1], ns[RIS_MAX_NEIGHBORS + 1], albs[RIS_MAX_NEIGHBORS + 1];
+    q[0] = px;
+    xs[0] = gp.xyz;
+    ns[0] = texelFetch(g_normal, px, 0).xyz;
+    albs[0] = texelFetch(g_albedo, px, 0).rgb;
+    uint n = 1u;
+    uint tries = min(ris.neighbors, uint(RIS_MAX_NEIGHBORS));
+    for (uint j = 0u; j < tries; j++) {
+        // A point of the disc of radius `radius` (by the hash of pixel, seed, pass, layer and j).
+        uint stream = 16u + ris.pass * 64u + j;
+        float a = 2.0 * PI * ris_rand(px, stream, 2u * layer), rr = ris.radius * sqrt(ris_rand(px, stream, 2u * layer + 1u));
+        ivec2 c = px + ivec2(round(rr * vec2(cos(a), sin(a))));
+        if (c == px || any(lessThan(c, ivec2(0))) || any(greaterThanEqual(c, ivec2(frame.size.xy)))) continue;
+        vec4 gq = texelFetch(g_position, c, 0);
+        vec3 nq = texelFetch(g_normal, c, 0).xyz;
+        if (!similar(gp, ns[0], gq, nq)) continue;
+        q[n] = c;
+        xs[n] = gq.xyz;
+        ns[n] = nq;
+        albs[n] = texelFetch(g_albedo, c, 0).rgb;
+        n++;
+    }
+    Reservoir inputs[RIS_MAX_NEIGHBORS + 1];
+    inputs[0] = canonical;
+    float confidence = canonical.confidence;
+    for (uint i = 1u; i < n; i++) {
+        inputs[i] = res_in[res_index(q[i], layer)];
+        confidence += inputs[i].confidence;
+    }
+    // Resample: input i's sample y_i weighs m_i(y_i) · p̂_x(y_i) · W_i.
+    Reservoir r = empty_reservoir(confidence);
+    float sum = 0.0;
+    for (uint i = 0u; i < n; i++) {
+        Reservoir in_i = inputs[i];
+        if (in_i.vpl == RIS_NONE || !(in_i.weight > 0.0)) continue;
+        Vpl vpl = vpl_fetch(in_i.vpl);
+        float num = 0.0, den = 0.0, here = 0.0;
+        for (uint j = 0u; j < n; j++) {
+            float t = luminance(vpl_unshadowed(xs[j], ns[j], albs[j], vpl, pc.clamp_d2));
+            den += inputs[j].confidence * t;
+            if (j == i) num = inputs[j].confidence * t;
+            if (j == 0u) here = t;
+        }
+        float w = den > 0.0 ? num / den * here * in_i.weight : 0.0;
+        if (!(w > 0.0)) continue;
+        sum += w;
+        if (ris_rand(px, 8u + ris.pass, layer * 16u + i) * sum < w) {
+            r.vpl = in_i.vpl;
+            r.target = here;
+        }
+    }
+    r.weight = r.vpl != RIS_NONE ? sum / r.target : 0.0;
+    if (!(r.weight > 0.0)) r = empty_reservoir(confidence);
+    res_out[idx] = r;
+}
+#endif
+
+#ifdef RIS_SHADE
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
+    vec4 gp = texelFetch(g_position, px, 0);
+    vec3 sum = vec3(0.0);
+    if (gp.w != 0.0) {
+        vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
+        for (uint layer = pc.first; layer < pc.last; layer++) {
+            Reservoir r = res_in[res_index(px, layer)];
+            if (r.vpl != RIS_NONE && r.weight > 0.0) sum += contribution(x, nx, ax, r.vpl) * r.weight;
+        }
+        sum /= float(ris.reservoirs);
+    }
+    if (pc.add_direct != 0u) sum += texelFetch(direct_radiance, px, 0).rgb;
+    if (pc.accumulate != 0u) sum += imageLoad(out_radiance, px).rgb;
+    imageStore(out_radiance, px, vec4(sum, 1.0));
+}
+#endif

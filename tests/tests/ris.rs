@@ -1,0 +1,209 @@
+//! `--method ris` (resampled importance sampling over the VPLs, `passes/ris.rs`) against independent
+//! judges: unbiased with respect to `all` (the same test as every method, `vpl::converges_to`) without
+//! reuse, with spatial reuse and with temporal reuse over progressive frames, for the voxel and the exact
+//! visibility; its mean within 1 % of the exact one-bounce reference with exact visibility; with one
+//! candidate and no reuse it is its source method; the candidates' split over dispatches (lavapipe's
+//! loop limit) does not change the image; bad flag combinations are a `SettingsError`.
+
+use crate::vpl::{converges_to, indirect_with};
+use bounce_graph::frame::{FrameSettings, Method, Renderer, RisSettings, RisSource, SettingsError, Visibility};
+use bounce_graph::scene::Scene;
+use bounce_tests::TestGpu;
+
+const SIZE: (u32, u32, u32, u32) = (24, 24, 32, 32);
+
+/// ris at the unbiasedness tests' settings (as `every_method_converges_to_all_at_the_monte_carlo_rate`:
+/// the 1/d² clamp at 1 % of the diagonal, defensive share 0.5), `reuse` spatial passes of 4 neighbours,
+/// temporal reuse with a cap of `cap` (0: none).
+fn ris(visibility: Visibility, seed: u64, reuse: u32, cap: f32) -> FrameSettings {
+    FrameSettings {
+        method: Method::Ris,
+        visibility,
+        seed,
+        vpls: 4,
+        cdf_samples: 16,
+        clamp: 0.01,
+        defensive: 0.5,
+        ris: RisSettings {
+            candidates: 8,
+            spatial_passes: reuse,
+            spatial_neighbors: 4,
+            spatial_radius: 6.0,
+            temporal_cap: cap,
+            ..RisSettings::default()
+        },
+        ..FrameSettings::default()
+    }
+}
+
+fn all(r: &mut Renderer, visibility: Visibility) -> Vec<[f32; 3]> {
+    let (w, h, res, vox) = SIZE;
+    let s = FrameSettings { method: Method::All, clamp: 0.01, visibility, ..FrameSettings::default() };
+    indirect_with(r, s, w, h, res, vox)
+}
+
+/// One frame per seed, no history: without reuse and with two spatial passes.
+#[test]
+fn ris_is_unbiased_without_reuse_and_with_spatial_reuse() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    for visibility in [Visibility::Voxel, Visibility::Exact] {
+        let all = all(&mut r, visibility);
+        for reuse in [0, 2] {
+            let name = format!("ris ({visibility:?} visibility, {reuse} spatial passes)");
+            converges_to(&name, &all, |seed| indirect_with(&mut r, ris(visibility, seed, reuse, 0.0), w, h, res, vox));
+        }
+    }
+}
+
+/// Progressive frames of one view (seeds s, s + 1, …, one CDF) with temporal and spatial reuse: each run
+/// starts from an empty history and its mean over `FRAMES` frames converges to `all`; and the history
+/// is used: the last frame alone has a lower error than the first.
+#[test]
+fn ris_with_temporal_reuse_converges_over_progressive_frames() {
+    const FRAMES: u64 = 4;
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    for visibility in [Visibility::Voxel, Visibility::Exact] {
+        let all = all(&mut r, visibility);
+        let (mut first, mut last) = (0.0, 0.0);
+        converges_to(&format!("ris ({visibility:?} visibility, temporal + spatial)"), &all, |run| {
+            // A fresh history: nothing of the previous run is kept.
+            r.clear_frame_cache();
+            let mut sum = vec![[0.0f32; 3]; all.len()];
+            for k in 0..FRAMES {
+                let s = FrameSettings { cdf_seed: Some(run), ..ris(visibility, run * FRAMES + k, 1, 20.0) };
+                let img = indirect_with(&mut r, s, w, h, res, vox);
+                let e = bounce_tests::rel_mse(&img, &all);
+                if k == 0 {
+                    first += e;
+                }
+                if k == FRAMES - 1 {
+                    last += e;
+                }
+                for (a, p) in sum.iter_mut().zip(&img) {
+                    (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
+                }
+            }
+            sum
+        });
+        eprintln!("ris ({visibility:?}): relMSE of frame 1 {first:.4}, of frame {FRAMES} {last:.4} (sums over runs)");
+        // Frame FRAMES combines its own candidates with up to FRAMES − 1 frames' worth of history.
+        assert!(last < 0.7 * first, "the history does not help: frame 1 {first}, frame {FRAMES} {last}");
+    }
+}
+
+/// With exact visibility, ris's progressive mean is within 1 % of the GPU one-bounce reference on the
+/// Cornell box (where `all_with_exact_visibility_agrees_with_the_reference` compares `all`).
+#[test]
+fn ris_with_exact_visibility_agrees_with_the_reference() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h) = (24, 24);
+    let reference = FrameSettings { method: Method::Reference, spp: 256, ..FrameSettings::default() };
+    let reference = indirect_with(&mut r, reference, w, h, 64, 64);
+    let frames = 16;
+    let mut mean = 0.0;
+    for k in 0..frames {
+        let s = FrameSettings {
+            method: Method::Ris,
+            visibility: Visibility::Exact,
+            seed: 100 + k,
+            cdf_seed: Some(100),
+            vpls: 8,
+            ..FrameSettings::default()
+        };
+        mean += bounce_tests::mean(&indirect_with(&mut r, s, w, h, 64, 64)) / frames as f64;
+    }
+    let mr = bounce_tests::mean(&reference);
+    eprintln!(
+        "ris (exact visibility, {frames} frames) vs reference: mean {mean:.5} vs {mr:.5} ({:+.2}%)",
+        100.0 * (mean - mr) / mr
+    );
+    assert!(((mean - mr) / mr).abs() <= 0.01, "mean {mean} vs {mr}");
+}
+
+/// One candidate and no reuse: the reservoir keeps the source's sample with W = 1/p, so the image is the
+/// source method's (up to rounding: f · (p̂/p)/p̂ against f/p).
+#[test]
+fn ris_with_one_candidate_is_its_source_method() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    for source in [RisSource::Uniform, RisSource::Gbg, RisSource::Local] {
+        let base = FrameSettings { seed: 3, vpls: 8, ..FrameSettings::default() };
+        let ris = RisSettings { source, candidates: 1, spatial_passes: 0, temporal_cap: 0.0, ..RisSettings::default() };
+        let a = indirect_with(&mut r, FrameSettings { method: Method::Ris, ris, ..base.clone() }, w, h, res, vox);
+        let b = indirect_with(&mut r, FrameSettings { method: source.method(), ..base }, w, h, res, vox);
+        let worst = a
+            .iter()
+            .zip(&b)
+            .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs() / q[c].abs().max(1e-6)))
+            .fold(0.0f32, f32::max);
+        eprintln!("ris with one candidate vs {}: worst relative difference {worst:e}", source.method().name());
+        assert!(bounce_tests::mean(&b) > 0.0);
+        assert!(worst <= 1e-4, "{source:?}: {worst}");
+    }
+}
+
+/// The initial stage streams its candidates over dispatches under the loop limit, carrying each
+/// reservoir's state in its buffer: any split gives the same image, bit for bit.
+#[test]
+fn ris_candidates_split_over_dispatches_give_one_image() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let mut run = |chunk: Option<u32>| {
+        let mut s = ris(Visibility::Voxel, 9, 1, 20.0);
+        s.ris.candidates = 37;
+        s.ris.candidates_chunk = chunk.and_then(std::num::NonZeroU32::new);
+        r.clear_frame_cache();
+        indirect_with(&mut r, s, w, h, res, vox)
+    };
+    let whole = run(None);
+    for chunk in [1, 5, 36] {
+        assert_eq!(run(Some(chunk)), whole, "{chunk} candidates per dispatch changed the image");
+    }
+}
+
+/// Settings ris cannot run are a `SettingsError` (bad input, exit 2 on the command line).
+#[test]
+fn ris_rejects_bad_flag_combinations() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let base = FrameSettings { width: 8, height: 8, ..ris(Visibility::Voxel, 1, 1, 20.0) };
+    let with = |f: &dyn Fn(&mut FrameSettings)| {
+        let mut s = base.clone();
+        f(&mut s);
+        s
+    };
+    let cases = [
+        ("psm", with(&|s| s.visibility = Visibility::Psm)),
+        ("psm", with(&|s| s.visibility = Visibility::PsmExact)),
+        ("--candidates", with(&|s| s.ris.candidates = 0)),
+        ("--spatial-neighbors", with(&|s| s.ris.spatial_neighbors = 9)),
+        ("--spatial-neighbors", with(&|s| s.ris.spatial_neighbors = 0)),
+        ("--spatial-radius", with(&|s| s.ris.spatial_radius = f32::NAN)),
+        ("--temporal-cap", with(&|s| s.ris.temporal_cap = -1.0)),
+    ];
+    for (names, s) in cases {
+        let e = r.render(&s).err().unwrap_or_else(|| panic!("{names}: accepted"));
+        let e = e.downcast_ref::<SettingsError>().unwrap_or_else(|| panic!("{names}: not a SettingsError: {e:#}"));
+        assert!(e.to_string().contains(names), "{names}: {e}");
+    }
+    let (mut out, mut err) = (vec![], vec![]);
+    let args = ["bounce", "render", "x.toml", "--method", "ris", "--visibility", "psm"];
+    let scene = bounce_tests::default_scene();
+    let mut argv: Vec<std::ffi::OsString> = args.iter().map(|a| a.into()).collect();
+    argv[2] = scene.into();
+    argv.extend(["--out".into(), bounce_tests::evidence_dir().join("ris-psm-never-written.exr").into()]);
+    assert_eq!(bounce::run(argv, &mut out, &mut err), 2, "{}", String::from_utf8_lossy(&err));
+}
