@@ -4,6 +4,9 @@
 //! more chunks ([`super::chunks`]): one for the sampled methods, a tile of VPLs each for `all`, a batch
 //! of samples each for `reference`. Static products are kept by the graph under their keys
 //! ([`super::keys`]), so a frame whose camera and settings did not change records only the gather.
+//! The lights are frame state too ([`Renderer::set_light`]): written to the scene's light buffer before
+//! each frame, and named by the keys of the light-side products, so moving a light redoes the VPLs,
+//! shadow map, direct light and CDF and keeps the voxels and the G-buffer.
 
 use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
@@ -20,9 +23,10 @@ use crate::passes::reference::Reference;
 use crate::passes::voxelize::{self, VoxelGridSpec};
 use crate::passes::{FrameInputs, Passes};
 use crate::scene::Scene;
-use crate::shader_types::{FrameUniforms, Vertex};
+use crate::shader_types::{FrameUniforms, Light, Vertex};
 use anyhow::{Context, Result};
 use bounce_device::{vk, Buffer, BufferDesc, Gpu, MemoryLocation};
+use glam::Vec3;
 
 /// What does not change from frame to frame: the device, the uploaded scene, every pass's pipelines,
 /// and the scene's BVH (built on first use).
@@ -30,16 +34,20 @@ pub struct RenderContext {
     pub gpu: Gpu,
     pub scene: GpuScene,
     pub passes: Passes,
-    /// The largest intensity component of any light (for the gbg fixed-point scale).
+    /// The largest intensity component of any light (for the gbg fixed-point scale): the current
+    /// lights', set before each frame.
     max_intensity: f32,
     /// The scene's triangles, kept for the BVH.
     vertices: Vec<Vertex>,
     bvh: Option<GpuBvh>,
 }
 
-/// What changes from frame to frame: the camera, and the resources the graph keeps across frames.
+/// What changes from frame to frame: the camera, the lights, and the resources the graph keeps across
+/// frames.
 pub struct FrameState {
     pub camera: Camera,
+    /// The point lights, in the scene's local coordinates (as `Scene::lights`).
+    pub lights: Vec<Light>,
     pub retained: Retained,
 }
 
@@ -85,11 +93,23 @@ impl Renderer {
             gpu: gpu.clone(),
             scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
             passes: Passes::new(gpu, !scene.textures.is_empty())?,
-            max_intensity: scene.lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max),
+            max_intensity: max_intensity(&scene.lights),
             vertices: scene.vertices.clone(),
             bvh: None,
         };
-        Ok(Renderer { ctx, state: FrameState { camera: scene.camera, retained: Retained::default() } })
+        let state = FrameState { camera: scene.camera, lights: scene.lights.clone(), retained: Retained::default() };
+        Ok(Renderer { ctx, state })
+    }
+
+    /// The current lights (scene-local coordinates).
+    pub fn lights(&self) -> &[Light] {
+        &self.state.lights
+    }
+
+    /// Moves light `i` to `position` (scene-local) with `intensity` (W/sr per channel). The next frame
+    /// re-records the light-side passes and what depends on them. Panics on a light the scene lacks.
+    pub fn set_light(&mut self, i: usize, position: Vec3, intensity: Vec3) {
+        self.state.lights[i] = crate::scene::point_light(position, intensity);
     }
 
     /// Moves the camera (the viewer's fly camera). The next frame re-records what depends on it.
@@ -135,13 +155,15 @@ impl Renderer {
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<FrameOutput> {
         self.check(s)?;
+        self.ctx.scene.write_lights(&self.state.lights)?;
+        self.ctx.max_intensity = max_intensity(&self.state.lights);
         let reference = s.method == Method::Reference && s.component != Component::Direct;
         if s.visibility.uses_bvh() || reference {
             self.bvh()?;
         }
         let uniforms = self.uniform_buffer(s)?;
         let (ctx, state) = (&self.ctx, &mut self.state);
-        let i = ctx.recipe_inputs(s, &state.camera, &uniforms);
+        let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
         let (total, per_chunk) = ctx.chunking(s, &i);
         let mut log = FrameLog::default();
         let mut read = None;
@@ -178,6 +200,11 @@ impl Renderer {
             stderr,
         })
     }
+}
+
+/// The largest intensity component of any of `lights`.
+fn max_intensity(lights: &[Light]) -> f32 {
+    lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max)
 }
 
 /// The RMS over pixels and channels of the reference's standard error of the mean per pixel,
@@ -243,12 +270,18 @@ impl RenderContext {
     }
 
     /// What the recipe reads besides the settings, for settings `s` seen from `camera`.
-    fn recipe_inputs<'a>(&'a self, s: &FrameSettings, camera: &Camera, uniforms: &'a Buffer) -> RecipeInputs<'a> {
+    fn recipe_inputs<'a>(
+        &'a self,
+        s: &FrameSettings,
+        camera: &Camera,
+        lights: &[Light],
+        uniforms: &'a Buffer,
+    ) -> RecipeInputs<'a> {
         let importance = self.importance_params(s);
         let grid = self.voxel_spec(s);
         RecipeInputs {
             f: self.frame_inputs(s, uniforms),
-            keys: Keys::new(s, camera, &grid, &importance),
+            keys: Keys::new(s, camera, lights, &grid, &importance),
             importance,
             grid,
             reference_per_dispatch: self
