@@ -114,6 +114,19 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define B_PSM_VIEWS 29
 #define B_PSM_DEPTH 30
 
+// ---- present: the viewer's running mean, tone mapping and sRGB encoding (passes/present.rs) -------------
+#define B_PRESENT_RADIANCE 40
+#define B_PRESENT_SUM 41
+#define B_PRESENT_OUT 42
+#define B_PRESENT_STATS 43
+// PresentPush.stage
+#define PRESENT_ACCUMULATE 0
+#define PRESENT_TOTAL 1
+#define PRESENT_MAP 2
+// Reinhard 2002: the key value a, and the δ of the log-average luminance (crates/app/src/output.rs).
+const float REINHARD_KEY = 0.18;
+const float REINHARD_DELTA = 0.000001;
+
 // ---- Test kernels (glsl/test/): their input and output buffers. Test pipelines bind nothing else at
 // these numbers, so they may repeat B_REF_SQ's and B_PSM_VIEWS's. --------------------------------------------
 #define B_TEST_IN 28

@@ -300,6 +300,15 @@ pub struct RenderArgs {
     /// write their mean: equal-time comparisons in one flag. Not for `all` (the same every frame).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
+    /// Render an animation of this many frames (with --light-path) into --out-dir: frame_0000.exr and
+    /// .png, …
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Where --frames writes its frames.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    #[command(flatten)]
+    pub animation: AnimationArgs,
 }
 
 /// `view` renders a frame per redraw, so it starts from a smaller window and cheaper maps than
@@ -328,6 +337,49 @@ pub struct ViewArgs {
     /// Present without waiting for vertical sync (immediate or mailbox, where the surface has one).
     #[arg(long)]
     pub no_vsync: bool,
+    #[command(flatten)]
+    pub animation: AnimationArgs,
+}
+
+/// The seeds of an animation's frames (`--temporal`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Temporal {
+    /// Common random numbers: every frame after a change starts again from --seed, so each pixel's
+    /// stratified points stay the same while the light moves and its draws follow the CDF
+    /// continuously; frames of an unchanged scene still take seed + 1, + 2, … (progressive).
+    Coherent,
+    /// Frame k of the animation uses seed + k: fresh random numbers every frame.
+    Fresh,
+}
+
+impl Temporal {
+    /// The seed of a frame: `since_change` frames after the last change of camera, lights or settings,
+    /// `frame` frames after the first.
+    pub fn seed(self, base: u64, frame: u32, since_change: u32) -> u64 {
+        match self {
+            Temporal::Coherent => base.wrapping_add(since_change as u64),
+            Temporal::Fresh => base.wrapping_add(frame as u64),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Temporal::Coherent => "coherent",
+            Temporal::Fresh => "fresh",
+        }
+    }
+}
+
+/// The scripted light motion and how its frames draw their random numbers (`render`, `view`).
+#[derive(Args, Debug)]
+pub struct AnimationArgs {
+    /// Move the lights: `orbit[:PERIOD]` (each light circles its start, PERIOD frames per turn, default
+    /// 60) or a TOML file of keyframes (see README). Needs --frames.
+    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
+    pub light_path: Option<String>,
+    /// The seeds of consecutive frames.
+    #[arg(long, value_enum, default_value = "coherent")]
+    pub temporal: Temporal,
 }
 
 /// The window size of `view` when neither the flags nor the scene give one.

@@ -16,16 +16,17 @@ use crate::bindings::HYBRID_MAX_TRACES;
 use crate::bvh::GpuBvh;
 use crate::camera::Camera;
 use crate::gpu_scene::GpuScene;
-use crate::graph::{Graph, PassTiming, Retained};
+use crate::graph::{Graph, PassTiming, Persistent, Retained};
 use crate::passes::cdf_reduce::CdfReduce;
 use crate::passes::importance::{ImportanceKind, ImportanceParams};
+use crate::passes::present::PresentParams;
 use crate::passes::reference::Reference;
 use crate::passes::voxelize::{self, VoxelGridSpec};
 use crate::passes::{FrameInputs, Passes};
 use crate::scene::Scene;
 use crate::shader_types::{FrameUniforms, Light, Vertex};
 use anyhow::{Context, Result};
-use bounce_device::{vk, Buffer, BufferDesc, Gpu, MemoryLocation};
+use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, MemoryLocation};
 use glam::Vec3;
 
 /// What does not change from frame to frame: the device, the uploaded scene, every pass's pipelines,
@@ -64,7 +65,7 @@ impl std::ops::Deref for Renderer {
     }
 }
 
-/// A rendered frame, read back.
+/// A rendered frame, read back ([`Renderer::present`]: only the screenshot's mean, if asked).
 pub struct FrameOutput {
     pub width: u32,
     pub height: u32,
@@ -154,6 +155,29 @@ impl Renderer {
         s: &FrameSettings,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<FrameOutput> {
+        self.frame(s, progress, None)
+    }
+
+    /// Renders a frame and presents it on the GPU (the viewer): the present pass adds it to the running
+    /// mean and writes the tone-mapped picture into `ldr` ([`crate::passes::present::Present::ldr_image`]). Nothing is read
+    /// back (no radiance, no dead-CDF check), unless `read_mean`: then the returned radiance is the
+    /// running mean (a screenshot), else it is empty.
+    pub fn present(
+        &mut self,
+        s: &FrameSettings,
+        ldr: &Persistent<Image>,
+        params: PresentParams,
+        read_mean: bool,
+    ) -> Result<FrameOutput> {
+        self.frame(s, &mut |_, _| {}, Some(PresentTo { ldr, params, read_mean }))
+    }
+
+    fn frame(
+        &mut self,
+        s: &FrameSettings,
+        progress: &mut dyn FnMut(u64, u64),
+        present: Option<PresentTo>,
+    ) -> Result<FrameOutput> {
         self.check(s)?;
         self.ctx.scene.write_lights(&self.state.lights)?;
         self.ctx.max_intensity = max_intensity(&self.state.lights);
@@ -166,27 +190,46 @@ impl Renderer {
         let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
         let (total, per_chunk) = ctx.chunking(s, &i);
         let mut log = FrameLog::default();
-        let mut read = None;
+        let mut read = (vec![], None);
         for_each_chunk(total, per_chunk, progress, |chunk, last| {
             let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
             let out = build_frame(&ctx.passes, &mut g, s, &i, chunk);
             g.export(&out.radiance);
+            let presented = match &present {
+                Some(p) if last => {
+                    let mut ldr = g.import_image(p.ldr);
+                    let sum = ctx.passes.present.add(&mut g, &out.radiance, &mut ldr, s.width, s.height, p.params);
+                    g.export(&ldr);
+                    Some(sum)
+                }
+                _ => None,
+            };
             let done = g.execute()?;
             log.add(&done);
-            if done.ran.contains(&"cdf_reduce") {
-                if let Some(cdf) = &out.cdf {
-                    log.warnings.extend(ctx.dead_cdf_warning(s, &done.read_buffer(cdf)?));
+            match (&present, presented) {
+                (Some(p), Some(sum)) if p.read_mean => read.0 = done.read_image(&sum)?,
+                (Some(_), _) => {}
+                (None, _) => {
+                    if done.ran.contains(&"cdf_reduce") {
+                        if let Some(cdf) = &out.cdf {
+                            log.warnings.extend(ctx.dead_cdf_warning(s, &done.read_buffer(cdf)?));
+                        }
+                    }
+                    if last {
+                        let sq = out.second_moment.map(|h| done.read_image(&h)).transpose()?;
+                        read = (done.read_image(&out.radiance)?, sq);
+                    }
                 }
-            }
-            if last {
-                let sq = out.second_moment.map(|h| done.read_image(&h)).transpose()?;
-                read = Some((done.read_image(&out.radiance)?, sq));
             }
             Ok(())
         })?;
         state.retained.next_frame();
-        let (radiance, second) = read.expect("the last chunk reads the image");
-        let radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&radiance);
+        let (radiance, second) = read;
+        let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&radiance);
+        if let Some(p) = &present {
+            let k = p.params.frames.max(1) as f32;
+            radiance.iter_mut().for_each(|px| *px = px.map(|c| c / k));
+        }
         let stderr = second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
         log.warnings.extend(rsm_warning(s));
         Ok(FrameOutput {
@@ -200,6 +243,13 @@ impl Renderer {
             stderr,
         })
     }
+}
+
+/// Where [`Renderer::present`] puts its picture.
+struct PresentTo<'p> {
+    ldr: &'p Persistent<Image>,
+    params: PresentParams,
+    read_mean: bool,
 }
 
 /// The largest intensity component of any of `lights`.

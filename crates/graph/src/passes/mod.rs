@@ -8,6 +8,7 @@ pub mod gather;
 pub mod gbuffer;
 pub mod importance;
 pub mod mis;
+pub mod present;
 pub mod psm;
 pub mod reference;
 pub mod voxelize;
@@ -29,6 +30,8 @@ pub struct Passes {
     pub mis: gather::Gather,
     pub psm: psm::Psm,
     pub reference: reference::Reference,
+    /// The viewer's running mean and tone mapping.
+    pub present: present::Present,
 }
 
 impl Passes {
@@ -46,6 +49,7 @@ impl Passes {
             mis: mis::create(gpu).context("creating the mis pass")?,
             psm: psm::Psm::new(gpu).context("creating the psm pass")?,
             reference: reference::Reference::new(gpu, textured).context("creating the reference pass")?,
+            present: present::Present::new(gpu).context("creating the present pass")?,
         })
     }
 }
