@@ -412,6 +412,8 @@ fn view_30_frames_under_xvfb_shows_the_scene() {
     args.extend(VIEW_SETTINGS);
     let o = view(&args, true);
     assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("30 frames in the mean, 30 in all; 1 copy to host memory"), "{stdout}");
     let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
     let all_exr = d.join("all.exr");
     let mut a = vec!["render", scene.to_str().unwrap(), "--out", all_exr.to_str().unwrap()];
@@ -425,6 +427,85 @@ fn view_30_frames_under_xvfb_shows_the_scene() {
     eprintln!("view, 30 frames: mean {mv:.4} vs all {ma:.4} ({:+.2}%)", 100.0 * (mv - ma) / ma);
     assert!(((mv - ma) / ma).abs() < 0.05, "{mv} vs {ma}");
     assert!(std::fs::metadata(&shot).unwrap().len() > 100, "no PNG screenshot");
+}
+
+/// The bar for a moving light: `view --light-path orbit --frames 30` under Xvfb exits 0, its
+/// screenshot is exactly frame 29 of `render --frames 30 --light-path orbit` (same seed: `coherent`
+/// gives every frame of a moving light the seed S, and the viewer's mean after a light move is that
+/// one frame), it differs from the static light's frame with the same seed, and the whole run copied
+/// to host memory once (the screenshot's mean).
+#[test]
+fn view_orbits_the_light_and_reads_back_only_the_screenshot() {
+    let d = scratch("view-orbit");
+    let scene = bounce_tests::default_scene();
+    let shot = d.join("s.png");
+    let mut args = vec![scene.to_str().unwrap(), "--light-path", "orbit", "--frames", "30"];
+    args.extend(["--screenshot", shot.to_str().unwrap(), "--seed", "5", "--validation"]);
+    args.extend(VIEW_SETTINGS);
+    let o = view(&args, true);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("1 frame in the mean, 30 in all; 1 copy to host memory"), "{stdout}");
+    let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
+    let frames = d.join("frames");
+    let mut a = vec!["render", scene.to_str().unwrap(), "--frames", "30", "--out-dir", frames.to_str().unwrap()];
+    a.extend(["--light-path", "orbit", "--seed", "5", "--cdf-seed", "5"]);
+    a.extend(VIEW_SETTINGS);
+    let r = bounce(&a);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (rendered, meta) = read_exr(&frames.join("frame_0029.exr")).unwrap();
+    assert!(meta.iter().any(|(k, val)| k == "bounce.frame" && val == "29"), "{meta:?}");
+    assert_eq!(v.pixels, rendered.pixels, "the viewer's orbit frame 29 is not render's");
+    assert!(frames.join("frame_0000.png").exists() && frames.join("frame_0029.png").exists());
+    let still = d.join("still.exr");
+    let mut a = vec!["render", scene.to_str().unwrap(), "--out", still.to_str().unwrap(), "--seed", "5"];
+    a.extend(["--cdf-seed", "5"]);
+    a.extend(VIEW_SETTINGS);
+    assert_eq!(bounce(&a).code, 0);
+    let (still, _) = read_exr(&still).unwrap();
+    let moved = bounce_tests::rel_mse(&v.pixels, &still.pixels);
+    eprintln!("orbit frame 29 against the static light: relMSE {moved:.3e}");
+    assert!(moved > 1e-3, "the light did not visibly move: relMSE {moved}");
+}
+
+/// Light paths that cannot run: one `error:` line naming the problem, exit 2, nothing written.
+#[test]
+fn bad_light_paths_are_exit_2() {
+    let d = scratch("light-path");
+    let scene = bounce_tests::default_scene();
+    let out = d.join("frames");
+    let keys = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let outside = keys("outside.toml", "[[key]]\nframe = 0\nlight = 0\nposition = [0, 100, 0]\n");
+    let no_light = keys("nolight.toml", "[[key]]\nframe = 0\nlight = 3\nposition = [0, 1, 0]\n");
+    let twice = keys(
+        "twice.toml",
+        "[[key]]\nframe = 2\nlight = 0\nposition = [0, 1, 0]\n[[key]]\nframe = 2\nlight = 0\nposition = [0, 1, 0]\n",
+    );
+    let typo = keys("typo.toml", "[[key]]\nframe = 0\nlight = 0\npositon = [0, 1, 0]\n");
+    let dark = keys("dark.toml", "[[key]]\nframe = 0\nlight = 0\nposition = [0, 1, 0]\nintensity = [-1, 0, 0]\n");
+    for (path, named) in [
+        ("orbit:0", "orbit:PERIOD"),
+        ("orbit:x", "orbit:PERIOD"),
+        ("orbital", "neither"),
+        (d.join("absent.toml").to_str().unwrap(), "absent.toml"),
+        (&outside, "outside the scene's bounds"),
+        (&no_light, "1 light"),
+        (&twice, "second key"),
+        (&typo, "typo.toml:4"),
+        (&dark, "non-negative"),
+    ] {
+        let args = ["render", scene.to_str().unwrap(), "--frames", "2", "--out-dir", out.to_str().unwrap()];
+        let mut args = args.to_vec();
+        args.extend(["--light-path", path, "--width", "8", "--height", "8"]);
+        expect_bad_input(&args, named, &out);
+    }
+    let o = d.join("o.exr");
+    let lone = ["render", scene.to_str().unwrap(), "--light-path", "orbit", "--out", o.to_str().unwrap()];
+    expect_bad_input(&lone, "--light-path needs --frames", &o);
 }
 
 /// Without a display: exit 2, one `error:` line that says so, no screenshot.

@@ -18,13 +18,13 @@ use std::time::{Duration, Instant};
 pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     check_animation_flags(a)?;
     let scene = super::load_scene(&a.scene, err)?;
+    let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
     let settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
     renderer.check(&settings)?;
     if let Some(frames) = a.frames {
-        let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
         animate(a, &mut renderer, &settings, path.as_ref(), frames, err)?;
         return super::check_validation(&gpu, a.frame.validation);
     }
