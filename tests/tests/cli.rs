@@ -201,6 +201,61 @@ fn bench_writes_csv_markdown_and_a_plot() {
 
 /// Broken inputs: each gives exit code 2, exactly one `error:` line naming what is wrong, no output file,
 /// and no panic (a panic would not return through `bounce::run` as a code at all).
+/// `bench --animate`: one CSV row per method, mode and frame; per-frame relMSE and flicker recomputed
+/// from the frames `render --frames` makes with the same seeds and the cached per-frame ground truth
+/// (an independent path to the same numbers); the means in bench.md; the plot; the references cached.
+#[test]
+fn bench_animate_writes_relmse_and_flicker_per_frame() {
+    let d = scratch("bench-animate");
+    let scene = bounce_tests::default_scene();
+    let size = ["--width", "16", "--height", "16", "--dprsm-res", "16", "--voxels", "16"];
+    let mut args = vec!["bench", scene.to_str().unwrap(), "--out", d.to_str().unwrap(), "--animate", "orbit:8"];
+    args.extend(["--frames", "3", "--methods", "uniform", "--vpls", "4", "--reference-spp", "16", "--validation"]);
+    args.extend(size);
+    let r = bounce(&args);
+    assert_eq!(r.code, 0, "stderr: {}", r.stderr);
+    let csv = std::fs::read_to_string(d.join("bench.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2 * 3, "one row per mode and frame:\n{csv}");
+    let md = std::fs::read_to_string(d.join("bench.md")).unwrap();
+    assert!(md.contains("| uniform | fresh |") && md.contains("| uniform | coherent |"), "{md}");
+    assert_eq!(&std::fs::read(d.join("flicker.png")).unwrap()[1..4], b"PNG");
+    // The same frames through `render --frames` (coherent: seed 1 and CDF seed 1 for every frame).
+    let frames = d.join("frames");
+    let mut a = vec!["render", scene.to_str().unwrap(), "--frames", "3", "--out-dir", frames.to_str().unwrap()];
+    a.extend(["--light-path", "orbit:8", "--component", "indirect", "--vpls", "4", "--cdf-seed", "1"]);
+    a.extend(size);
+    assert_eq!(bounce(&a).code, 0);
+    let truth: Vec<Vec<[f32; 3]>> = (0..3)
+        .map(|k| {
+            let name = std::fs::read_dir(&d)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .find(|p| p.to_string_lossy().ends_with(&format!("-frame{k:04}.exr")))
+                .expect("the per-frame ground truth is cached in the output folder");
+            read_exr(&name).unwrap().0.pixels
+        })
+        .collect();
+    let rendered: Vec<Vec<[f32; 3]>> =
+        (0..3).map(|k| read_exr(&frames.join(format!("frame_{k:04}.exr"))).unwrap().0.pixels).collect();
+    for k in 0..3usize {
+        let row = rows.iter().find(|r| r[1] == "coherent" && r[2] == k.to_string()).unwrap();
+        let rel: f64 = row[4].parse().unwrap();
+        let want = bounce::metrics::Metrics::of(&rendered[k], &truth[k]).rel_mse;
+        assert!((rel - want).abs() <= 1e-5 * want, "frame {k}: relMSE {rel} vs {want}");
+        if k > 0 {
+            let f: f64 = row[5].parse().unwrap();
+            let want = bounce::metrics::flicker(&rendered[k], &rendered[k - 1], &truth[k], &truth[k - 1]);
+            assert!((f - want).abs() <= 1e-5 * want, "frame {k}: flicker {f} vs {want}");
+        } else {
+            assert!(row[5].is_empty(), "frame 0 has no flicker");
+        }
+    }
+    let again = bounce(&args);
+    assert_eq!(again.code, 0);
+    assert!(!again.stderr.contains("reference: frame"), "the ground truth was rendered again: {}", again.stderr);
+}
+
 #[test]
 fn bad_inputs_give_one_line_and_exit_2() {
     let d = scratch("bad-inputs");

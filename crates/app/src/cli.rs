@@ -426,6 +426,17 @@ pub struct BenchArgs {
     /// below every method's error; see BENCHMARKS.md).
     #[arg(long, default_value_t = 1024)]
     pub reference_spp: u32,
+    /// Measure temporal stability instead: move the lights along this path (`orbit[:PERIOD]` or a
+    /// keyframe TOML, as --light-path) and report per method the mean per-frame relMSE and flicker
+    /// against a per-frame ground truth, at --vpls's first value per frame.
+    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
+    pub animate: Option<String>,
+    /// Frames of the --animate animation.
+    #[arg(long, default_value_t = 16)]
+    pub frames: u32,
+    /// The seed schedules --animate compares, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "fresh,coherent")]
+    pub temporal: Vec<Temporal>,
 }
 
 /// What `bench` measures errors against (`commands::bench::Reference` adds the sample count).
