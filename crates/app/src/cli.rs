@@ -505,6 +505,20 @@ mod tests {
         assert_eq!((b.width, b.height, b.frame.dprsm_res, b.frame.shadow_res), (128, 128, 128, 2048));
     }
 
+    /// Both schedules give the frames of an unchanged scene fresh seeds (so a static view's progressive
+    /// mean converges: `view_30_frames_under_xvfb_shows_the_scene` checks it against `all` with the
+    /// default, `coherent`); after each change `coherent` starts again from the base seed, `fresh` never.
+    #[test]
+    fn temporal_schedules() {
+        for t in [Temporal::Coherent, Temporal::Fresh] {
+            let seeds: Vec<u64> = (0..5).map(|k| t.seed(7, k, k)).collect();
+            assert_eq!(seeds, [7, 8, 9, 10, 11], "{t:?}: an unchanged scene's frames");
+        }
+        let moving = |t: Temporal| (0..4).map(|k| t.seed(7, k, 0)).collect::<Vec<_>>();
+        assert_eq!(moving(Temporal::Coherent), [7, 7, 7, 7]);
+        assert_eq!(moving(Temporal::Fresh), [7, 8, 9, 10]);
+    }
+
     /// The flags' defaults are the graph's defaults, so a command that sets nothing renders what
     /// `FrameSettings::default()` describes (size and the per-command defaults aside).
     #[test]
