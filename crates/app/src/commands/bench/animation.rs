@@ -174,7 +174,9 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
          {} VPLs per pixel per frame, {} frames of `{arg}`. Ground truth: `--method reference` at {} spp per frame. \
          relMSE: mean over frames; flicker: mean over frames 1..{} of the relMSE of the frame-to-frame difference \
          against the ground truth's; GPU ms: mean over frames 1..{} (the light side and the gather; voxels and \
-         G-buffer kept).\n\n| method | temporal | GPU ms / frame | relMSE | flicker |\n|---|---|---:|---:|---:|\n",
+         G-buffer kept). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
+         | method | temporal | GPU ms / frame | relMSE | flicker | median relMSE | median flicker |\n\
+         |---|---|---:|---:|---:|---:|---:|\n",
         b.width,
         b.height,
         b.dprsm_res,
@@ -189,12 +191,14 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
         for &t in &a.temporal {
             let later = || of(samples, m, t).filter(|s| s.frame > 0);
             md.push_str(&format!(
-                "| {} | {} | {:.2} | {:.4} | {:.4} |\n",
+                "| {} | {} | {:.2} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
                 m.name(),
                 t.name(),
                 mean(later().map(|s| s.gpu_ms)),
                 mean(of(samples, m, t).map(|s| s.rel_mse)),
                 mean(later().filter_map(|s| s.flicker)),
+                super::median(of(samples, m, t).map(|s| s.rel_mse).collect()),
+                super::median(later().filter_map(|s| s.flicker).collect()),
             ));
         }
     }
