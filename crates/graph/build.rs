@@ -80,6 +80,8 @@ const SHADERS: &[Shader] = &[
     // (`--reference-estimator cosine`).
     file("reference.comp"),
     variant("reference.cosine.comp", "reference.comp", &["COSINE_ONLY"]),
+    // The viewer's presentation: running mean, Reinhard, sRGB8.
+    file("present.comp"),
     // Kernels used only by the tests.
     file("test/bvh_trace.comp"),
     file("test/cdf_sample.comp"),

@@ -107,8 +107,8 @@ const float BVH_SHADOW_EPS = 1e-4;
 // about CELL_DENSITY cells per triangle (never finer than the voxels). A trace tests at most HYBRID_MAX_TESTS
 // listed triangles, then finishes with one BVH traversal from where it stands (Renderer::vpls_per_dispatch
 // counts both).
-#define B_CELL_OFFSETS 41
-#define B_CELL_TRIS 42
+#define B_CELL_OFFSETS 44
+#define B_CELL_TRIS 45
 #define CELL_DENSITY 8
 #define HYBRID_MAX_TESTS 96
 
@@ -128,6 +128,19 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define RIS_NONE 0xFFFFFFFFu
 // Most neighbours of one spatial pass (its loops are bounded by it).
 #define RIS_MAX_NEIGHBORS 8
+
+// ---- present: the viewer's running mean, tone mapping and sRGB encoding (passes/present.rs) -------------
+#define B_PRESENT_RADIANCE 40
+#define B_PRESENT_SUM 41
+#define B_PRESENT_OUT 42
+#define B_PRESENT_STATS 43
+// PresentPush.stage
+#define PRESENT_ACCUMULATE 0
+#define PRESENT_TOTAL 1
+#define PRESENT_MAP 2
+// Reinhard 2002: the key value a, and the δ of the log-average luminance (crates/app/src/output.rs).
+const float REINHARD_KEY = 0.18;
+const float REINHARD_DELTA = 0.000001;
 
 // ---- Test kernels (glsl/test/): their input and output buffers. Test pipelines bind nothing else at
 // these numbers, so they may repeat B_REF_SQ's and B_PSM_VIEWS's. --------------------------------------------

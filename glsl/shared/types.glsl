@@ -129,4 +129,16 @@ struct ParaboloidPush {
                       // 0: the paraboloid shadow maps (the direct light's, and psm's per-VPL maps)
 };
 
+// present push constants.
+struct PresentPush {
+    uint stage;       // PRESENT_ACCUMULATE, PRESENT_TOTAL or PRESENT_MAP
+    uint frames;      // frames in the running mean, this one included
+    uint reset;       // 1: the sum restarts at this frame's radiance
+    uint swap_rb;     // 1: write B, G, R (a BGRA swapchain)
+    float exposure;   // multiplies Reinhard's scale a / L̄_w (1: the PNG writer's mapping)
+    uint groups;      // workgroups of the per-pixel stages (the stats buffer's partials)
+    uint pad0;
+    uint pad1;
+};
+
 #endif

@@ -19,6 +19,7 @@ layout(std430, set = 0, binding = 0) readonly buffer In {
     CdfPush cp;
     VoxelizePush vp;
     ParaboloidPush pp;
+    PresentPush pr;
 };
 layout(std430, set = 0, binding = 1) writeonly buffer Out { uint words[]; };
 
@@ -54,4 +55,6 @@ void main() {
     put4u(uvec4(floatBitsToUint(ip.min_d2), floatBitsToUint(ip.fixed_scale), ip.section, ip.first));
     put4u(uvec4(cp.stage, cp.row_length, cp.rows, cp.section));
     put4u(uvec4(vp.cells_per_invocation, vp.first_triangle, pp.map_res, pp.light_map));
+    put4u(uvec4(pr.stage, pr.frames, pr.reset, pr.swap_rb));
+    put4u(uvec4(floatBitsToUint(pr.exposure), pr.groups, pr.pad0, pr.pad1));
 }

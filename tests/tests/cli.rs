@@ -201,6 +201,61 @@ fn bench_writes_csv_markdown_and_a_plot() {
 
 /// Broken inputs: each gives exit code 2, exactly one `error:` line naming what is wrong, no output file,
 /// and no panic (a panic would not return through `bounce::run` as a code at all).
+/// `bench --animate`: one CSV row per method, mode and frame; per-frame relMSE and flicker recomputed
+/// from the frames `render --frames` makes with the same seeds and the cached per-frame ground truth
+/// (an independent path to the same numbers); the means in bench.md; the plot; the references cached.
+#[test]
+fn bench_animate_writes_relmse_and_flicker_per_frame() {
+    let d = scratch("bench-animate");
+    let scene = bounce_tests::default_scene();
+    let size = ["--width", "16", "--height", "16", "--dprsm-res", "16", "--voxels", "16"];
+    let mut args = vec!["bench", scene.to_str().unwrap(), "--out", d.to_str().unwrap(), "--animate", "orbit:8"];
+    args.extend(["--frames", "3", "--methods", "uniform", "--vpls", "4", "--reference-spp", "16", "--validation"]);
+    args.extend(size);
+    let r = bounce(&args);
+    assert_eq!(r.code, 0, "stderr: {}", r.stderr);
+    let csv = std::fs::read_to_string(d.join("bench.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2 * 3, "one row per mode and frame:\n{csv}");
+    let md = std::fs::read_to_string(d.join("bench.md")).unwrap();
+    assert!(md.contains("| uniform | fresh |") && md.contains("| uniform | coherent |"), "{md}");
+    assert_eq!(&std::fs::read(d.join("flicker.png")).unwrap()[1..4], b"PNG");
+    // The same frames through `render --frames` (coherent: seed 1 and CDF seed 1 for every frame).
+    let frames = d.join("frames");
+    let mut a = vec!["render", scene.to_str().unwrap(), "--frames", "3", "--out-dir", frames.to_str().unwrap()];
+    a.extend(["--light-path", "orbit:8", "--component", "indirect", "--vpls", "4", "--cdf-seed", "1"]);
+    a.extend(size);
+    assert_eq!(bounce(&a).code, 0);
+    let truth: Vec<Vec<[f32; 3]>> = (0..3)
+        .map(|k| {
+            let name = std::fs::read_dir(&d)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .find(|p| p.to_string_lossy().ends_with(&format!("-frame{k:04}.exr")))
+                .expect("the per-frame ground truth is cached in the output folder");
+            read_exr(&name).unwrap().0.pixels
+        })
+        .collect();
+    let rendered: Vec<Vec<[f32; 3]>> =
+        (0..3).map(|k| read_exr(&frames.join(format!("frame_{k:04}.exr"))).unwrap().0.pixels).collect();
+    for k in 0..3usize {
+        let row = rows.iter().find(|r| r[1] == "coherent" && r[2] == k.to_string()).unwrap();
+        let rel: f64 = row[4].parse().unwrap();
+        let want = bounce::metrics::Metrics::of(&rendered[k], &truth[k]).rel_mse;
+        assert!((rel - want).abs() <= 1e-5 * want, "frame {k}: relMSE {rel} vs {want}");
+        if k > 0 {
+            let f: f64 = row[5].parse().unwrap();
+            let want = bounce::metrics::flicker(&rendered[k], &rendered[k - 1], &truth[k], &truth[k - 1]);
+            assert!((f - want).abs() <= 1e-5 * want, "frame {k}: flicker {f} vs {want}");
+        } else {
+            assert!(row[5].is_empty(), "frame 0 has no flicker");
+        }
+    }
+    let again = bounce(&args);
+    assert_eq!(again.code, 0);
+    assert!(!again.stderr.contains("reference: frame"), "the ground truth was rendered again: {}", again.stderr);
+}
+
 #[test]
 fn bad_inputs_give_one_line_and_exit_2() {
     let d = scratch("bad-inputs");
@@ -412,6 +467,8 @@ fn view_30_frames_under_xvfb_shows_the_scene() {
     args.extend(VIEW_SETTINGS);
     let o = view(&args, true);
     assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("30 frames in the mean, 30 in all; 1 copy to host memory"), "{stdout}");
     let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
     let all_exr = d.join("all.exr");
     let mut a = vec!["render", scene.to_str().unwrap(), "--out", all_exr.to_str().unwrap()];
@@ -425,6 +482,85 @@ fn view_30_frames_under_xvfb_shows_the_scene() {
     eprintln!("view, 30 frames: mean {mv:.4} vs all {ma:.4} ({:+.2}%)", 100.0 * (mv - ma) / ma);
     assert!(((mv - ma) / ma).abs() < 0.05, "{mv} vs {ma}");
     assert!(std::fs::metadata(&shot).unwrap().len() > 100, "no PNG screenshot");
+}
+
+/// The bar for a moving light: `view --light-path orbit --frames 30` under Xvfb exits 0, its
+/// screenshot is exactly frame 29 of `render --frames 30 --light-path orbit` (same seed: `coherent`
+/// gives every frame of a moving light the seed S, and the viewer's mean after a light move is that
+/// one frame), it differs from the static light's frame with the same seed, and the whole run copied
+/// to host memory once (the screenshot's mean).
+#[test]
+fn view_orbits_the_light_and_reads_back_only_the_screenshot() {
+    let d = scratch("view-orbit");
+    let scene = bounce_tests::default_scene();
+    let shot = d.join("s.png");
+    let mut args = vec![scene.to_str().unwrap(), "--light-path", "orbit", "--frames", "30"];
+    args.extend(["--screenshot", shot.to_str().unwrap(), "--seed", "5", "--validation"]);
+    args.extend(VIEW_SETTINGS);
+    let o = view(&args, true);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("1 frame in the mean, 30 in all; 1 copy to host memory"), "{stdout}");
+    let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
+    let frames = d.join("frames");
+    let mut a = vec!["render", scene.to_str().unwrap(), "--frames", "30", "--out-dir", frames.to_str().unwrap()];
+    a.extend(["--light-path", "orbit", "--seed", "5", "--cdf-seed", "5"]);
+    a.extend(VIEW_SETTINGS);
+    let r = bounce(&a);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (rendered, meta) = read_exr(&frames.join("frame_0029.exr")).unwrap();
+    assert!(meta.iter().any(|(k, val)| k == "bounce.frame" && val == "29"), "{meta:?}");
+    assert_eq!(v.pixels, rendered.pixels, "the viewer's orbit frame 29 is not render's");
+    assert!(frames.join("frame_0000.png").exists() && frames.join("frame_0029.png").exists());
+    let still = d.join("still.exr");
+    let mut a = vec!["render", scene.to_str().unwrap(), "--out", still.to_str().unwrap(), "--seed", "5"];
+    a.extend(["--cdf-seed", "5"]);
+    a.extend(VIEW_SETTINGS);
+    assert_eq!(bounce(&a).code, 0);
+    let (still, _) = read_exr(&still).unwrap();
+    let moved = bounce_tests::rel_mse(&v.pixels, &still.pixels);
+    eprintln!("orbit frame 29 against the static light: relMSE {moved:.3e}");
+    assert!(moved > 1e-3, "the light did not visibly move: relMSE {moved}");
+}
+
+/// Light paths that cannot run: one `error:` line naming the problem, exit 2, nothing written.
+#[test]
+fn bad_light_paths_are_exit_2() {
+    let d = scratch("light-path");
+    let scene = bounce_tests::default_scene();
+    let out = d.join("frames");
+    let keys = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let outside = keys("outside.toml", "[[key]]\nframe = 0\nlight = 0\nposition = [0, 100, 0]\n");
+    let no_light = keys("nolight.toml", "[[key]]\nframe = 0\nlight = 3\nposition = [0, 1, 0]\n");
+    let twice = keys(
+        "twice.toml",
+        "[[key]]\nframe = 2\nlight = 0\nposition = [0, 1, 0]\n[[key]]\nframe = 2\nlight = 0\nposition = [0, 1, 0]\n",
+    );
+    let typo = keys("typo.toml", "[[key]]\nframe = 0\nlight = 0\npositon = [0, 1, 0]\n");
+    let dark = keys("dark.toml", "[[key]]\nframe = 0\nlight = 0\nposition = [0, 1, 0]\nintensity = [-1, 0, 0]\n");
+    for (path, named) in [
+        ("orbit:0", "orbit:PERIOD"),
+        ("orbit:x", "orbit:PERIOD"),
+        ("orbital", "neither"),
+        (d.join("absent.toml").to_str().unwrap(), "absent.toml"),
+        (&outside, "outside the scene's bounds"),
+        (&no_light, "1 light"),
+        (&twice, "second key"),
+        (&typo, "typo.toml:4"),
+        (&dark, "non-negative"),
+    ] {
+        let args = ["render", scene.to_str().unwrap(), "--frames", "2", "--out-dir", out.to_str().unwrap()];
+        let mut args = args.to_vec();
+        args.extend(["--light-path", path, "--width", "8", "--height", "8"]);
+        expect_bad_input(&args, named, &out);
+    }
+    let o = d.join("o.exr");
+    let lone = ["render", scene.to_str().unwrap(), "--light-path", "orbit", "--out", o.to_str().unwrap()];
+    expect_bad_input(&lone, "--light-path needs --frames", &o);
 }
 
 /// Without a display: exit 2, one `error:` line that says so, no screenshot.

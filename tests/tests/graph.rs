@@ -201,6 +201,57 @@ fn a_camera_move_keeps_the_light_side() {
     assert!(combined.ran.contains(&"dprsm_depth"), "{:?}", combined.ran);
 }
 
+/// A light move re-records exactly the light-side passes (reflective maps, shadow map, direct light)
+/// and what depends on them (importance, CDF, gather), keeps the voxels and the G-buffer, and gives the
+/// image a fresh renderer whose scene has the light there renders; an intensity change alone keeps the
+/// shadow map; moving nothing records only the gather; moving the light back gives the first image's
+/// bits (the light upload is exact).
+#[test]
+fn a_light_move_records_exactly_the_light_side() {
+    use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+    use bounce_graph::scene::{point_light, Scene};
+    use glam::Vec3;
+    let gpu = TestGpu::new();
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let s = FrameSettings {
+        width: 24,
+        height: 24,
+        component: Component::Combined,
+        method: Method::Global,
+        vpls: 4,
+        dprsm_res: 32,
+        shadow_res: 128,
+        voxels: 32,
+        ..FrameSettings::default()
+    };
+    let first = r.render(&s).unwrap();
+    let (p0, i0) =
+        (Vec3::from_slice(&scene.lights[0].position[..3]), Vec3::from_slice(&scene.lights[0].intensity[..3]));
+    let p1 = p0 + Vec3::new(0.15, -0.05, 0.1) * scene.diagonal();
+    r.set_light(0, p1, i0);
+    let moved = r.render(&s).unwrap();
+    let light_side = ["dprsm_depth", "direct", "dprsm", "importance", "cdf_reduce", "gather"];
+    let mut want: Vec<&str> = first.ran.iter().copied().filter(|p| light_side.contains(p)).collect();
+    want.dedup();
+    assert_eq!(moved.ran, want, "a light move must record exactly the light side");
+    for pass in ["voxelize", "gbuffer"] {
+        assert!(first.ran.contains(&pass) && !moved.ran.contains(&pass), "{pass}: {:?}", moved.ran);
+    }
+    let mut there = scene.clone();
+    there.lights[0] = point_light(p1, i0);
+    let fresh = Renderer::new(&gpu, &there).unwrap().render(&s).unwrap();
+    assert_eq!(fresh.radiance, moved.radiance, "a kept product is stale after the light move");
+    assert_ne!(fresh.radiance, first.radiance, "the light move changed nothing");
+    assert_eq!(r.render(&s).unwrap().ran, vec!["gather"], "moving nothing records only the gather");
+    r.set_light(0, p1, i0 * 2.0);
+    let brighter = r.render(&s).unwrap();
+    assert!(!brighter.ran.contains(&"dprsm_depth"), "the shadow map depends on positions: {:?}", brighter.ran);
+    assert!(brighter.ran.contains(&"direct") && brighter.ran.contains(&"dprsm"), "{:?}", brighter.ran);
+    r.set_light(0, p0, i0);
+    assert_eq!(r.render(&s).unwrap().radiance, first.radiance, "moving the light back changed the bits");
+}
+
 /// A paraboloid face that sees nothing (zero flux: all the geometry lies on one side of the light) is
 /// never sampled. With one live face, Russian roulette (probability ∝ face total) and the uniform face
 /// choice (uniform among faces with importance) both give it probability 0 and draw every sample from

@@ -64,6 +64,15 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     let cp = CdfPush { stage: 6001, row_length: 6002, rows: 6003, section: 6004 };
     let vp = VoxelizePush { cells_per_invocation: 7001, first_triangle: 7002 };
     let pp = ParaboloidPush { map_res: 8001, light_map: 8002 };
+    let pr = PresentPush {
+        stage: 9001,
+        frames: 9002,
+        reset: 9003,
+        swap_rb: 9004,
+        exposure: next(),
+        groups: 9006,
+        pad: [9007, 9008],
+    };
     let mut input = vec![];
     input.extend_from_slice(bytemuck::bytes_of(&v));
     input.extend_from_slice(bytemuck::bytes_of(&m));
@@ -76,6 +85,7 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     input.extend_from_slice(bytemuck::bytes_of(&cp));
     input.extend_from_slice(bytemuck::bytes_of(&vp));
     input.extend_from_slice(bytemuck::bytes_of(&pp));
+    input.extend_from_slice(bytemuck::bytes_of(&pr));
 
     let inb = Buffer::with_data(&gpu, "echo in", vk::BufferUsageFlags::STORAGE_BUFFER, &input).unwrap();
     let outb = Buffer::new(&gpu, &BufferDesc::storage("echo out", input.len() as u64)).unwrap();

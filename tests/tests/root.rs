@@ -12,6 +12,7 @@ mod images;
 
 mod layout;
 mod lightmaps;
+mod present;
 mod psm;
 mod reference;
 mod ris;

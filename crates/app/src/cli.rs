@@ -342,6 +342,15 @@ pub struct RenderArgs {
     /// write their mean: equal-time comparisons in one flag. Not for `all` (the same every frame).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
+    /// Render an animation of this many frames (with --light-path) into --out-dir: frame_0000.exr and
+    /// .png, …
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Where --frames writes its frames.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    #[command(flatten)]
+    pub animation: AnimationArgs,
 }
 
 /// `view` renders a frame per redraw, so it starts from a smaller window and cheaper maps than
@@ -370,6 +379,49 @@ pub struct ViewArgs {
     /// Present without waiting for vertical sync (immediate or mailbox, where the surface has one).
     #[arg(long)]
     pub no_vsync: bool,
+    #[command(flatten)]
+    pub animation: AnimationArgs,
+}
+
+/// The seeds of an animation's frames (`--temporal`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Temporal {
+    /// Common random numbers: every frame after a change starts again from --seed, so each pixel's
+    /// stratified points stay the same while the light moves and its draws follow the CDF
+    /// continuously; frames of an unchanged scene still take seed + 1, + 2, … (progressive).
+    Coherent,
+    /// Frame k of the animation uses seed + k: fresh random numbers every frame.
+    Fresh,
+}
+
+impl Temporal {
+    /// The seed of a frame: `since_change` frames after the last change of camera, lights or settings,
+    /// `frame` frames after the first.
+    pub fn seed(self, base: u64, frame: u32, since_change: u32) -> u64 {
+        match self {
+            Temporal::Coherent => base.wrapping_add(since_change as u64),
+            Temporal::Fresh => base.wrapping_add(frame as u64),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Temporal::Coherent => "coherent",
+            Temporal::Fresh => "fresh",
+        }
+    }
+}
+
+/// The scripted light motion and how its frames draw their random numbers (`render`, `view`).
+#[derive(Args, Debug)]
+pub struct AnimationArgs {
+    /// Move the lights: `orbit[:PERIOD]` (each light circles its start, PERIOD frames per turn, default
+    /// 60) or a TOML file of keyframes (see README). Needs --frames.
+    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
+    pub light_path: Option<String>,
+    /// The seeds of consecutive frames.
+    #[arg(long, value_enum, default_value = "coherent")]
+    pub temporal: Temporal,
 }
 
 /// The window size of `view` when neither the flags nor the scene give one.
@@ -416,6 +468,17 @@ pub struct BenchArgs {
     /// below every method's error; see BENCHMARKS.md).
     #[arg(long, default_value_t = 1024)]
     pub reference_spp: u32,
+    /// Measure temporal stability instead: move the lights along this path (`orbit[:PERIOD]` or a
+    /// keyframe TOML, as --light-path) and report per method the mean per-frame relMSE and flicker
+    /// against a per-frame ground truth, at --vpls's first value per frame.
+    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
+    pub animate: Option<String>,
+    /// Frames of the --animate animation.
+    #[arg(long, default_value_t = 16)]
+    pub frames: u32,
+    /// The seed schedules --animate compares, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "fresh,coherent")]
+    pub temporal: Vec<Temporal>,
 }
 
 /// What `bench` measures errors against (`commands::bench::Reference` adds the sample count).
@@ -482,6 +545,20 @@ mod tests {
         assert_eq!((v.picture.vpls, v.frame.dprsm_res, v.frame.shadow_res), (16, 256, 1024));
         let Command::Bench(b) = parse(&["bench", "s.toml", "--out", "o"]) else { panic!() };
         assert_eq!((b.width, b.height, b.frame.dprsm_res, b.frame.shadow_res), (128, 128, 128, 2048));
+    }
+
+    /// Both schedules give the frames of an unchanged scene fresh seeds (so a static view's progressive
+    /// mean converges: `view_30_frames_under_xvfb_shows_the_scene` checks it against `all` with the
+    /// default, `coherent`); after each change `coherent` starts again from the base seed, `fresh` never.
+    #[test]
+    fn temporal_schedules() {
+        for t in [Temporal::Coherent, Temporal::Fresh] {
+            let seeds: Vec<u64> = (0..5).map(|k| t.seed(7, k, k)).collect();
+            assert_eq!(seeds, [7, 8, 9, 10, 11], "{t:?}: an unchanged scene's frames");
+        }
+        let moving = |t: Temporal| (0..4).map(|k| t.seed(7, k, 0)).collect::<Vec<_>>();
+        assert_eq!(moving(Temporal::Coherent), [7, 7, 7, 7]);
+        assert_eq!(moving(Temporal::Fresh), [7, 8, 9, 10]);
     }
 
     /// The flags' defaults are the graph's defaults, so a command that sets nothing renders what

@@ -4,11 +4,13 @@
 //! [`run`] is the whole command line, so the tests drive it in-process. `cli` is the clap schema,
 //! `commands` holds one module per command, and `error` decides the exit code from an error's type:
 //! 0 success, 2 bad input (things the user fixes), 1 a runtime failure. Every error is one line on
-//! stderr. `output`, `metrics` and `plot` are libraries the tests and tools use too.
+//! stderr. `output`, `metrics` and `plot` are libraries the tests and tools use too; `light_path` is
+//! the scripted light motion of `--light-path` and `--animate`.
 
 mod cli;
 mod commands;
 mod error;
+pub mod light_path;
 pub mod metrics;
 pub mod output;
 pub mod plot;

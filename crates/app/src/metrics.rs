@@ -1,6 +1,7 @@
 //! Image error metrics, as the project defines them (linear radiance, all pixels and channels):
 //! RMSE; relMSE = mean of (t − r)² / (r² + 0.01); bias = mean(t) / mean(r); the 99th percentile of
-//! |t − r|; and the count of non-finite test pixels (which never count as agreeing).
+//! |t − r|; and the count of non-finite test pixels (which never count as agreeing). For animations,
+//! [`flicker`]: the relMSE of the frame-to-frame differences.
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Metrics {
@@ -86,9 +87,40 @@ impl Metrics {
     }
 }
 
+/// The flicker of frame k of an animation: the error of its frame-to-frame difference against the
+/// ground truth's, mean over pixels and channels of ((t_k − t_{k−1}) − (r_k − r_{k−1}))² / (r_k² + 0.01)
+/// (relMSE's normalisation). A constant error (a bias that does not change) does not flicker; fresh
+/// noise every frame does. A non-finite test value gives infinity.
+pub fn flicker(t: &[[f32; 3]], t_prev: &[[f32; 3]], r: &[[f32; 3]], r_prev: &[[f32; 3]]) -> f64 {
+    assert!(t.len() == r.len() && t_prev.len() == r.len() && r_prev.len() == r.len(), "images of different sizes");
+    let mut sum = 0.0f64;
+    for i in 0..r.len() {
+        for c in 0..3 {
+            let dt = t[i][c] as f64 - t_prev[i][c] as f64;
+            let dr = r[i][c] as f64 - r_prev[i][c] as f64;
+            let e = if dt.is_finite() { dt - dr } else { f64::INFINITY };
+            sum += e * e / ((r[i][c] as f64).powi(2) + 0.01);
+        }
+    }
+    sum / (3 * r.len()).max(1) as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn flicker_counts_changes_of_the_error_not_the_error() {
+        let (r0, r1) = ([[1.0f32, 0.0, 0.5]], [[2.0f32, 0.0, 0.5]]);
+        // A constant offset from the truth: no flicker, whatever its size.
+        let (t0, t1) = ([[1.5f32, 0.3, 0.0]], [[2.5f32, 0.3, 0.0]]);
+        assert_eq!(flicker(&t1, &t0, &r1, &r0), 0.0);
+        // The error grows by 0.1 in the first channel and by 0.2 in the second:
+        // (0.1² / (2² + 0.01) + 0.2² / (0 + 0.01)) / 3.
+        let t1 = [[2.6f32, 0.5, 0.0]];
+        let want = (0.01 / 4.01 + 0.04 / 0.01) / 3.0;
+        assert!((flicker(&t1, &t0, &r1, &r0) - want).abs() < 1e-6, "{}", flicker(&t1, &t0, &r1, &r0));
+    }
 
     #[test]
     fn hand_computed_case() {

@@ -1,5 +1,6 @@
 //! The time-versus-error plot of `bounce bench`: log–log, one line per method, labelled axes with units
-//! and a legend. Text uses the embedded DejaVu Sans (assets/fonts), so no system font is needed.
+//! and a legend; and for `bench --animate`, panels of per-frame figures (relMSE, flicker) over the
+//! frames. Text uses the embedded DejaVu Sans (assets/fonts), so no system font is needed.
 
 use anyhow::{anyhow, Result};
 use plotters::coord::combinators::BindKeyPoints;
@@ -120,6 +121,76 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
         root.present().map_err(|e| anyhow!("plot: {e}"))?;
     }
     std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+}
+
+/// One panel of [`over_frames`]: its y-axis label and its series, (name, [(frame, value)]).
+pub struct Panel<'a> {
+    pub y: &'a str,
+    pub series: &'a [(String, Vec<(f64, f64)>)],
+}
+
+/// Panels stacked vertically, frame number on a linear x axis, the values on log y axes, one line per
+/// series (the same colour in every panel).
+pub fn over_frames(path: &Path, panels: &[Panel], title: &str) -> Result<()> {
+    register_font();
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    {
+        let root = BitMapBackend::new(&tmp, (900, 420 * panels.len().max(1) as u32)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(|e| anyhow!("plot: {e}"))?;
+        for (area, panel) in root.split_evenly((panels.len().max(1), 1)).iter().zip(panels) {
+            frame_panel(area, panel)?;
+        }
+        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+}
+
+fn frame_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel: &Panel) -> Result<()> {
+    let ok = |(f, v): &(f64, f64)| f.is_finite() && *v > 0.0 && v.is_finite();
+    let pts: Vec<(f64, f64)> = panel.series.iter().flat_map(|(_, v)| v.iter().copied()).filter(ok).collect();
+    if pts.is_empty() {
+        return Err(anyhow!("no finite positive value to plot for {}", panel.y));
+    }
+    let (fmin, fmax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (f, _)| (a.min(*f), b.max(*f)));
+    let (vmin, vmax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (_, v)| (a.min(*v), b.max(*v)));
+    let mut chart = ChartBuilder::on(area)
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(96)
+        .build_cartesian_2d(
+            fmin - 0.5..fmax + 0.5,
+            (vmin / 1.5..vmax * 1.5).log_scale().with_key_points(key_points(vmin / 1.5, vmax * 1.5)),
+        )
+        .map_err(|e| anyhow!("plot: {e}"))?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .y_desc(panel.y)
+        .y_labels(8)
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| tick(*v))
+        .label_style(("sans-serif", 15))
+        .draw()
+        .map_err(|e| anyhow!("plot: {e}"))?;
+    for (k, (name, v)) in panel.series.iter().enumerate() {
+        let color = Palette99::pick(k).to_rgba();
+        let line: Vec<(f64, f64)> = v.iter().copied().filter(ok).collect();
+        chart
+            .draw_series(LineSeries::new(line, color.stroke_width(2)))
+            .map_err(|e| anyhow!("plot: {e}"))?
+            .label(name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|e| anyhow!("plot: {e}"))?;
+    Ok(())
 }
 
 #[cfg(test)]

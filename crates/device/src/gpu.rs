@@ -111,6 +111,9 @@ pub struct Shared {
     pub(crate) command_pool: Mutex<vk::CommandPool>,
     messenger: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     validation: Arc<ValidationLog>,
+    /// Copies to host memory made so far (`Buffer::read_back`, `Image::read_back`): how the viewer's
+    /// tests see that a presented frame reads nothing back.
+    readbacks: std::sync::atomic::AtomicU64,
 }
 
 /// The device handle: cheap to clone, shared by every resource made from it.
@@ -499,7 +502,18 @@ impl Gpu {
             command_pool: Mutex::new(command_pool),
             messenger,
             validation,
+            readbacks: Default::default(),
         })))
+    }
+
+    /// How many copies to host memory ([`crate::Buffer::read_back`], [`crate::Image::read_back`]) this
+    /// device has made.
+    pub fn readbacks(&self) -> u64 {
+        self.0.readbacks.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    pub(crate) fn count_readback(&self) {
+        self.0.readbacks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// This device's validation messages (empty unless created with `validation: true`).

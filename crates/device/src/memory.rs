@@ -116,6 +116,7 @@ impl Buffer {
     /// transfer read is recorded here); waits for completion.
     pub fn read_back(&self, current: Access) -> Result<Vec<u8>> {
         let gpu = &self.gpu;
+        gpu.count_readback();
         let staging = Buffer::new(
             gpu,
             &BufferDesc {
@@ -316,6 +317,7 @@ impl Image {
     /// last access; the image is left in [`Access::TransferRead`].
     pub fn read_back(&self, current: Access) -> Result<Vec<u8>> {
         let gpu = &self.gpu;
+        gpu.count_readback();
         let layer_bytes = self.desc.width as u64 * self.desc.height as u64 * texel_size(self.desc.format);
         let staging = Buffer::new(
             gpu,

@@ -1,6 +1,8 @@
 //! Presentation: a swapchain on a surface the caller created (the app owns the window and its
-//! handles; this crate knows no windowing library), and the one way bounce shows an image: a tone-mapped
-//! RGBA8 host image copied into the next swapchain image (`vkCmdCopyBufferToImage`), then presented.
+//! handles; this crate knows no windowing library), and two ways to show an image: a tone-mapped RGBA8
+//! device image copied into the next swapchain image (`vkCmdCopyImage`, [`Swapchain::present_image`]:
+//! the viewer's, nothing crosses to the host), or a host RGBA8 image copied in from a staging buffer
+//! (`vkCmdCopyBufferToImage`, [`Swapchain::present_rgba8`]).
 //!
 //! Synchronisation, one frame in flight: the acquire semaphore is waited by the copy's submission
 //! (`Gpu::submit_synced`), which completes before the next acquire; each swapchain image has its own "copied" semaphore
@@ -9,7 +11,7 @@
 
 use crate::error::{Error, Result, VkContext};
 use crate::gpu::Gpu;
-use crate::memory::{Buffer, BufferDesc};
+use crate::memory::{Buffer, BufferDesc, Image};
 use crate::sync::{self, Access, Target, Tracked};
 use ash::{khr, vk};
 use gpu_allocator::MemoryLocation;
@@ -158,18 +160,77 @@ impl Swapchain {
         Ok(())
     }
 
+    /// Copies `src` (an RGBA8 UNORM image, already sRGB-encoded and in the swapchain's channel order,
+    /// made with `TRANSFER_SRC` usage) into the next swapchain image and presents it. `last` is `src`'s
+    /// last access; the returned access is its new one. Where the sizes differ (a resize in flight) the
+    /// overlap is copied. The two formats are both 32-bit, so the copy moves bytes unchanged.
+    pub fn present_image(&mut self, src: &Image, last: Access) -> Result<(Presented, Access)> {
+        let Some(index) = self.acquire()? else { return Ok((Presented::OutOfDate, last)) };
+        let image = self.images[index as usize];
+        let layers = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
+        let region = vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(vk::Extent3D {
+            width: src.desc.width.min(self.extent.width),
+            height: src.desc.height.min(self.extent.height),
+            depth: 1,
+        });
+        let d = self.gpu.device.clone();
+        self.submit_and_present(index, |gpu, cmd| unsafe {
+            let mut from = Tracked::after(last, false);
+            sync::transition(gpu, cmd, Target::Image(src), &mut from, Access::TransferRead);
+            let target = Target::External { image, range: color_range() };
+            let mut state = Tracked::after(Access::Acquired, false);
+            sync::transition(gpu, cmd, target, &mut state, Access::TransferWrite);
+            d.cmd_copy_image(
+                cmd,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            );
+            sync::transition(gpu, cmd, target, &mut state, Access::Present);
+        })
+        .map(|p| (p, Access::TransferRead))
+    }
+
+    /// The next image's index, `None` when the swapchain is out of date.
+    fn acquire(&mut self) -> Result<Option<u32>> {
+        match unsafe { self.swapchain_fn.acquire_next_image(self.raw, u64::MAX, self.acquired, vk::Fence::null()) } {
+            Ok((index, _suboptimal)) => Ok(Some(index)),
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(None),
+            Err(result) => Err(Error::Vk { call: "vkAcquireNextImageKHR", result }),
+        }
+    }
+
+    /// Submits `record` (which fills image `index`), waiting for the acquire and signalling that image's
+    /// "copied" semaphore, then presents it. One frame in flight: this waits for the submission, so the
+    /// acquire semaphore and any staging memory are free again before the next present.
+    fn submit_and_present(&mut self, index: u32, record: impl FnOnce(&Gpu, vk::CommandBuffer)) -> Result<Presented> {
+        let wait =
+            [vk::SemaphoreSubmitInfo::default().semaphore(self.acquired).stage_mask(vk::PipelineStageFlags2::COPY)];
+        let signal = [vk::SemaphoreSubmitInfo::default()
+            .semaphore(self.copied[index as usize])
+            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        let gpu = self.gpu.clone();
+        self.gpu.submit_synced(&wait, &signal, |cmd| record(&gpu, cmd))?;
+        let waits = [self.copied[index as usize]];
+        let swapchains = [self.raw];
+        let indices = [index];
+        let present =
+            vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
+        match unsafe { self.swapchain_fn.queue_present(self.gpu.queue, &present) } {
+            Ok(_) => Ok(Presented::Yes),
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Presented::OutOfDate),
+            Err(result) => Err(Error::Vk { call: "vkQueuePresentKHR", result }),
+        }
+    }
+
     /// Copies `rgba` (`width` × `height` sRGB-encoded RGBA8, row 0 at the top) into the next swapchain
     /// image and presents it. Where the sizes differ (a resize in flight) the overlap is copied.
     pub fn present_rgba8(&mut self, width: u32, height: u32, rgba: &[u8]) -> Result<Presented> {
         assert_eq!(rgba.len(), 4 * width as usize * height as usize, "RGBA8 image size");
         let d = self.gpu.device.clone();
-        let (index, _suboptimal) =
-            match unsafe { self.swapchain_fn.acquire_next_image(self.raw, u64::MAX, self.acquired, vk::Fence::null()) }
-            {
-                Ok(r) => r,
-                Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => return Ok(Presented::OutOfDate),
-                Err(result) => return Err(Error::Vk { call: "vkAcquireNextImageKHR", result }),
-            };
+        let Some(index) = self.acquire()? else { return Ok(Presented::OutOfDate) };
         let size = rgba.len() as u64;
         if self.staging.as_ref().is_none_or(|b| b.size < size) {
             self.staging = Some(Buffer::new(
@@ -192,8 +253,6 @@ impl Swapchain {
             dst[..rgba.len()].copy_from_slice(rgba);
         }
         let image = self.images[index as usize];
-        let range =
-            vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1);
         let staging_raw = staging.raw;
         let copy = vk::BufferImageCopy::default()
             .buffer_row_length(width)
@@ -205,33 +264,21 @@ impl Swapchain {
                 height: height.min(self.extent.height),
                 depth: 1,
             });
-        let wait =
-            [vk::SemaphoreSubmitInfo::default().semaphore(self.acquired).stage_mask(vk::PipelineStageFlags2::COPY)];
-        let signal = [vk::SemaphoreSubmitInfo::default()
-            .semaphore(self.copied[index as usize])
-            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
-        // One frame in flight: this waits for the copy, so the staging buffer and the acquire
-        // semaphore are free again before the next present.
-        self.gpu.submit_synced(&wait, &signal, |cmd| unsafe {
+        self.submit_and_present(index, |gpu, cmd| unsafe {
             // The barriers come from the access table like every other: acquired (the semaphore's wait
             // at the transfer stage, old contents discarded) → copy destination → presentation.
-            let target = Target::External { image, range };
+            let target = Target::External { image, range: color_range() };
             let mut state = Tracked::after(Access::Acquired, false);
-            sync::transition(&self.gpu, cmd, target, &mut state, Access::TransferWrite);
+            sync::transition(gpu, cmd, target, &mut state, Access::TransferWrite);
             d.cmd_copy_buffer_to_image(cmd, staging_raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy]);
-            sync::transition(&self.gpu, cmd, target, &mut state, Access::Present);
-        })?;
-        let waits = [self.copied[index as usize]];
-        let swapchains = [self.raw];
-        let indices = [index];
-        let present =
-            vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
-        match unsafe { self.swapchain_fn.queue_present(self.gpu.queue, &present) } {
-            Ok(_) => Ok(Presented::Yes),
-            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Presented::OutOfDate),
-            Err(result) => Err(Error::Vk { call: "vkQueuePresentKHR", result }),
-        }
+            sync::transition(gpu, cmd, target, &mut state, Access::Present);
+        })
     }
+}
+
+/// The colour subresource of a swapchain image.
+fn color_range() -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1)
 }
 
 impl Drop for Swapchain {

@@ -1,11 +1,18 @@
 //! The scene on the GPU: uploaded once, read-only afterwards. Because nothing writes these buffers after
 //! the upload (which waits for its fence), the graph does not track them; passes bind them with
 //! [`GpuScene::writes`] at the binding numbers of `glsl/shared/scene.glsl`.
+//!
+//! The lights are the exception: they are frame state (`Renderer::set_light`), so their buffer is
+//! host-visible and rewritten by [`GpuScene::write_lights`] before each frame is recorded. Every frame
+//! waits for its submission, so no GPU work reads the buffer while the host writes it, and a host write
+//! before `vkQueueSubmit` is visible to the submission without a barrier. The bounds (and so the voxel
+//! grid and the paraboloid far plane) stay those of the upload: a light should stay inside them.
 
 use crate::bindings::*;
 use crate::scene::Scene;
+use crate::shader_types::Light;
 use anyhow::{Context, Result};
-use bounce_device::{vk, Buffer, DescriptorWrites, Gpu};
+use bounce_device::{vk, Buffer, BufferDesc, DescriptorWrites, Gpu, MemoryLocation};
 use glam::Vec3;
 
 pub struct GpuScene {
@@ -51,12 +58,22 @@ impl GpuScene {
             materials: up("materials", bytemuck::cast_slice(&scene.materials))?,
             textures: up("textures", bytemuck::cast_slice(&scene.textures))?,
             texels: up("texels", bytemuck::cast_slice(&scene.texels))?,
-            lights: up("lights", bytemuck::cast_slice(&scene.lights))?,
+            lights: lights_buffer(gpu, &scene.lights)?,
             triangle_count: scene.tri_material.len() as u32,
             light_count: scene.lights.len() as u32,
             bounds_min: lo,
             bounds_max: hi,
         })
+    }
+
+    /// Writes `lights` (as many as the scene has) into the light buffer; the same records give the same
+    /// bits as the upload did, so a static light renders the same image.
+    pub fn write_lights(&mut self, lights: &[Light]) -> Result<()> {
+        anyhow::ensure!(lights.len() == self.light_count as usize, "the scene has {} lights", self.light_count);
+        let bytes: &[u8] = bytemuck::cast_slice(lights);
+        let dst = self.lights.mapped_mut().context("the light buffer is not host-visible")?;
+        dst[..bytes.len()].copy_from_slice(bytes);
+        Ok(())
     }
 
     /// Length of the diagonal of the bounds (geometry and lights).
@@ -75,6 +92,23 @@ impl GpuScene {
             .storage_buffer(B_TEXELS, &self.texels)
             .storage_buffer(B_LIGHTS, &self.lights)
     }
+}
+
+/// The host-visible light buffer, holding `lights`.
+fn lights_buffer(gpu: &Gpu, lights: &[Light]) -> Result<Buffer> {
+    let bytes: &[u8] = bytemuck::cast_slice(lights);
+    let mut b = Buffer::new(
+        gpu,
+        &BufferDesc {
+            name: "lights".into(),
+            size: bytes.len().max(4) as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::CpuToGpu,
+        },
+    )
+    .context("creating the light buffer")?;
+    b.mapped_mut().context("the light buffer is not host-visible")?[..bytes.len()].copy_from_slice(bytes);
+    Ok(b)
 }
 
 /// The descriptor bindings of the scene, for pipeline layouts.

@@ -74,6 +74,10 @@ impl<T> Persistent<T> {
     pub fn last_access(&self) -> Access {
         self.last.get()
     }
+    /// After a use outside any graph (the swapchain's copy of the viewer's picture).
+    pub fn set_last_access(&self, access: Access) {
+        self.last.set(access);
+    }
 }
 
 /// A realised resource the graph keeps between frames.

@@ -209,3 +209,24 @@ pub struct ParaboloidPush {
 }
 const _: () = assert!(size_of::<ParaboloidPush>() == 8);
 const _: () = assert!(offset_of!(ParaboloidPush, light_map) == 4);
+
+/// present push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PresentPush {
+    /// `PRESENT_ACCUMULATE`, `PRESENT_TOTAL` or `PRESENT_MAP`.
+    pub stage: u32,
+    /// Frames in the running mean, this one included.
+    pub frames: u32,
+    /// 1: the sum restarts at this frame's radiance.
+    pub reset: u32,
+    /// 1: write B, G, R (a BGRA swapchain).
+    pub swap_rb: u32,
+    /// Multiplies Reinhard's scale a / L̄_w (1: the PNG writer's mapping).
+    pub exposure: f32,
+    /// Workgroups of the per-pixel stages.
+    pub groups: u32,
+    pub pad: [u32; 2],
+}
+const _: () = assert!(size_of::<PresentPush>() == 32);
+const _: () = assert!(offset_of!(PresentPush, exposure) == 16);

@@ -14,6 +14,11 @@
 //!   VPL counts in columns, time and error per cell) and a per-pass time table (Fig. 7.19's breakdown);
 //! - `time_vs_error.png`: median relMSE against median GPU time, log–log, one line per method (points at
 //!   the VPL counts), so equal-time comparisons read off a vertical line.
+//!
+//! With `--animate PATH --frames N` it measures temporal stability instead (per-frame relMSE and
+//! flicker of a moving light's animation): see [`animation`].
+
+mod animation;
 
 use crate::cli::{BenchArgs, ReferenceArg};
 use crate::error::{self, bad};
@@ -40,6 +45,10 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
+    if a.animate.is_some() {
+        animation::run(a, &scene, &mut renderer, &base, out, err)?;
+        return super::check_validation(&gpu, a.frame.validation);
+    }
     if a.time_limits.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         return Err(bad(anyhow::anyhow!("--time-limits must be positive numbers of seconds")));
     }

@@ -5,6 +5,7 @@
 
 use crate::cli::{RenderArgs, RENDER_FALLBACK_SIZE};
 use crate::error::{self, bad};
+use crate::light_path::LightPath;
 use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
@@ -15,12 +16,18 @@ use std::io::Write;
 use std::time::{Duration, Instant};
 
 pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    check_animation_flags(a)?;
     let scene = super::load_scene(&a.scene, err)?;
+    let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
     let settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
     renderer.check(&settings)?;
+    if let Some(frames) = a.frames {
+        animate(a, &mut renderer, &settings, path.as_ref(), frames, err)?;
+        return super::check_validation(&gpu, a.frame.validation);
+    }
     if a.time_limit.is_some() && !bounce_graph::frame::progressive::averages(&settings) {
         writeln!(
             err,
@@ -53,7 +60,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     if bad_px > 0 {
         writeln!(err, "warning: {bad_px} pixel(s) are not finite")?;
     }
-    let mut meta = metadata(a, &settings, &gpu, &frame, bad_px);
+    let mut meta = metadata(a, &settings, &gpu.name, &frame, bad_px);
     if let (Some((n, gpu_ms)), Some(t)) = (frames, a.time_limit) {
         meta.push(("time_limit_s", t.to_string()));
         meta.push(("frames", n.to_string()));
@@ -75,6 +82,52 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         a.png.as_ref().map(|p| format!(" and {}", p.display())).unwrap_or_default()
     )
     .context("writing to stderr")?;
+    Ok(())
+}
+
+/// The animation flags go together: --frames with --out-dir, --light-path only with --frames, and an
+/// animation is not a time-limited mean.
+fn check_animation_flags(a: &RenderArgs) -> Result<()> {
+    let fail = |m: &str| Err(bad(anyhow::anyhow!("{m}")));
+    match (a.frames, &a.out_dir) {
+        (Some(0), _) => fail("--frames must be at least 1"),
+        (Some(_), None) | (None, Some(_)) => fail("--frames and --out-dir go together"),
+        (None, None) if a.animation.light_path.is_some() => fail("--light-path needs --frames and --out-dir"),
+        (Some(_), Some(_)) if a.time_limit.is_some() => fail("--time-limit and --frames do not go together"),
+        _ => Ok(()),
+    }
+}
+
+/// Frame k of the animation: the lights at `path`'s frame k, the `--temporal` seed; an EXR and a PNG each.
+fn animate(
+    a: &RenderArgs,
+    r: &mut Renderer,
+    s: &FrameSettings,
+    path: Option<&LightPath>,
+    frames: u32,
+    err: &mut dyn Write,
+) -> Result<()> {
+    let dir = a.out_dir.as_ref().expect("checked: --frames comes with --out-dir");
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let gpu_name = r.gpu.name.clone();
+    for k in 0..frames {
+        if let Some(p) = path {
+            p.apply(r, k);
+        }
+        // Every frame of a moving light is a change; a static one accumulates nothing here either.
+        let since_change = if path.is_some() { 0 } else { k };
+        let fs = FrameSettings { seed: a.animation.temporal.seed(s.seed, k, since_change), ..s.clone() };
+        let f = r.render(&fs)?;
+        let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+        let mut meta = metadata(a, &fs, &gpu_name, &f, img.non_finite_count());
+        meta.push(("frame", k.to_string()));
+        meta.push(("temporal", a.animation.temporal.name().to_string()));
+        meta.push(("light_path", a.animation.light_path.clone().unwrap_or_else(|| "none".into())));
+        let stem = dir.join(format!("frame_{k:04}"));
+        output::write_exr(&stem.with_extension("exr"), &img, &meta)?;
+        output::write_png(&stem.with_extension("png"), &img)?;
+    }
+    writeln!(err, "wrote {frames} frame(s) to {} (frame_0000.exr/.png …)", dir.display())?;
     Ok(())
 }
 
@@ -100,7 +153,7 @@ fn progressive(r: &mut Renderer, s: &FrameSettings, seconds: f64) -> Result<Prog
 fn metadata(
     a: &RenderArgs,
     s: &FrameSettings,
-    gpu: &Gpu,
+    device: &str,
     frame: &FrameOutput,
     non_finite: usize,
 ) -> Vec<(&'static str, String)> {
@@ -114,7 +167,7 @@ fn metadata(
         ("visibility", format!("{:?}", s.visibility).to_lowercase()),
         ("spp", s.spp.to_string()),
         ("seed", s.seed.to_string()),
-        ("device", gpu.name.clone()),
+        ("device", device.to_string()),
         ("gpu_ms", frame.gpu_ms().map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())),
         ("dprsm_res", s.dprsm_res.to_string()),
         ("light_map", s.light_map.name().to_string()),

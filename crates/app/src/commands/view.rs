@@ -1,15 +1,24 @@
 //! `bounce view`: the interactive viewer. A winit window with an ash-window surface and a swapchain
 //! (`bounce_device::Swapchain`); each redraw renders one frame with the same `Renderer` as
-//! `bounce render`, adds it to a running mean while camera and settings stay put (progressive
-//! accumulation, frame k with seed `--seed + k`), tone-maps the mean (Reinhard, as the PNG output) and
-//! presents it. What does not change is not re-rendered: the renderer's frame cache keeps the G-buffer,
+//! `bounce render` and presents it on the GPU (`Renderer::present`, passes/present.rs): the present pass
+//! adds it to a running mean while camera, lights and settings stay put (progressive accumulation,
+//! frame k after a change with seed `--seed + k`), tone-maps the mean (Reinhard, as the PNG output)
+//! into an 8-bit image, and the swapchain copies that image in. No frame is read back to the host
+//! except a screenshot's. What does not change is not re-rendered: the renderer's frame cache keeps the G-buffer,
 //! the paraboloid maps, the direct light, the importance and the CDF, so a static frame records only
 //! the gather (the title names what was reused).
 //!
 //! Controls: left-drag looks around, W/A/S/D move, Q/E down/up (speed ∝ the scene's diagonal, Shift ×4);
-//! M cycles the sampling method, +/− double/halve the VPL count, C cycles the component, Space toggles
-//! accumulation, P writes a screenshot (PNG + EXR of the linear mean), Esc quits. The title shows
-//! method, VPLs, frames accumulated, frame time and the slowest passes' GPU times.
+//! Tab selects the next light, the arrow keys move it in the horizontal plane and PageUp/PageDown up
+//! and down (the camera's speed), [ and ] scale its intensity by 0.8 and 1.25; M cycles the sampling
+//! method, +/− double/halve the VPL count, C cycles the component, Space toggles accumulation, P writes
+//! a screenshot (PNG + EXR of the linear mean), Esc quits. The title shows method, VPLs, frames
+//! accumulated, the selected light, frame time and the slowest passes' GPU times.
+//!
+//! `--light-path orbit[:PERIOD]|FILE.toml` moves the lights by script (`crate::light_path`): frame k
+//! of the run puts them where the path says. `--temporal` picks the seeds (`cli::Temporal`): with
+//! `coherent` (the default) every frame after a change starts again from `--seed`, so a moving light's
+//! frames share their random numbers; `fresh` gives frame k of the run `--seed + k`.
 //!
 //! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
 //! for scripts and tests (under Xvfb on lavapipe). The mean of those N frames is the mean of
@@ -17,16 +26,20 @@
 //! (default: S): the frames share one CDF, so the importance and CDF passes run only when the camera
 //! or a setting changes. The frame flags are `render`'s, with cheaper defaults (`cli::ViewArgs`).
 //!
-//! Presenting goes through host memory (read back, tone map, copy into the swapchain image): one copy
-//! of a W × H image per frame, small next to a lavapipe frame; a GPU tone-map pass would remove it.
+//! The screenshot reads the GPU's running mean back once (f32 sums: equal to the mean of the frames
+//! `render` makes, bit for bit) and writes it as EXR and, tone-mapped on the host, as PNG; the log line
+//! says how many copies to host memory the whole run made.
 
 use crate::cli::{ViewArgs, VIEW_FALLBACK_SIZE};
 use crate::error::{self, bad};
+use crate::light_path::LightPath;
 use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
-use bounce_device::{Gpu, GpuOptions, Presented, Swapchain};
+use bounce_device::{vk, Gpu, GpuOptions, Image, Presented, Swapchain};
 use bounce_graph::camera::Camera;
-use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer};
+use bounce_graph::graph::Persistent;
+use bounce_graph::passes::present::{Present, PresentParams};
 use bounce_graph::scene::Scene;
 use glam::Vec3;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -70,7 +83,11 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
     if matches!(settings.method, Method::All) {
         return Err(bad(anyhow::anyhow!("`all` is not progressive; view a sampled method or use `bounce render`")));
     }
-    let mut app = Viewer { args: a, scene: &scene, settings, state: None, error: None, log: vec![] };
+    if a.animation.light_path.is_some() && a.frames.is_none() {
+        return Err(bad(anyhow::anyhow!("--light-path needs --frames (and --screenshot)")));
+    }
+    let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
+    let mut app = Viewer { args: a, scene: &scene, settings, path, state: None, error: None, log: vec![] };
     event_loop.run_app(&mut app).context("running the window's event loop")?;
     for line in &app.log {
         writeln!(out, "{line}")?;
@@ -85,6 +102,8 @@ struct Viewer<'a> {
     args: &'a ViewArgs,
     scene: &'a Scene,
     settings: FrameSettings,
+    /// `--light-path`: where the lights are at each frame of the run.
+    path: Option<LightPath>,
     state: Option<State>,
     error: Option<anyhow::Error>,
     /// Lines for stdout after the window closes (screenshots written).
@@ -99,10 +118,17 @@ struct State {
     gpu: Gpu,
     window: Window,
     fly: Fly,
-    /// Sum of the frames since the last change, and their count.
-    sum: Vec<[f64; 3]>,
+    lamp: Lamp,
+    /// The present pass's 8-bit picture, copied into the swapchain.
+    ldr: Persistent<Image>,
+    /// Frames in the running mean (since the last change), and since the start.
     frames: u32,
+    total: u32,
+    /// Copies to host memory before the first frame (the run's count is reported against it).
+    readbacks: u64,
     accumulate: bool,
+    /// P was pressed: the next frame reads its mean back and writes a screenshot.
+    shot_requested: bool,
     last: Instant,
     /// The passes the first frame after a change ran: what a static frame reuses is the difference.
     full_passes: Vec<&'static str>,
@@ -171,6 +197,72 @@ impl Fly {
     }
 }
 
+/// The selected light and the keys that move it: arrows in the horizontal plane, PageUp/PageDown up and
+/// down, at the camera's speed; the light stays inside the scene's bounds (the voxel grid's and the
+/// paraboloid far plane's, fitted once).
+struct Lamp {
+    selected: usize,
+    speed: f32,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Lamp {
+    fn new(scene: &Scene, r: &Renderer) -> Lamp {
+        Lamp { selected: 0, speed: 0.3 * scene.diagonal(), lo: r.scene.bounds_min, hi: r.scene.bounds_max }
+    }
+
+    /// Moves the selected light by the held keys over `dt` seconds; whether it moved.
+    fn step(&self, keys: &HashSet<KeyCode>, r: &mut Renderer, dt: f32) -> bool {
+        let mut d = Vec3::ZERO;
+        for (k, v) in [
+            (KeyCode::ArrowRight, Vec3::X),
+            (KeyCode::ArrowLeft, -Vec3::X),
+            (KeyCode::ArrowDown, Vec3::Z),
+            (KeyCode::ArrowUp, -Vec3::Z),
+            (KeyCode::PageUp, Vec3::Y),
+            (KeyCode::PageDown, -Vec3::Y),
+        ] {
+            if keys.contains(&k) {
+                d += v;
+            }
+        }
+        if d == Vec3::ZERO {
+            return false;
+        }
+        let (p, i) = light(r, self.selected);
+        let to = (p + d.normalize() * self.speed * dt.min(0.5)).clamp(self.lo, self.hi);
+        r.set_light(self.selected, to, i);
+        to != p
+    }
+
+    /// Scales the selected light's intensity.
+    fn scale(&self, r: &mut Renderer, factor: f32) {
+        let (p, i) = light(r, self.selected);
+        r.set_light(self.selected, p, i * factor);
+    }
+
+    /// The title's words for the selected light.
+    fn describe(&self, r: &Renderer) -> String {
+        let (p, i) = light(r, self.selected);
+        format!(
+            "light {}/{} at ({:.2}, {:.2}, {:.2}) I {:.2}",
+            self.selected + 1,
+            r.lights().len(),
+            p.x,
+            p.y,
+            p.z,
+            i.max_element()
+        )
+    }
+}
+
+/// Position and intensity of light `i`.
+fn light(r: &Renderer, i: usize) -> (Vec3, Vec3) {
+    let l = r.lights()[i];
+    (Vec3::from_slice(&l.position[..3]), Vec3::from_slice(&l.intensity[..3]))
+}
+
 impl Viewer<'_> {
     fn start(&mut self, el: &ActiveEventLoop) -> Result<State> {
         let attrs = Window::default_attributes()
@@ -196,16 +288,21 @@ impl Viewer<'_> {
         let renderer = Renderer::new(&gpu, self.scene)?;
         renderer.check(&self.settings)?;
         let fly = Fly::new(&self.scene.camera, self.scene.diagonal());
-        let n = (self.settings.width * self.settings.height) as usize;
+        let lamp = Lamp::new(self.scene, &renderer);
+        let ldr = Present::ldr_image(&gpu, self.settings.width, self.settings.height)?;
         Ok(State {
             swapchain,
             renderer,
+            readbacks: gpu.readbacks(),
             gpu,
             window,
             fly,
-            sum: vec![[0.0; 3]; n],
+            lamp,
+            ldr,
             frames: 0,
+            total: 0,
             accumulate: true,
+            shot_requested: false,
             last: Instant::now(),
             full_passes: vec![],
             shots: 0,
@@ -226,69 +323,84 @@ impl Viewer<'_> {
             st.renderer.set_camera(st.fly.camera());
             st.frames = 0;
         }
-        if st.frames == 0 || !st.accumulate {
-            st.sum.iter_mut().for_each(|p| *p = [0.0; 3]);
+        let before = st.renderer.lights().to_vec();
+        match &self.path {
+            Some(p) => p.apply(&mut st.renderer, st.total),
+            None => _ = st.lamp.step(&st.fly.keys, &mut st.renderer, dt),
+        }
+        if st.renderer.lights() != before.as_slice() {
             st.frames = 0;
         }
-        let s = FrameSettings { seed: self.settings.seed.wrapping_add(st.frames as u64), ..self.settings.clone() };
+        if !st.accumulate {
+            st.frames = 0;
+        }
+        let last = self.args.frames.is_some_and(|n| st.total + 1 >= n);
+        let shot = last || std::mem::take(&mut st.shot_requested);
+        let seed = self.args.animation.temporal.seed(self.settings.seed, st.total, st.frames);
+        let s = FrameSettings { seed, ..self.settings.clone() };
+        let params = PresentParams {
+            frames: st.frames + 1,
+            reset: st.frames == 0,
+            exposure: 1.0,
+            swap_rb: st.swapchain.format == vk::Format::B8G8R8A8_UNORM,
+        };
         let t0 = Instant::now();
-        let f = st.renderer.render(&s)?;
+        let f = st.renderer.present(&s, &st.ldr, params, shot)?;
         let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
-        // Reported, not hidden: a non-finite pixel is a bug to see.
-        let non_finite = f.radiance.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count();
         if st.frames == 0 {
             st.full_passes = f.ran.clone();
         }
-        for (acc, p) in st.sum.iter_mut().zip(&f.radiance) {
-            for c in 0..3 {
-                acc[c] += p[c] as f64;
-            }
-        }
         st.frames += 1;
-        let img = mean_image(st, s.width, s.height);
-        let mapped = output::tonemap_reinhard(&img);
-        let rgba: Vec<u8> = mapped
-            .iter()
-            .flat_map(|p| [p[0], p[1], p[2]].map(output::linear_to_srgb8).into_iter().chain([255]))
-            .collect();
-        if st.swapchain.present_rgba8(s.width, s.height, &rgba).map_err(error::device)? == Presented::OutOfDate {
+        st.total += 1;
+        let (presented, access) =
+            st.swapchain.present_image(&st.ldr.res, st.ldr.last_access()).map_err(error::device)?;
+        st.ldr.set_last_access(access);
+        if presented == Presented::OutOfDate {
             let size = st.window.inner_size();
             self.resize(size.width, size.height)?;
         }
-        let st = self.state.as_mut().expect("started");
+        self.set_title(&f, frame_ms);
+        if shot {
+            let path = match (&self.args.screenshot, last) {
+                (Some(p), true) => p.clone(),
+                _ => {
+                    let st = self.state.as_mut().expect("started");
+                    st.shots += 1;
+                    PathBuf::from(format!("bounce-screenshot-{}.png", st.shots))
+                }
+            };
+            self.screenshot(&path, &f)?;
+        }
+        Ok(last)
+    }
+
+    /// The title: method, VPLs, component, frames, the selected light, frame time, the slowest passes.
+    fn set_title(&self, f: &FrameOutput, frame_ms: f64) {
+        let (st, s) = (self.state.as_ref().expect("started"), &self.settings);
         let mut passes: Vec<(&str, f64)> = f.timings.iter().filter_map(|t| Some((t.name, t.ms?))).collect();
         passes.sort_by(|a, b| b.1.total_cmp(&a.1));
         let shown: Vec<String> = passes.iter().take(4).map(|(n, ms)| format!("{n} {ms:.1}")).collect();
         let reused: Vec<&str> = st.full_passes.iter().copied().filter(|p| !f.ran.contains(p)).collect();
         let mut title = format!(
-            "bounce view — {} · {} VPLs · {} · {} frame{} · {frame_ms:.0} ms · GPU ms: {}",
+            "bounce view — {} · {} VPLs · {} · {} frame{} · {} · {frame_ms:.0} ms · GPU ms: {}",
             s.method.name(),
             s.vpls,
             s.component.name(),
             st.frames,
             if st.frames == 1 { "" } else { "s" },
+            st.lamp.describe(&st.renderer),
             shown.join(", "),
         );
         if !reused.is_empty() {
             title += &format!(" · reused: {}", reused.join(" "));
         }
-        if non_finite > 0 {
-            title += &format!(" · {non_finite} NON-FINITE px");
-        }
         st.window.set_title(&title);
-        if let (Some(n), Some(path)) = (self.args.frames, &self.args.screenshot) {
-            if st.frames >= n {
-                let path = path.clone();
-                self.screenshot(&path)?;
-                return Ok(true);
-            }
-        }
-        Ok(false)
     }
 
-    fn screenshot(&mut self, png: &Path) -> Result<()> {
+    /// Writes the frame's read-back mean (`f.radiance`) as EXR and PNG.
+    fn screenshot(&mut self, png: &Path, f: &FrameOutput) -> Result<()> {
         let st = self.state.as_mut().expect("started");
-        let img = mean_image(st, self.settings.width, self.settings.height);
+        let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
         let exr = png.with_extension("exr");
         let meta = vec![
             ("scene", self.args.scene.display().to_string()),
@@ -296,12 +408,23 @@ impl Viewer<'_> {
             ("method", self.settings.method.name().to_string()),
             ("vpls", self.settings.vpls.to_string()),
             ("frames", st.frames.to_string()),
-            ("seed", format!("{} (frame k: seed + k)", self.settings.seed)),
+            ("seed", format!("{} ({})", self.settings.seed, self.args.animation.temporal.name())),
+            ("light_path", self.args.animation.light_path.clone().unwrap_or_else(|| "none".into())),
             ("device", st.gpu.name.clone()),
+            ("non_finite_pixels", img.non_finite_count().to_string()),
         ];
         output::write_exr(&exr, &img, &meta)?;
         output::write_png(png, &img)?;
-        self.log.push(format!("wrote {} and {} ({} frames)", png.display(), exr.display(), st.frames));
+        let copies = st.gpu.readbacks() - st.readbacks;
+        self.log.push(format!(
+            "wrote {} and {} ({} frame{} in the mean, {} in all; {copies} cop{} to host memory)",
+            png.display(),
+            exr.display(),
+            st.frames,
+            if st.frames == 1 { "" } else { "s" },
+            st.total,
+            if copies == 1 { "y" } else { "ies" }
+        ));
         Ok(())
     }
 
@@ -314,7 +437,7 @@ impl Viewer<'_> {
         st.swapchain.recreate(width, height).map_err(error::device)?;
         self.settings.width = st.swapchain.extent.width;
         self.settings.height = st.swapchain.extent.height;
-        st.sum = vec![[0.0; 3]; (self.settings.width * self.settings.height) as usize];
+        st.ldr = Present::ldr_image(&st.gpu, self.settings.width, self.settings.height)?;
         st.frames = 0;
         Ok(())
     }
@@ -350,11 +473,15 @@ impl Viewer<'_> {
                 st.accumulate = !st.accumulate;
                 return Ok(true);
             }
-            KeyCode::KeyP => {
+            KeyCode::KeyP => self.state.as_mut().expect("started").shot_requested = true,
+            KeyCode::Tab => {
                 let st = self.state.as_mut().expect("started");
-                st.shots += 1;
-                let path = PathBuf::from(format!("bounce-screenshot-{}.png", st.shots));
-                self.screenshot(&path)?;
+                st.lamp.selected = (st.lamp.selected + 1) % st.renderer.lights().len();
+            }
+            KeyCode::BracketLeft | KeyCode::BracketRight => {
+                let st = self.state.as_mut().expect("started");
+                st.lamp.scale(&mut st.renderer, if code == KeyCode::BracketLeft { 0.8 } else { 1.25 });
+                return Ok(true);
             }
             _ => {}
         }
@@ -367,11 +494,6 @@ impl Viewer<'_> {
         }
         el.exit();
     }
-}
-
-fn mean_image(st: &State, width: u32, height: u32) -> RgbImage {
-    let k = st.frames.max(1) as f64;
-    RgbImage { width, height, pixels: st.sum.iter().map(|p| p.map(|c| (c / k) as f32)).collect() }
 }
 
 impl ApplicationHandler for Viewer<'_> {

@@ -1,7 +1,8 @@
 //! Cache keys: for each product the recipe keeps across frames ([`crate::graph::Graph::cached`]), the
 //! settings it depends on. A product is reused exactly while its key is unchanged, so a key must name
-//! everything its passes read besides the scene and the lights (fixed for a `Renderer`): too little is a
-//! stale image, too much only a recomputation. The `graph` tests check each key against the passes that
+//! everything its passes read besides the scene (fixed for a `Renderer`): too little is a stale image,
+//! too much only a recomputation. The lights are frame state: the light-side products (VPLs, shadow
+//! map, direct light, and through the VPLs the CDF) name them; the voxels and the G-buffer do not. The `graph` tests check each key against the passes that
 //! a settings change must (and must not) redo.
 
 use super::settings::FrameSettings;
@@ -9,6 +10,7 @@ use crate::camera::Camera;
 use crate::graph::fingerprint;
 use crate::passes::importance::{ImportanceKind, ImportanceParams};
 use crate::passes::voxelize::VoxelGridSpec;
+use crate::shader_types::Light;
 
 /// f32 → bits, so keys hash exactly.
 fn bits(v: &[f32]) -> Vec<u32> {
@@ -20,13 +22,13 @@ fn bits(v: &[f32]) -> Vec<u32> {
 pub struct Keys {
     /// The voxel grid: its fitted spec.
     pub voxels: u64,
-    /// The reflective maps (the VPLs): resolution and light map.
+    /// The reflective maps (the VPLs): resolution, light map, and the lights.
     pub vpls: u64,
-    /// The direct light's paraboloid shadow map: its resolution.
+    /// The direct light's paraboloid shadow map: its resolution and the lights' positions.
     pub shadow: u64,
     /// The G-buffer: camera and image size.
     pub gbuffer: u64,
-    /// The direct light: the G-buffer, the shadow map and the biases.
+    /// The direct light: the G-buffer, the shadow map, the biases and the lights' intensities.
     pub direct: u64,
     /// Importance and CDF: the VPLs, the grid, the importance parameters, and for every kind that draws
     /// gather points the G-buffer and the seed (`uniform`'s validity depends on the maps alone), and for
@@ -35,14 +37,26 @@ pub struct Keys {
 }
 
 impl Keys {
-    pub fn new(s: &FrameSettings, camera: &Camera, spec: &VoxelGridSpec, p: &ImportanceParams) -> Keys {
+    pub fn new(
+        s: &FrameSettings,
+        camera: &Camera,
+        lights: &[Light],
+        spec: &VoxelGridSpec,
+        p: &ImportanceParams,
+    ) -> Keys {
         let c = camera;
         let cam =
             bits(&[c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fov_y_deg]);
         let gbuffer = fingerprint(&(cam, s.width, s.height));
-        let vpls = fingerprint(&(s.dprsm_res, s.light_map.name(), s.light_map.tan_half_fov().to_bits()));
+        let positions: Vec<u32> = lights.iter().flat_map(|l| bits(&l.position)).collect();
+        let intensities: Vec<u32> = lights.iter().flat_map(|l| bits(&l.intensity)).collect();
+        let vpls = fingerprint(&(
+            (s.dprsm_res, s.light_map.name(), s.light_map.tan_half_fov().to_bits()),
+            &positions,
+            &intensities,
+        ));
         let voxels = fingerprint(&(bits(&spec.origin.to_array()), spec.cell.to_bits(), spec.dims.to_array()));
-        let shadow = fingerprint(&s.shadow_res);
+        let shadow = fingerprint(&(s.shadow_res, &positions));
         let per_pixel = (p.kind != ImportanceKind::Uniform).then_some((gbuffer, p.seed));
         let params = (p.kind, p.samples, p.min_d2.to_bits(), p.fixed_scale.to_bits());
         // gbg's rays find their hits through the visibility's structure: the hybrid's exact hits differ.
@@ -52,7 +66,10 @@ impl Keys {
             vpls,
             shadow,
             gbuffer,
-            direct: fingerprint(&(gbuffer, shadow, s.shadow_bias.to_bits(), s.shadow_slope_bias.to_bits())),
+            direct: fingerprint(&(
+                (gbuffer, shadow, s.shadow_bias.to_bits(), s.shadow_slope_bias.to_bits()),
+                &intensities,
+            )),
             cdf: fingerprint(&(vpls, voxels, params, per_pixel, traced)),
         }
     }

@@ -4,6 +4,9 @@
 //! more chunks ([`super::chunks`]): one for the sampled methods, a tile of VPLs each for `all`, a batch
 //! of samples each for `reference`. Static products are kept by the graph under their keys
 //! ([`super::keys`]), so a frame whose camera and settings did not change records only the gather.
+//! The lights are frame state too ([`Renderer::set_light`]): written to the scene's light buffer before
+//! each frame, and named by the keys of the light-side products, so moving a light redoes the VPLs,
+//! shadow map, direct light and CDF and keeps the voxels and the G-buffer.
 
 use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
@@ -14,16 +17,18 @@ use crate::bvh::cells::{CellLists, GpuCells};
 use crate::bvh::GpuBvh;
 use crate::camera::Camera;
 use crate::gpu_scene::GpuScene;
-use crate::graph::{Graph, PassTiming, Retained};
+use crate::graph::{Graph, PassTiming, Persistent, Retained};
 use crate::passes::cdf_reduce::CdfReduce;
 use crate::passes::importance::{ImportanceKind, ImportanceParams};
+use crate::passes::present::PresentParams;
 use crate::passes::reference::Reference;
 use crate::passes::voxelize::{self, VoxelGridSpec};
 use crate::passes::{FrameInputs, Passes};
 use crate::scene::Scene;
-use crate::shader_types::{FrameUniforms, Vertex};
+use crate::shader_types::{FrameUniforms, Light, Vertex};
 use anyhow::{Context, Result};
-use bounce_device::{vk, Buffer, BufferDesc, Gpu, MemoryLocation};
+use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, MemoryLocation};
+use glam::Vec3;
 
 /// What does not change from frame to frame: the device, the uploaded scene, every pass's pipelines,
 /// and the scene's BVH (built on first use).
@@ -31,7 +36,8 @@ pub struct RenderContext {
     pub gpu: Gpu,
     pub scene: GpuScene,
     pub passes: Passes,
-    /// The largest intensity component of any light (for the gbg fixed-point scale).
+    /// The largest intensity component of any light (for the gbg fixed-point scale): the current
+    /// lights', set before each frame.
     max_intensity: f32,
     /// The scene's triangles, kept for the BVH.
     vertices: Vec<Vertex>,
@@ -42,9 +48,12 @@ pub struct RenderContext {
     cells: Option<GpuCells>,
 }
 
-/// What changes from frame to frame: the camera, and the resources the graph keeps across frames.
+/// What changes from frame to frame: the camera, the lights, and the resources the graph keeps across
+/// frames.
 pub struct FrameState {
     pub camera: Camera,
+    /// The point lights, in the scene's local coordinates (as `Scene::lights`).
+    pub lights: Vec<Light>,
     pub retained: Retained,
 }
 
@@ -61,7 +70,7 @@ impl std::ops::Deref for Renderer {
     }
 }
 
-/// A rendered frame, read back.
+/// A rendered frame, read back ([`Renderer::present`]: only the screenshot's mean, if asked).
 pub struct FrameOutput {
     pub width: u32,
     pub height: u32,
@@ -90,13 +99,25 @@ impl Renderer {
             gpu: gpu.clone(),
             scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
             passes: Passes::new(gpu, !scene.textures.is_empty())?,
-            max_intensity: scene.lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max),
+            max_intensity: max_intensity(&scene.lights),
             vertices: scene.vertices.clone(),
             bvh: None,
             bvh_tris: Vec::new(),
             cells: None,
         };
-        Ok(Renderer { ctx, state: FrameState { camera: scene.camera, retained: Retained::default() } })
+        let state = FrameState { camera: scene.camera, lights: scene.lights.clone(), retained: Retained::default() };
+        Ok(Renderer { ctx, state })
+    }
+
+    /// The current lights (scene-local coordinates).
+    pub fn lights(&self) -> &[Light] {
+        &self.state.lights
+    }
+
+    /// Moves light `i` to `position` (scene-local) with `intensity` (W/sr per channel). The next frame
+    /// re-records the light-side passes and what depends on them. Panics on a light the scene lacks.
+    pub fn set_light(&mut self, i: usize, position: Vec3, intensity: Vec3) {
+        self.state.lights[i] = crate::scene::point_light(position, intensity);
     }
 
     /// Moves the camera (the viewer's fly camera). The next frame re-records what depends on it.
@@ -155,7 +176,32 @@ impl Renderer {
         s: &FrameSettings,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<FrameOutput> {
+        self.frame(s, progress, None)
+    }
+
+    /// Renders a frame and presents it on the GPU (the viewer): the present pass adds it to the running
+    /// mean and writes the tone-mapped picture into `ldr` ([`crate::passes::present::Present::ldr_image`]). Nothing is read
+    /// back (no radiance, no dead-CDF check), unless `read_mean`: then the returned radiance is the
+    /// running mean (a screenshot), else it is empty.
+    pub fn present(
+        &mut self,
+        s: &FrameSettings,
+        ldr: &Persistent<Image>,
+        params: PresentParams,
+        read_mean: bool,
+    ) -> Result<FrameOutput> {
+        self.frame(s, &mut |_, _| {}, Some(PresentTo { ldr, params, read_mean }))
+    }
+
+    fn frame(
+        &mut self,
+        s: &FrameSettings,
+        progress: &mut dyn FnMut(u64, u64),
+        present: Option<PresentTo>,
+    ) -> Result<FrameOutput> {
         self.check(s)?;
+        self.ctx.scene.write_lights(&self.state.lights)?;
+        self.ctx.max_intensity = max_intensity(&self.state.lights);
         let reference = s.method == Method::Reference && s.component != Component::Direct;
         if s.visibility.uses_bvh() || reference {
             self.bvh()?;
@@ -165,30 +211,49 @@ impl Renderer {
         }
         let uniforms = self.uniform_buffer(s)?;
         let (ctx, state) = (&self.ctx, &mut self.state);
-        let i = ctx.recipe_inputs(s, &state.camera, &uniforms);
+        let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
         let (total, per_chunk) = ctx.chunking(s, &i);
         let mut log = FrameLog::default();
-        let mut read = None;
+        let mut read = (vec![], None);
         for_each_chunk(total, per_chunk, progress, |chunk, last| {
             let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
             let out = build_frame(&ctx.passes, &mut g, s, &i, chunk);
             g.export(&out.radiance);
+            let presented = match &present {
+                Some(p) if last => {
+                    let mut ldr = g.import_image(p.ldr);
+                    let sum = ctx.passes.present.add(&mut g, &out.radiance, &mut ldr, s.width, s.height, p.params);
+                    g.export(&ldr);
+                    Some(sum)
+                }
+                _ => None,
+            };
             let done = g.execute()?;
             log.add(&done);
-            if done.ran.contains(&"cdf_reduce") {
-                if let Some(cdf) = &out.cdf {
-                    log.warnings.extend(ctx.dead_cdf_warning(s, &done.read_buffer(cdf)?));
+            match (&present, presented) {
+                (Some(p), Some(sum)) if p.read_mean => read.0 = done.read_image(&sum)?,
+                (Some(_), _) => {}
+                (None, _) => {
+                    if done.ran.contains(&"cdf_reduce") {
+                        if let Some(cdf) = &out.cdf {
+                            log.warnings.extend(ctx.dead_cdf_warning(s, &done.read_buffer(cdf)?));
+                        }
+                    }
+                    if last {
+                        let sq = out.second_moment.map(|h| done.read_image(&h)).transpose()?;
+                        read = (done.read_image(&out.radiance)?, sq);
+                    }
                 }
-            }
-            if last {
-                let sq = out.second_moment.map(|h| done.read_image(&h)).transpose()?;
-                read = Some((done.read_image(&out.radiance)?, sq));
             }
             Ok(())
         })?;
         state.retained.next_frame();
-        let (radiance, second) = read.expect("the last chunk reads the image");
-        let radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&radiance);
+        let (radiance, second) = read;
+        let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&radiance);
+        if let Some(p) = &present {
+            let k = p.params.frames.max(1) as f32;
+            radiance.iter_mut().for_each(|px| *px = px.map(|c| c / k));
+        }
         let stderr = second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
         log.warnings.extend(rsm_warning(s));
         Ok(FrameOutput {
@@ -202,6 +267,18 @@ impl Renderer {
             stderr,
         })
     }
+}
+
+/// Where [`Renderer::present`] puts its picture.
+struct PresentTo<'p> {
+    ldr: &'p Persistent<Image>,
+    params: PresentParams,
+    read_mean: bool,
+}
+
+/// The largest intensity component of any of `lights`.
+fn max_intensity(lights: &[Light]) -> f32 {
+    lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max)
 }
 
 /// The RMS over pixels and channels of the reference's standard error of the mean per pixel,
@@ -284,12 +361,18 @@ impl RenderContext {
     }
 
     /// What the recipe reads besides the settings, for settings `s` seen from `camera`.
-    fn recipe_inputs<'a>(&'a self, s: &FrameSettings, camera: &Camera, uniforms: &'a Buffer) -> RecipeInputs<'a> {
+    fn recipe_inputs<'a>(
+        &'a self,
+        s: &FrameSettings,
+        camera: &Camera,
+        lights: &[Light],
+        uniforms: &'a Buffer,
+    ) -> RecipeInputs<'a> {
         let importance = self.importance_params(s);
         let grid = self.voxel_spec(s);
         RecipeInputs {
             f: self.frame_inputs(s, uniforms),
-            keys: Keys::new(s, camera, &grid, &importance),
+            keys: Keys::new(s, camera, lights, &grid, &importance),
             importance,
             grid,
             ris_candidates_per_dispatch: crate::passes::ris::candidates_per_dispatch(

@@ -8,6 +8,7 @@ pub mod gather;
 pub mod gbuffer;
 pub mod importance;
 pub mod mis;
+pub mod present;
 pub mod psm;
 pub mod reference;
 pub mod ris;
@@ -31,6 +32,8 @@ pub struct Passes {
     pub psm: psm::Psm,
     pub reference: reference::Reference,
     pub ris: ris::Ris,
+    /// The viewer's running mean and tone mapping.
+    pub present: present::Present,
 }
 
 impl Passes {
@@ -49,6 +52,7 @@ impl Passes {
             psm: psm::Psm::new(gpu).context("creating the psm pass")?,
             reference: reference::Reference::new(gpu, textured).context("creating the reference pass")?,
             ris: ris::Ris::new(gpu).context("creating the ris pass")?,
+            present: present::Present::new(gpu).context("creating the present pass")?,
         })
     }
 }

@@ -1,0 +1,225 @@
+//! `bounce bench SCENE --animate PATH --frames N`: temporal stability. The lights move along `PATH`
+//! (`crate::light_path`: `orbit[:PERIOD]` or a keyframe file); each method renders the N frames at a
+//! fixed budget per frame (`--vpls`'s first value), once per `--temporal` mode (`fresh`: frame k takes
+//! seed 1 + k, its CDF too; `coherent`: every frame seed 1, so each pixel's stratified points and the
+//! importance's gather points stay put while the light moves). Every frame is compared with its own
+//! ground truth (`--method reference` at `--reference-spp`, the lights at that frame, rendered once and
+//! cached in the output folder under a name keyed by the scene, the settings and the path).
+//!
+//! Per method and mode it reports the mean over frames of relMSE (mean of (t − r)² / (r² + 0.01)) and of
+//! the flicker, `metrics::flicker`: mean of ((t_k − t_{k−1}) − (r_k − r_{k−1}))² / (r_k² + 0.01) over
+//! frames 1..N−1, the relMSE of the frame-to-frame differences, so noise that is the same in every
+//! frame does not count and noise that changes does. It writes `bench.csv` (one row per frame),
+//! `bench.md` (the means, and the GPU time per frame) and `flicker.png` (both figures over the frames).
+//! The frames after a method's first keep what the light does not change (voxels, G-buffer), as an
+//! interactive session would; the GPU time is the mean over those frames.
+
+use super::{BenchArgs, Reference};
+use crate::cli::Temporal;
+use crate::error::bad;
+use crate::light_path::LightPath;
+use crate::metrics::{flicker, Metrics};
+use crate::output::{self, RgbImage};
+use anyhow::{Context, Result};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+use bounce_graph::scene::Scene;
+use std::io::Write;
+use std::path::Path;
+
+/// One rendered frame of one method and mode.
+struct FrameSample {
+    method: Method,
+    temporal: Temporal,
+    frame: u32,
+    gpu_ms: f64,
+    rel_mse: f64,
+    /// None for the first frame (no previous frame).
+    flicker: Option<f64>,
+}
+
+/// The animated sweep: settings checked, references rendered or read, every method × mode rendered.
+pub(super) fn run(
+    a: &BenchArgs,
+    scene: &Scene,
+    r: &mut Renderer,
+    base: &FrameSettings,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<()> {
+    let arg = a.animate.as_deref().expect("called with --animate");
+    let path = LightPath::parse(arg, scene)?;
+    if a.frames < 2 || a.temporal.is_empty() || !a.time_limits.is_empty() {
+        return Err(bad(anyhow::anyhow!(
+            "--animate needs --frames ≥ 2 and at least one --temporal mode, and no --time-limits"
+        )));
+    }
+    if a.reference != crate::cli::ReferenceArg::Path {
+        return Err(bad(anyhow::anyhow!("--animate measures against the path-traced ground truth (--reference path)")));
+    }
+    let vpls = a.vpls[0];
+    for &method in &a.methods {
+        r.check(&FrameSettings { method, vpls, ..base.clone() })?;
+    }
+    let reference = Reference::Path { spp: a.reference_spp };
+    r.check(&reference.settings(base))?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let truth = references(r, &path, arg, reference, base, &a.scene, &a.out, a.frames, err)?;
+    let mut samples = vec![];
+    let bar = indicatif::ProgressBar::new((a.methods.len() * a.temporal.len()) as u64 * a.frames as u64);
+    for &method in &a.methods {
+        for &temporal in &a.temporal {
+            r.clear_frame_cache();
+            let mut previous: Option<RgbImage> = None;
+            for k in 0..a.frames {
+                path.apply(r, k);
+                let seed = temporal.seed(1, k, 0);
+                let s = FrameSettings { method, vpls, seed, cdf_seed: Some(seed), ..base.clone() };
+                let f = r.render(&s)?;
+                let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+                let t = &truth[k as usize].pixels;
+                let flick =
+                    previous.as_ref().map(|p| flicker(&img.pixels, &p.pixels, t, &truth[k as usize - 1].pixels));
+                let rel_mse = Metrics::of(&img.pixels, t).rel_mse;
+                let gpu_ms = f.gpu_ms().unwrap_or(f64::NAN);
+                samples.push(FrameSample { method, temporal, frame: k, gpu_ms, rel_mse, flicker: flick });
+                previous = Some(img);
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let md = table(a, base, &samples, &r.gpu.name, &command, arg);
+    output::write_text(&a.out.join("bench.csv"), &csv(&samples))?;
+    output::write_text(&a.out.join("bench.md"), &md)?;
+    plot(&a.out.join("flicker.png"), a, &samples, base, &r.gpu.name)?;
+    writeln!(out, "{md}")?;
+    writeln!(err, "wrote {}/bench.csv, bench.md, flicker.png", a.out.display())?;
+    Ok(())
+}
+
+/// The ground truth of every frame, from the cache or rendered (lights at that frame, seed 1).
+#[allow(clippy::too_many_arguments)]
+fn references(
+    r: &mut Renderer,
+    path: &LightPath,
+    arg: &str,
+    reference: Reference,
+    base: &FrameSettings,
+    scene: &Path,
+    dir: &Path,
+    frames: u32,
+    err: &mut dyn Write,
+) -> Result<Vec<RgbImage>> {
+    // The path's own text (a file's contents) keys the cache, so an edited keyframe file renders anew.
+    let contents = std::fs::read_to_string(arg).unwrap_or_default();
+    let key = bounce_graph::graph::fingerprint(&(arg, contents));
+    let stem = reference.file_name(base, scene);
+    let stem = stem.trim_end_matches(".exr");
+    let s = reference.settings(base);
+    let mut truth = vec![];
+    for k in 0..frames {
+        let file = dir.join(format!("{stem}-path{key:016x}-frame{k:04}.exr"));
+        if let Ok((img, _)) = output::read_exr(&file) {
+            if (img.width, img.height) == (base.width, base.height) {
+                truth.push(img);
+                continue;
+            }
+        }
+        writeln!(err, "reference: frame {k} into {}", file.display())?;
+        path.apply(r, k);
+        let f = r.render(&s)?;
+        let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+        let meta = [("component", "indirect".into()), ("method", "reference".into()), ("frame", k.to_string())];
+        output::write_exr(&file, &img, &meta)?;
+        truth.push(img);
+    }
+    Ok(truth)
+}
+
+fn csv(samples: &[FrameSample]) -> String {
+    let mut csv = String::from("method,temporal,frame,gpu_ms,rel_mse,flicker\n");
+    for s in samples {
+        csv.push_str(&format!(
+            "{},{},{},{:.4},{:.6e},{}\n",
+            s.method.name(),
+            s.temporal.name(),
+            s.frame,
+            s.gpu_ms,
+            s.rel_mse,
+            s.flicker.map(|f| format!("{f:.6e}")).unwrap_or_default()
+        ));
+    }
+    csv
+}
+
+/// Mean of the finite values.
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let v: Vec<f64> = v.filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        v.iter().sum::<f64>() / v.len() as f64
+    }
+}
+
+/// The samples of one method and mode.
+fn of(samples: &[FrameSample], m: Method, t: Temporal) -> impl Iterator<Item = &FrameSample> {
+    samples.iter().filter(move |s| s.method == m && s.temporal == t)
+}
+
+fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str, command: &str, arg: &str) -> String {
+    let mut md = format!(
+        "# bounce bench --animate\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, \
+         {} VPLs per pixel per frame, {} frames of `{arg}`. Ground truth: `--method reference` at {} spp per frame. \
+         relMSE: mean over frames; flicker: mean over frames 1..{} of the relMSE of the frame-to-frame difference \
+         against the ground truth's; GPU ms: mean over frames 1..{} (the light side and the gather; voxels and \
+         G-buffer kept). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
+         | method | temporal | GPU ms / frame | relMSE | flicker | median relMSE | median flicker |\n\
+         |---|---|---:|---:|---:|---:|---:|\n",
+        b.width,
+        b.height,
+        b.dprsm_res,
+        b.voxels,
+        a.vpls[0],
+        a.frames,
+        a.reference_spp,
+        a.frames - 1,
+        a.frames - 1,
+    );
+    for &m in &a.methods {
+        for &t in &a.temporal {
+            let later = || of(samples, m, t).filter(|s| s.frame > 0);
+            md.push_str(&format!(
+                "| {} | {} | {:.2} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+                m.name(),
+                t.name(),
+                mean(later().map(|s| s.gpu_ms)),
+                mean(of(samples, m, t).map(|s| s.rel_mse)),
+                mean(later().filter_map(|s| s.flicker)),
+                super::median(of(samples, m, t).map(|s| s.rel_mse).collect()),
+                super::median(later().filter_map(|s| s.flicker).collect()),
+            ));
+        }
+    }
+    md
+}
+
+fn plot(file: &Path, a: &BenchArgs, samples: &[FrameSample], b: &FrameSettings, device: &str) -> Result<()> {
+    let mut rel = vec![];
+    let mut flick = vec![];
+    for &m in &a.methods {
+        for &t in &a.temporal {
+            let name = format!("{} ({})", m.name(), t.name());
+            rel.push((name.clone(), of(samples, m, t).map(|s| (s.frame as f64, s.rel_mse)).collect()));
+            flick.push((name, of(samples, m, t).filter_map(|s| Some((s.frame as f64, s.flicker?))).collect()));
+        }
+    }
+    let panels = [
+        crate::plot::Panel { y: "relMSE against the ground truth (log)", series: &rel },
+        crate::plot::Panel { y: "flicker (log)", series: &flick },
+    ];
+    let component = if b.component == Component::Indirect { "indirect" } else { "combined" };
+    let title = format!("Per-frame error and flicker ({}×{}, {component}, {device})", b.width, b.height);
+    crate::plot::over_frames(file, &panels, &title)
+}
