@@ -109,7 +109,7 @@ const float BVH_SHADOW_EPS = 1e-4;
 // counts both).
 #define B_CELL_OFFSETS 44
 #define B_CELL_TRIS 45
-#define CELL_DENSITY 8
+#define CELL_DENSITY 16
 #define HYBRID_MAX_TESTS 96
 
 // ---- reference: the exact one-bounce integrator --------------------------------------------------------

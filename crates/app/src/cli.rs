@@ -128,7 +128,7 @@ pub const VISIBILITIES: Choices<Visibility> = Choices(&[
     (
         "hybrid",
         Visibility::Hybrid,
-        "Exact shadow rays traced only through the voxel grid's runs of occupied cells (exact's answer)",
+        "Default. Exact's answer: a march through a grid of triangle lists, testing each cell's own triangles",
     ),
 ]);
 
@@ -234,7 +234,7 @@ pub struct FrameArgs {
     #[arg(long, value_parser = REFERENCE_ESTIMATORS, default_value = "mis")]
     pub reference_estimator: ReferenceEstimator,
     /// Visibility of the VPL gather.
-    #[arg(long, value_parser = VISIBILITIES, default_value = "voxel")]
+    #[arg(long, value_parser = VISIBILITIES, default_value = "hybrid")]
     pub visibility: Visibility,
     /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
     #[arg(long, default_value_t = 256)]

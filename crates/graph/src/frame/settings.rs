@@ -131,8 +131,9 @@ pub enum Visibility {
     Psm,
     /// The shared set of `Psm` with exact shadow rays: the maps' own error, on identical VPLs.
     PsmExact,
-    /// Exact shadow rays traced only through the voxel grid's runs of occupied cells
-    /// (`glsl/shared/hybrid.glsl`): `Exact`'s answer, with the march to skip empty space.
+    /// The default: `Exact`'s answer, found by a march through a grid of triangle lists that tests each
+    /// entered cell's own triangles (`glsl/shared/hybrid.glsl`, `bvh/cells.rs`). No end skip, no
+    /// thickening: none of the voxel march's darkening at junctions and thin walls.
     Hybrid,
 }
 
@@ -333,7 +334,7 @@ impl Default for FrameSettings {
             spp: 256,
             reference_estimator: ReferenceEstimator::Mis,
             reference_chunk: None,
-            visibility: Visibility::Voxel,
+            visibility: Visibility::Hybrid,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
