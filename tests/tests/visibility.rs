@@ -1,6 +1,6 @@
-//! `--visibility hybrid` (glsl/shared/hybrid.glsl): exact shadow rays traced only through the voxel grid's
-//! runs of occupied cells. It must give `--visibility exact`'s answer, so every test compares it with
-//! exact, per pixel, on the stress scenes of scripts/make-scenes.py, where the plain voxel march
+//! `--visibility hybrid` (glsl/shared/hybrid.glsl, the default): a march through a grid of triangle lists
+//! (crates/graph/src/bvh/cells.rs) that tests each entered cell's own triangles. It must give
+//! `--visibility exact`'s answer, so every GPU test compares it with exact, per pixel, on the stress scenes of scripts/make-scenes.py, where the plain voxel march
 //! (`--visibility voxel`) goes measurably wrong: each test also checks that the voxel march does differ
 //! there, so the scene really exposes the cause. Sizes are tiny (24², DPRSM 16², 32 cells).
 //!
@@ -143,4 +143,46 @@ fn hybrid_does_not_leak_through_thin_walls() {
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     hybrid_matches_exact("doorway", &mut r, Method::All);
+}
+
+/// The triangle lists the GPU marches, checked by their CPU twin (bounce_oracles::cpu_cells) against
+/// every triangle of the scene: on random pairs of surface points of each stress scene and the Cornell
+/// box, at a coarse and a fine voxel grid, the march over the lists finds a segment occluded exactly when
+/// some triangle crosses it. A list that missed a triangle a segment crosses would show here.
+#[test]
+fn the_triangle_lists_hold_every_occluder_a_segment_meets() {
+    use bounce_graph::bvh::cells::CellLists;
+    use bounce_graph::bvh::{Bvh, FlatBvh};
+    use bounce_oracles::cpu_cells;
+    for name in ["cornell-box", "box-on-floor", "doorway", "clutter"] {
+        let scene = stress_scene(name);
+        let flat = FlatBvh::new(&Bvh::new(&scene), &scene.vertices);
+        let tris: Vec<[Vec3; 3]> =
+            scene.vertices.chunks(3).map(|v| [v[0].position(), v[1].position(), v[2].position()]).collect();
+        for voxels in [16, 128] {
+            let spec = bounce_graph::passes::voxelize::fit(scene.bounds_min, scene.bounds_max, voxels);
+            let lists = CellLists::build(&flat.tris, &spec);
+            let mut rng = bounce_tests::Rng(11 + voxels as u64);
+            let (mut occluded, mut tested) = (0, 0u64);
+            for _ in 0..3000 {
+                let ta = tris[rng.below(tris.len() as u32) as usize];
+                let tb = tris[rng.below(tris.len() as u32) as usize];
+                let (a, b) = (rng.on_triangle(&ta).as_dvec3(), rng.on_triangle(&tb).as_dvec3());
+                let m = cpu_cells::march(&lists, &spec, &flat.tris, a, b, 1e-4, 1.0 - 1e-4);
+                let truth = cpu_cells::brute_force(&flat.tris, a, b, 1e-4, 1.0 - 1e-4);
+                assert_eq!(
+                    m.occluded, truth,
+                    "{name}, {voxels} voxels: the lists disagree with every triangle on {a} → {b}"
+                );
+                occluded += truth as u32;
+                tested += m.tests as u64;
+            }
+            eprintln!(
+                "{name}, {voxels} voxels: {occluded} of 3000 occluded, {:.1} tests per march",
+                tested as f64 / 3000.0
+            );
+            // Both answers occur often, so the comparison has teeth.
+            assert!(occluded > 100 && occluded < 2900, "{name}: {occluded} occluded");
+        }
+    }
 }

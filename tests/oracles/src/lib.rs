@@ -14,6 +14,7 @@
 //! Users: the integration tests (`tests/tests`), the tools in `tests/src/bin`, and the fuzz target.
 
 pub mod cpu_cdf;
+pub mod cpu_cells;
 pub mod cpu_ref;
 pub mod cpu_voxel;
 pub mod scene_fuzz;

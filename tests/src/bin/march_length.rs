@@ -1,19 +1,26 @@
-//! Mean number of voxel cells the visibility march visits per VPL–point pair (CPU twin of the GPU
-//! march, `bounce_oracles::cpu_voxel`), over random pairs of surface points of the default scene: the
-//! factor between VPL evaluations/s and voxel steps/s in BENCHMARKS.md.
+//! Cells visited per visibility march, over random pairs of surface points of a scene (default: the
+//! Cornell box), for the voxel march (CPU twin `bounce_oracles::cpu_voxel`, which stops at the first
+//! occupied cell) and for `--visibility hybrid`'s march over its triangle lists (CPU twin
+//! `bounce_oracles::cpu_cells`: list cells entered and triangle tests). Also checks the lists against
+//! every triangle: a pair the brute force finds occluded must be found occluded by the hybrid march.
 //!
-//!     cargo run -p bounce-tests --bin march-length [voxels]
+//!     cargo run -p bounce-tests --bin march-length [scene.toml] [voxels]
 
+use bounce_graph::bvh::cells::CellLists;
+use bounce_graph::bvh::{Bvh, FlatBvh};
 use bounce_graph::passes::voxelize;
 use bounce_graph::scene::Scene;
-use bounce_oracles::cpu_voxel;
+use bounce_oracles::{cpu_cells, cpu_voxel};
 use glam::Vec3;
 
 fn main() -> anyhow::Result<()> {
-    let voxels: u32 = std::env::args().nth(1).map(|a| a.parse()).transpose()?.unwrap_or(128);
-    let scene = Scene::load(&bounce_tests::default_scene())?;
+    let path = std::env::args().nth(1).map_or_else(bounce_tests::default_scene, Into::into);
+    let voxels: u32 = std::env::args().nth(2).map(|a| a.parse()).transpose()?.unwrap_or(128);
+    let scene = Scene::load(&path)?;
     let spec = voxelize::fit(scene.bounds_min, scene.bounds_max, voxels);
     let grid = cpu_voxel::voxelize_scene(&scene, spec);
+    let flat = FlatBvh::new(&Bvh::new(&scene), &scene.vertices);
+    let lists = CellLists::build(&flat.tris, &spec);
     let tris: Vec<[Vec3; 3]> =
         scene.vertices.chunks(3).map(|v| [v[0].position(), v[1].position(), v[2].position()]).collect();
     let mut rng = bounce_tests::Rng(7);
@@ -23,6 +30,8 @@ fn main() -> anyhow::Result<()> {
         (rng.on_triangle(&t), n)
     };
     let (mut cells, mut pairs, mut blocked) = (0u64, 0u64, 0u64);
+    let (mut h_cells, mut h_tests, mut h_blocked, mut missed) = (0u64, 0u64, 0u64, 0u64);
+    let check = flat.tris.len() <= 20_000;
     for _ in 0..20_000 {
         let ((x, nx), (y, ny)) = (point(), point());
         let nx = if nx.dot(y - x) < 0.0 { -nx } else { nx };
@@ -37,11 +46,32 @@ fn main() -> anyhow::Result<()> {
         }
         cells += k;
         pairs += 1;
+        // Hybrid: the segment between the points, a window of 1e-4 of it at both ends.
+        let (a, b) = (x.as_dvec3(), y.as_dvec3());
+        let h = cpu_cells::march(&lists, &spec, &flat.tris, a, b, 1e-4, 1.0 - 1e-4);
+        h_cells += h.cells as u64;
+        h_tests += h.tests as u64;
+        h_blocked += h.occluded as u64;
+        if check && h.occluded != cpu_cells::brute_force(&flat.tris, a, b, 1e-4, 1.0 - 1e-4) {
+            missed += 1;
+        }
     }
+    let s = lists.stats();
+    let n = pairs as f64;
     println!(
-        "{voxels} voxels: {:.1} cells visited per march on average over {pairs} random surface pairs ({:.0} % occluded)",
-        cells as f64 / pairs as f64,
-        100.0 * blocked as f64 / pairs as f64
+        "{voxels} voxels: voxel march {:.1} cells per march ({:.0} % occluded); hybrid ({}³-ish list grid of {} cells, factor {}, {} entries, longest list {}): {:.1} cells and {:.1} triangle tests per march ({:.0} % occluded){}",
+        cells as f64 / n,
+        100.0 * blocked as f64 / n,
+        lists.dims.max_element(),
+        s.cells,
+        lists.factor,
+        s.entries,
+        s.max_list,
+        h_cells as f64 / n,
+        h_tests as f64 / n,
+        100.0 * h_blocked as f64 / n,
+        if check { format!("; {missed} of {pairs} pairs disagree with the brute force") } else { String::new() }
     );
+    anyhow::ensure!(missed == 0, "the triangle lists miss an occluder");
     Ok(())
 }

@@ -117,7 +117,7 @@ impl CellLists {
 /// so a large sloped triangle costs its area in cells, not its bounding box's volume.
 fn for_each_cell(v: &[DVec3; 3], dims: UVec3, mut f: impl FnMut(UVec3)) {
     let n = (v[1] - v[0]).cross(v[2] - v[0]);
-    if !(n.length_squared() > 0.0) || !v.iter().all(|p| p.is_finite()) {
+    if !v.iter().all(|p| p.is_finite()) || n.length_squared() == 0.0 {
         return;
     }
     let m = CELL_MARGIN;
