@@ -19,6 +19,7 @@
 use super::FrameInputs;
 use crate::bindings::*;
 use crate::gpu_scene::scene_bindings;
+use crate::graph::PassContext;
 use crate::graph::{Graph, Handle};
 use crate::passes::dprsm::DprsmOut;
 use crate::passes::gbuffer::GBufferOut;
@@ -26,7 +27,7 @@ use crate::shader_types::GatherPush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{Binding, Buffer, ComputePipeline, Gpu, Image, Sampler};
+use bounce_device::{Binding, Buffer, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
 
 pub struct Gather {
     name: &'static str,
@@ -150,6 +151,34 @@ impl Gather {
         Ok(Gather { name, pipeline, exact, psm, psm_exact, hybrid, sampler: Sampler::nearest(gpu)? })
     }
 
+    /// The shader variant of the frame's visibility, with what it binds besides the common set.
+    fn variant(
+        &self,
+        ctx: &PassContext,
+        f: FrameInputs,
+        i: &GatherInputs,
+        writes: DescriptorWrites,
+    ) -> (&ComputePipeline, DescriptorWrites) {
+        match (&i.psm, f.bvh) {
+            (Some(p), Some(bvh)) => {
+                (&self.psm_exact, bvh.writes(writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views))))
+            }
+            (Some(p), None) => (
+                &self.psm,
+                writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views)).sampled_image(
+                    B_PSM_DEPTH,
+                    ctx.image(&p.depth),
+                    self.sampler.raw,
+                ),
+            ),
+            (None, Some(bvh)) => match f.cells {
+                Some(cells) => (&self.hybrid, cells.writes(bvh.writes(writes))),
+                None => (&self.exact, bvh.writes(writes)),
+            },
+            (None, None) => (&self.pipeline, writes),
+        }
+    }
+
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
     /// `GATHER_SAMPLE`) into `out`: overwritten when `push.accumulate == 0`, else added to. The range is
     /// split into dispatches of at most `f.vpls_per_dispatch` (see `FrameInputs`), each adding to the
@@ -196,24 +225,7 @@ impl Gather {
                 .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            let (pipeline, writes) = match (&i.psm, f.bvh) {
-                (Some(p), Some(bvh)) => {
-                    (&self.psm_exact, bvh.writes(writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views))))
-                }
-                (Some(p), None) => (
-                    &self.psm,
-                    writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views)).sampled_image(
-                        B_PSM_DEPTH,
-                        ctx.image(&p.depth),
-                        s,
-                    ),
-                ),
-                (None, Some(bvh)) => match f.cells {
-                    Some(cells) => (&self.hybrid, cells.writes(bvh.writes(writes))),
-                    None => (&self.exact, bvh.writes(writes)),
-                },
-                (None, None) => (&self.pipeline, writes),
-            };
+            let (pipeline, writes) = self.variant(ctx, f, &i, writes);
             let chunk = f.vpls_per_dispatch.max(1);
             let mut first = push.first;
             loop {
