@@ -29,7 +29,7 @@ stage_binary() {
   mv "$stage/bin/bounce.tmp" "$stage/bin/bounce"
   # The loader, for a machine that has a GPU driver but no libvulkan.
   local loader
-  loader="$(ldconfig -p | awk '/libvulkan\.so\.1 /{print $NF; exit}')"
+  loader="$(ldconfig -p | awk '/libvulkan\.so\.1 / && !n++ {print $NF}')"
   [ -n "$loader" ] && cp -L "$loader" "$stage/lib/libvulkan.so.1"
   echo "staged $(du -sh "$stage" | cut -f1) in $stage" >&2
 }
@@ -48,7 +48,7 @@ run_bench() {
   mkdir -p "$out"
   local md="$out/gpu-bench.md"
   local device
-  device="$("$bin" info | awk -F': ' '/^device/{print $2; exit}')"
+  device="$("$bin" info | awk -F': ' '/^device/ && !n++ {print $2}')"
   local common=(--width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" --shadow-res "$shadow")
   local methods=(global local gbg mis)
   {

@@ -11,7 +11,7 @@ cargo fmt --all --check
 cargo clippy -q --workspace --all-targets -- -D warnings
 python3 scripts/check-structure.py
 cargo build -q --workspace --all-targets
-cargo run -q -p bounce -- info | head -n 3
+cargo run -q -p bounce -- info | sed -n 1,3p
 # The default scene at 128² with validation: must finish and name every pass it ran.
 cargo run -q -p bounce -- render assets/cornell-box/scene.toml --width 128 --height 128 \
   --out "${CARGO_TARGET_DIR:-target}/default-128.exr" --validation --timings
