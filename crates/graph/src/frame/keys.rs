@@ -60,7 +60,7 @@ impl Keys {
         let per_pixel = (p.kind != ImportanceKind::Uniform).then_some((gbuffer, p.seed));
         let params = (p.kind, p.samples, p.min_d2.to_bits(), p.fixed_scale.to_bits());
         // gbg's rays find their hits through the visibility's structure: the hybrid's exact hits differ.
-        let traced = matches!(p.kind, ImportanceKind::Gbg { .. }) && s.visibility.uses_bvh();
+        let traced = matches!(p.kind, ImportanceKind::Gbg { .. }) && s.visibility.traces_gathering();
         Keys {
             voxels,
             vpls,

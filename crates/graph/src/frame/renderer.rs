@@ -499,7 +499,7 @@ impl RenderContext {
             bvh: if traced { self.bvh.as_ref() } else { None },
             cells: if s.visibility == Visibility::Hybrid { self.cells.as_ref() } else { None },
             traces_per_dispatch: self.traces_per_dispatch(s),
-            exact_rays: s.visibility.uses_bvh(),
+            exact_rays: s.visibility.traces_gathering(),
             scene: &self.scene,
             uniforms,
             width: s.width,

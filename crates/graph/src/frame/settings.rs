@@ -142,6 +142,12 @@ impl Visibility {
     pub fn uses_bvh(self) -> bool {
         matches!(self, Visibility::Exact | Visibility::PsmExact | Visibility::Hybrid)
     }
+    /// Whether gbg's importance rays find the real surface they hit (`Exact`, `Hybrid`) rather than the
+    /// first occupied voxel. Not `PsmExact`: it must draw the same shared set as `Psm`, so that the two
+    /// differ by the maps alone.
+    pub fn traces_gathering(self) -> bool {
+        matches!(self, Visibility::Exact | Visibility::Hybrid)
+    }
     /// Whether the frame gathers a shared VPL set (`Psm`, `PsmExact`).
     pub fn shared_set(self) -> bool {
         matches!(self, Visibility::Psm | Visibility::PsmExact)

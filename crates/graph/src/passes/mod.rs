@@ -79,7 +79,7 @@ pub struct FrameInputs<'a> {
     /// Exact or hybrid rays one invocation may trace in one dispatch under the device's loop limit (gbg's
     /// importance rays are split over dispatches by it).
     pub traces_per_dispatch: u32,
-    /// Visibility is exact rays (`--visibility exact`, `psm-exact`: the BVH; `hybrid`: also `cells`).
+    /// gbg's importance rays find real hits (`--visibility exact`: the BVH; `hybrid`: also `cells`).
     pub exact_rays: bool,
     /// VPLs one gather dispatch may evaluate per pixel, so that no invocation exceeds the driver's loop
     /// iteration limit (`Gpu::loop_iteration_limit`); `u32::MAX` where there is none.
