@@ -1,4 +1,4 @@
-// `--visibility hybrid` (the default): exact visibility, the BVH's answer bit for bit, found by a march through
+// `--visibility hybrid`: exact visibility, the BVH's answer bit for bit, found by a march through
 // a grid of triangle lists. Include after voxel.glsl and bvh.glsl.
 //
 // hybrid_trace(o, d, tmin, tmax, any_hit, tri, bary) answers what bvh_trace(o, d, tmin, tmax, ...) answers.

@@ -92,7 +92,7 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     return v;
 }
 
-// The shadowed contribution. Visibility: the voxel march (default), or with EXACT_VISIBILITY defined (the
+// The shadowed contribution. Visibility: the voxel march (`--visibility voxel`), or with EXACT_VISIBILITY defined (the
 // `*.exact.comp` variants, `--visibility exact`) a shadow ray against the real triangles (BVH) between
 // points lifted off their surfaces (surface_lift in common.glsl): x along its normal, the VPL towards
 // its light. Not the VPL along its normal: a VPL exactly on an edge of a closed box (a light at the

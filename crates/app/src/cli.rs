@@ -118,7 +118,7 @@ pub const REFERENCE_ESTIMATORS: Choices<ReferenceEstimator> = Choices(&[
 
 pub const VISIBILITIES: Choices<Visibility> = Choices(&[
     ("voxel", Visibility::Voxel, "Amanatides–Woo march through the voxel grid (the thesis's ch. 7)"),
-    ("exact", Visibility::Exact, "Exact shadow rays against the triangles (BVH)"),
+    ("exact", Visibility::Exact, "Default. Exact shadow rays against the triangles (BVH)"),
     (
         "psm",
         Visibility::Psm,
@@ -128,7 +128,7 @@ pub const VISIBILITIES: Choices<Visibility> = Choices(&[
     (
         "hybrid",
         Visibility::Hybrid,
-        "Default. Exact's answer: a march through a grid of triangle lists, testing each cell's own triangles",
+        "Exact's answer: a march through a grid of triangle lists, testing each cell's own triangles",
     ),
 ]);
 
@@ -234,7 +234,7 @@ pub struct FrameArgs {
     #[arg(long, value_parser = REFERENCE_ESTIMATORS, default_value = "mis")]
     pub reference_estimator: ReferenceEstimator,
     /// Visibility of the VPL gather.
-    #[arg(long, value_parser = VISIBILITIES, default_value = "hybrid")]
+    #[arg(long, value_parser = VISIBILITIES, default_value = "exact")]
     pub visibility: Visibility,
     /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
     #[arg(long, default_value_t = 256)]

@@ -122,18 +122,21 @@ impl Default for RisSettings {
 /// How the VPL gather tests visibility.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Visibility {
-    /// Amanatides–Woo march through the voxel grid (the thesis).
+    /// Amanatides–Woo march through the voxel grid (the thesis's; 3–9 % dark on thin-walled and
+    /// cluttered rooms, seams at junctions).
     Voxel,
-    /// Shadow rays against the triangles (BVH): separates the voxel error from the rest.
+    /// The default: shadow rays against the triangles (BVH); gbg's importance rays and mis's gathering
+    /// rays hit the real surfaces. On lavapipe it costs no more than the voxel march on the small scenes
+    /// and 3.5× on Sibenik (BENCHMARKS.md), with no visibility bias.
     Exact,
     /// Per-VPL paraboloid shadow maps (thesis ch. 6) for a shared set of `vpls` VPLs per frame
     /// (`passes/psm.rs`).
     Psm,
     /// The shared set of `Psm` with exact shadow rays: the maps' own error, on identical VPLs.
     PsmExact,
-    /// The default: `Exact`'s answer, found by a march through a grid of triangle lists that tests each
-    /// entered cell's own triangles (`glsl/shared/hybrid.glsl`, `bvh/cells.rs`). No end skip, no
-    /// thickening: none of the voxel march's darkening at junctions and thin walls.
+    /// `Exact`'s answer, found by a march through a grid of triangle lists that tests each entered
+    /// cell's own triangles (`glsl/shared/hybrid.glsl`, `bvh/cells.rs`). Measured slower than the BVH on
+    /// lavapipe (1.1–2× on the small scenes, 1.5× on Sibenik), so not the default.
     Hybrid,
 }
 
@@ -340,7 +343,7 @@ impl Default for FrameSettings {
             spp: 256,
             reference_estimator: ReferenceEstimator::Mis,
             reference_chunk: None,
-            visibility: Visibility::Hybrid,
+            visibility: Visibility::Exact,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,

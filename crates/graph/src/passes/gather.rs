@@ -6,7 +6,7 @@
 //! x (a Lambertian emitter). V comes from an Amanatides–Woo march through the voxel grid
 //! (`glsl/shared/voxel.glsl` states where the march starts and stops), or from shadow rays against the
 //! BVH: everywhere (`--visibility exact`), or found by a march through the grid that tests each cell's
-//! own triangles (`hybrid`, the default: `glsl/shared/hybrid.glsl`, the same answer). Modes:
+//! own triangles (`hybrid`: `glsl/shared/hybrid.glsl`, the same answer). Modes:
 //! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
 //! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
 //!   (converged) VPL estimate, against which every sampling method is judged.
