@@ -9,6 +9,7 @@
 //   combined with last frame's reservoir at the same pixel and layer.
 // RIS_SPATIAL (W × H × R): the reservoir combined with k neighbours' of the same layer, generalized
 //   balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
+// The target may weigh in the voxel march's visibility (ris.target_floor < 1, see target_at).
 // RIS_SHADE (W × H): L = 1/R Σ_r f(y_r) V(y_r) W_r over the reservoirs [first, last), visibility as the
 //   gather's (voxel, EXACT_VISIBILITY, HYBRID_VISIBILITY).
 #include "shared/scene.glsl"
@@ -65,9 +66,17 @@ float ris_rand(ivec2 q, uint stream, uint i) {
     return float(h >> 8) * (1.0 / 16777216.0);
 }
 
-// The target p̂ of pixel geometry (x, n, a) for VPL v.
+// The target p̂ of pixel geometry (x, n, a) for VPL v: the unshadowed contribution's luminance, times
+// max(V_voxel, δ) when δ = ris.target_floor < 1. The voxel march is only a guess at visibility (it leaks
+// and darkens), but a target may be anything that is positive wherever the integrand is: with δ > 0 it
+// is, so the estimate stays unbiased (the shade tests the frame's real visibility), and VPLs the march
+// sees as hidden are drawn δ times as often, which is what an unshadowed target gets wrong behind walls.
+// Deterministic per pixel, so the spatial weights evaluate the same p̂ at each neighbour.
 float target_at(vec3 x, vec3 n, vec3 a, uint v) {
-    return luminance(vpl_unshadowed(x, n, a, vpl_fetch(v), pc.clamp_d2));
+    Vpl vpl = vpl_fetch(v);
+    float t = luminance(vpl_unshadowed(x, n, a, vpl, pc.clamp_d2));
+    if (t > 0.0 && ris.target_floor < 1.0) t *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
+    return t;
 }
 
 Reservoir empty_reservoir(float confidence) {

@@ -75,7 +75,7 @@ struct RisPush {
     float radius;     // spatial radius, pixels
     float history_cap;// the history's confidence is capped at history_cap · M
     uint history;     // 1: last frame's reservoirs are bound at B_RIS_HISTORY
-    uint pad;
+    float target_floor;// δ: the target weighs a VPL the voxel march calls occluded by δ (1: no march)
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

@@ -250,7 +250,7 @@ pub struct FrameArgs {
     #[arg(long)]
     pub cdf_seed: Option<u64>,
     /// Candidate distribution of --method ris (the CDF methods' mixtures, --defensive included).
-    #[arg(long, value_parser = RIS_SOURCES, default_value = "gbg")]
+    #[arg(long, value_parser = RIS_SOURCES, default_value = "uniform")]
     pub source: RisSource,
     /// Candidates per reservoir of --method ris (M).
     #[arg(long, default_value_t = RisSettings::default().candidates)]
@@ -268,6 +268,10 @@ pub struct FrameArgs {
     /// at most this many times --candidates (0: no temporal reuse).
     #[arg(long, default_value_t = RisSettings::default().temporal_cap)]
     pub temporal_cap: f32,
+    /// --method ris's target weighs a VPL the voxel march calls occluded by this (in (0, 1]; 1: the
+    /// unshadowed target, no march).
+    #[arg(long, default_value_t = RisSettings::default().target_floor)]
+    pub target_floor: f32,
     /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
     #[arg(long)]
     pub device: Option<String>,
@@ -309,6 +313,7 @@ impl FrameArgs {
                 spatial_neighbors: self.spatial_neighbors,
                 spatial_radius: self.spatial_radius,
                 temporal_cap: self.temporal_cap,
+                target_floor: self.target_floor,
                 candidates_chunk: None,
             },
             ..FrameSettings::default()

@@ -122,7 +122,8 @@ pub struct RisPush {
     pub radius: f32,
     pub history_cap: f32,
     pub history: u32,
-    pub pad: u32,
+    /// δ: the target weighs a VPL the voxel march calls occluded by δ (1: the unshadowed target).
+    pub target_floor: f32,
 }
 const _: () = assert!(size_of::<RisPush>() == 32);
 

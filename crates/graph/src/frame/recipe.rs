@@ -201,6 +201,7 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
         neighbors: ris.spatial_neighbors,
         radius: ris.spatial_radius,
         history_cap: ris.temporal_cap,
+        target_floor: ris.target_floor,
         ..RisPush::default()
     };
     let sampling = GatherPush { seed: 0, ..gather };

@@ -385,6 +385,7 @@ impl RenderContext {
                 self.gpu.loop_iteration_limit,
                 importance.kind.method_sections(),
                 s.light_map.faces() * self.scene.light_count,
+                self.ris_target_iterations(s),
             ),
             reference_per_dispatch: self
                 .bvh
@@ -571,6 +572,26 @@ impl RenderContext {
             reject!("the CDF would take {cdf_bytes} bytes, over the device limit maxStorageBufferRange ({max_range}); lower --dprsm-res");
         }
         voxelize::check_grid(&self.gpu, &self.voxel_spec(s)).map_err(|e| SettingsError(e.to_string()))?;
+        if let (Method::Ris, Some(limit)) = (s.method, self.gpu.loop_iteration_limit) {
+            // A spatial pass evaluates (k + 1)² targets per reservoir, each with a march under --target-floor.
+            let evals = (s.ris.spatial_neighbors + 1).pow(2);
+            if evals * (self.ris_target_iterations(s) + 64) + 256 > limit {
+                reject!(
+                    "ris: {evals} target evaluations of a spatial pass, each marching {} cells, overrun this device's loop limit ({limit}); lower --spatial-neighbors or --voxels, or use --target-floor 1",
+                    self.ris_target_iterations(s)
+                );
+            }
+        }
         Ok(())
+    }
+
+    /// Loop iterations of one ris target evaluation: the voxel march under --target-floor < 1.
+    fn ris_target_iterations(&self, s: &FrameSettings) -> u32 {
+        let d = self.voxel_spec(s).dims;
+        if s.ris.target_floor < 1.0 {
+            d.x + d.y + d.z + 3
+        } else {
+            0
+        }
     }
 }

@@ -100,6 +100,9 @@ pub struct RisSettings {
     /// Temporal reuse across frames of one view: the history's confidence is capped at this many times
     /// M (0: no temporal reuse).
     pub temporal_cap: f32,
+    /// δ in (0, 1]: the target weighs a VPL the voxel march calls occluded by δ (1: the unshadowed
+    /// target, no march). Any δ > 0 keeps the estimate unbiased (glsl/ris.comp, `target_at`).
+    pub target_floor: f32,
     /// Candidates per initial dispatch (`None`: as many as the device's loop limit allows). The image
     /// does not depend on it (the reservoirs' streaming state is carried between dispatches).
     pub candidates_chunk: Option<std::num::NonZeroU32>,
@@ -108,12 +111,17 @@ pub struct RisSettings {
 impl Default for RisSettings {
     fn default() -> Self {
         RisSettings {
-            source: RisSource::Gbg,
+            // Measured at equal time (BENCHMARKS.md, "ris: what its settings buy"): a uniform source (a CDF
+            // source adds rare heavy weights where it underrates a VPL the target favours), and no reuse
+            // by default: spatial reuse cost more than it gained, and temporal reuse correlates the frames
+            // a progressive render averages (3–10× the error in the two rooms).
+            source: RisSource::Uniform,
             candidates: 16,
-            spatial_passes: 1,
+            spatial_passes: 0,
             spatial_neighbors: 4,
             spatial_radius: 16.0,
-            temporal_cap: 20.0,
+            temporal_cap: 0.0,
+            target_floor: 1.0,
             candidates_chunk: None,
         }
     }
@@ -387,6 +395,12 @@ impl FrameSettings {
         }
         if !(r.spatial_radius.is_finite() && r.spatial_radius >= 1.0 && r.spatial_radius <= 1024.0) {
             reject!("--spatial-radius must be between 1 and 1024 pixels (got {})", r.spatial_radius);
+        }
+        if !(r.target_floor > 0.0 && r.target_floor <= 1.0) {
+            reject!(
+                "--target-floor must be in (0, 1] (got {}): 0 would leave VPLs the march wrongly hides undrawable",
+                r.target_floor
+            );
         }
         if !(r.temporal_cap.is_finite() && r.temporal_cap >= 0.0) {
             reject!("--temporal-cap must be finite and non-negative (got {})", r.temporal_cap);

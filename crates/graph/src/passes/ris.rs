@@ -77,12 +77,12 @@ pub struct RisFrame {
 
 /// Candidates per initial dispatch under a loop iteration `limit`: per candidate `draw_vpl`'s loops (two
 /// Sobol pairs' bit loops and two binary searches, ≤ 32 each, the sections 3 · `sections`, the faces
-/// 2 · `faces` · (`sections` + 1)) and 64 for the rest; 128 kept for the history's combination and the
-/// code outside.
-pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32) -> u32 {
+/// 2 · `faces` · (`sections` + 1)), the target's own loops (`target`: the voxel march under
+/// `--target-floor` < 1) and 64 for the rest; 128 kept for the history's combination and the code outside.
+pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, target: u32) -> u32 {
     let Some(limit) = limit else { return u32::MAX };
-    let per = 64 + 4 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2);
-    (limit.saturating_sub(128) / per).max(1)
+    let per = 64 + 4 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2) + target;
+    (limit.saturating_sub(128 + target) / per).max(1)
 }
 
 impl Ris {
