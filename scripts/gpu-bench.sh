@@ -50,7 +50,7 @@ run_bench() {
   local device
   device="$("$bin" info | awk -F': ' '/^device/ && !n++ {print $2}')"
   local common=(--width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" --shadow-res "$shadow")
-  local methods=(global local gbg mis)
+  local methods=(global local gbg mis ris)
   {
     echo "# gpu-bench: $(date -u +%Y-%m-%d), ${device:-unknown device}"
     echo
@@ -84,6 +84,19 @@ run_bench() {
           printf ' %s |' "${v:-–}"
         done
         echo
+      done
+    } | tee -a "$md"
+    # The visibilities' cost: the gather alone (issue 13's measure), median of 3.
+    {
+      echo
+      echo "## $scene: gather GPU ms by visibility (uniform, $vpls VPLs, median of 3)"
+      echo
+      echo "| visibility | gather ms |"
+      echo "|---|---:|"
+      for v in voxel exact hybrid; do
+        ms="$(for k in 1 2 3; do "$bin" render "$toml" "${common[@]}" --method uniform --vpls "$vpls" --seed "$k" \
+          --visibility "$v" --timings --out "$out/$scene-vis-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
+        echo "| $v | ${ms:-–} |"
       done
     } | tee -a "$md"
     local ref="$out/$scene-reference.exr"
