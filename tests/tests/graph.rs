@@ -121,6 +121,8 @@ fn an_unchanged_frame_records_only_the_gather() {
         dprsm_res: 32,
         shadow_res: 128,
         voxels: 32,
+        // The voxel march, so that the grid is made (and kept): exact rays need none.
+        visibility: bounce_graph::frame::Visibility::Voxel,
         ..FrameSettings::default()
     };
     let first = r.render(&s).unwrap();
@@ -133,6 +135,10 @@ fn an_unchanged_frame_records_only_the_gather() {
     let reseeded = r.render(&FrameSettings { seed: 99, ..s.clone() }).unwrap();
     assert_eq!(reseeded.ran, vec!["gather"]);
     assert_ne!(reseeded.radiance, first.radiance);
+    // Exact shadow rays need no voxel grid: a frame with them never voxelizes.
+    let mut exact = Renderer::new(&gpu, &scene).unwrap();
+    let e = exact.render(&FrameSettings { visibility: bounce_graph::frame::Visibility::Exact, ..s.clone() }).unwrap();
+    assert!(!e.ran.contains(&"voxelize") && !e.skipped.contains(&"voxelize"), "{:?}", e.ran);
     let gbg = FrameSettings { method: Method::Gbg, ..s.clone() };
     assert!(r.render(&gbg).unwrap().ran.contains(&"importance"));
     assert_eq!(r.render(&gbg).unwrap().ran, vec!["gather"]);
@@ -168,6 +174,8 @@ fn a_camera_move_keeps_the_light_side() {
         dprsm_res: 32,
         shadow_res: 128,
         voxels: 32,
+        // The voxel march, so that the grid is made (and kept): exact rays need none.
+        visibility: bounce_graph::frame::Visibility::Voxel,
         ..FrameSettings::default()
     };
     r.render(&s).unwrap();
@@ -223,6 +231,8 @@ fn a_light_move_records_exactly_the_light_side() {
         dprsm_res: 32,
         shadow_res: 128,
         voxels: 32,
+        // The voxel march, so that the grid is made (and kept): exact rays need none.
+        visibility: bounce_graph::frame::Visibility::Voxel,
         ..FrameSettings::default()
     };
     let first = r.render(&s).unwrap();

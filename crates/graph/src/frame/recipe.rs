@@ -71,7 +71,10 @@ pub fn build_frame<'a>(
     chunk: Range<u32>,
 ) -> FrameOut {
     let (f, k) = (i.f, &i.keys);
-    let voxels = g.cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid));
+    // The voxel grid only where something marches it: exact and hybrid rays need none (ris's shaders
+    // always bind it: their target may march it, `--target-floor`).
+    let marched = !s.visibility.traces_gathering() || s.method == Method::Ris;
+    let voxels = marched.then(|| g.cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid)));
     let vpls = g.cached("vpls", &k.vpls, |g| r.dprsm.add(g, f));
     let shadow = g.cached("shadow", &k.shadow, |g| r.dprsm.add_depth(g, f));
     let gbuffer = g.cached("gbuffer", &k.gbuffer, |g| r.gbuffer.add(g, f));
@@ -101,7 +104,7 @@ pub fn build_frame<'a>(
     // to a method's CDF and back does not redo it.
     let slot = if p.kind == ImportanceKind::Uniform { "validity_cdf" } else { "cdf" };
     let cdf = g.cached(slot, &k.cdf, |g| {
-        let imp = r.importance.add(g, f, &gbuffer, &vpls, &voxels, p);
+        let imp = r.importance.add(g, f, &gbuffer, &vpls, voxels, p);
         Cdf { importance: imp.importance, cdf: r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections) }
     });
     let mut inputs = GatherInputs::new(&gbuffer, &vpls, voxels, cdf.importance, cdf.cdf, combined);

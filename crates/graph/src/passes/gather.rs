@@ -53,7 +53,9 @@ pub struct GatherInputs {
     pub vpl_position: Handle<Image>,
     pub vpl_normal: Handle<Image>,
     pub vpl_flux: Handle<Image>,
-    pub voxels: Handle<Buffer>,
+    /// The voxel grid, when the frame's visibility marches it (`voxel`, and the voxel gathering of
+    /// `psm`'s mis); exact rays need none, and then the grid is not made.
+    pub voxels: Option<Handle<Buffer>>,
     pub importance: Handle<Buffer>,
     pub cdf: Handle<Buffer>,
     /// Added to the result when set (the combined component).
@@ -66,7 +68,7 @@ impl GatherInputs {
     pub fn new(
         gbuffer: &GBufferOut,
         vpls: &DprsmOut,
-        voxels: Handle<Buffer>,
+        voxels: Option<Handle<Buffer>>,
         importance: Handle<Buffer>,
         cdf: Handle<Buffer>,
         direct: Option<Handle<Image>>,
@@ -100,8 +102,16 @@ impl GatherInputs {
         v
     }
 
-    pub fn buffers(&self) -> [Handle<Buffer>; 3] {
-        [self.voxels, self.importance, self.cdf]
+    pub fn buffers(&self) -> Vec<Handle<Buffer>> {
+        self.voxels.into_iter().chain([self.importance, self.cdf]).collect()
+    }
+
+    /// `w` with the voxel grid bound, when the frame has one.
+    pub fn voxel_writes(&self, ctx: &PassContext, w: DescriptorWrites) -> DescriptorWrites {
+        match &self.voxels {
+            Some(v) => w.storage_buffer(B_VOXELS, ctx.buffer(v)),
+            None => w,
+        }
     }
 }
 
@@ -219,8 +229,9 @@ impl Gather {
             };
             let writes =
                 super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&i.g_position, &i.g_normal, &i.g_albedo], s);
-            let writes = super::vpl_writes(writes, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s)
-                .storage_buffer(B_VOXELS, ctx.buffer(&i.voxels))
+            let writes = super::vpl_writes(writes, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s);
+            let writes = i
+                .voxel_writes(ctx, writes)
                 .storage_buffer(B_IMPORTANCE, ctx.buffer(&i.importance))
                 .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
                 .sampled_image(B_GATHER_DIRECT, direct, s)

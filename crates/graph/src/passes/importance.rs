@@ -131,7 +131,7 @@ impl Importance {
         f: FrameInputs<'a>,
         gb: &GBufferOut,
         vpls: &DprsmOut,
-        voxels: &Handle<Buffer>,
+        voxels: Option<Handle<Buffer>>,
         p: ImportanceParams,
     ) -> ImportanceOut {
         let texels = Self::texel_count(&f);
@@ -139,13 +139,13 @@ impl Importance {
         let mut importance = g.create_buffer(BufferDesc::storage("importance", 4 * texels * sections as u64));
         let gbg = matches!(p.kind, ImportanceKind::Gbg { .. });
         let mut scratch = gbg.then(|| Self::add_clear(g, texels));
-        let io = Io { gb: *gb, vpls: *vpls, voxels: *voxels, out: importance, scratch };
+        let io = Io { gb: *gb, vpls: *vpls, voxels, out: importance, scratch };
         let mut b = g.add_pass("importance");
         for h in [&gb.position, &gb.normal, &gb.albedo, &vpls.position, &vpls.normal, &vpls.flux] {
             b = b.read(h, Access::ComputeRead);
         }
-        if gbg {
-            b = b.read(voxels, Access::ComputeRead);
+        if let (true, Some(v)) = (gbg, &voxels) {
+            b = b.read(v, Access::ComputeRead);
         }
         if let Some((sums, counts)) = &mut scratch {
             b = b.write(sums, Access::ComputeWrite).write(counts, Access::ComputeWrite);
@@ -209,10 +209,10 @@ impl Importance {
             dispatch(&self.pipeline, &writes, push(mode, 1), [res, res, layers * n]);
         }
         if let (ImportanceKind::Gbg { rays }, Some((sums, counts))) = (p.kind, &io.scratch) {
-            writes = writes
-                .storage_buffer(B_VOXELS, ctx.buffer(&io.voxels))
-                .storage_buffer(B_GBG_SUM, ctx.buffer(sums))
-                .storage_buffer(B_GBG_COUNT, ctx.buffer(counts));
+            if let Some(v) = &io.voxels {
+                writes = writes.storage_buffer(B_VOXELS, ctx.buffer(v));
+            }
+            writes = writes.storage_buffer(B_GBG_SUM, ctx.buffer(sums)).storage_buffer(B_GBG_COUNT, ctx.buffer(counts));
             ctx.serialize(&out);
             // The voxel march's rays all fit one dispatch; traced rays go in shares under the loop limit.
             let chunk = f.traces_per_dispatch.max(1);
@@ -244,7 +244,7 @@ impl Importance {
 struct Io {
     gb: GBufferOut,
     vpls: DprsmOut,
-    voxels: Handle<Buffer>,
+    voxels: Option<Handle<Buffer>>,
     out: Handle<Buffer>,
     scratch: Option<(Handle<Buffer>, Handle<Buffer>)>,
 }

@@ -166,8 +166,8 @@ impl Ris {
     fn base_writes(&self, f: FrameInputs, ctx: &PassContext, i: &GatherInputs) -> DescriptorWrites {
         let s = self.sampler.raw;
         let w = super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&i.g_position, &i.g_normal, &i.g_albedo], s);
-        super::vpl_writes(w, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s)
-            .storage_buffer(B_VOXELS, ctx.buffer(&i.voxels))
+        let w = super::vpl_writes(w, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s);
+        i.voxel_writes(ctx, w)
             .storage_buffer(B_IMPORTANCE, ctx.buffer(&i.importance))
             .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
     }
