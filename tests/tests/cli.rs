@@ -216,7 +216,23 @@ fn bench_animate_writes_relmse_and_flicker_per_frame() {
     assert_eq!(r.code, 0, "stderr: {}", r.stderr);
     let csv = std::fs::read_to_string(d.join("bench.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 2 * 3, "one row per mode and frame:\n{csv}");
+    assert_eq!(rows.len(), 2 * 3 + 2, "one row per mode and frame, then one mean row per mode:\n{csv}");
+    // The mean rows are the means of the frame rows (relMSE over every frame, flicker over frames 1..).
+    for mode in ["fresh", "coherent"] {
+        let of = |col: usize, from: u32| -> Vec<f64> {
+            rows.iter()
+                .filter(|r| r[1] == mode && r[2].parse::<u32>().is_ok_and(|k| k >= from))
+                .map(|r| r[col].parse().unwrap())
+                .collect()
+        };
+        let mean_row = rows.iter().find(|r| r[1] == mode && r[2] == "mean").expect("a mean row per mode");
+        for (col, from) in [(4, 0), (5, 1)] {
+            let v = of(col, from);
+            let want = v.iter().sum::<f64>() / v.len() as f64;
+            let got: f64 = mean_row[col].parse().unwrap();
+            assert!((got - want).abs() <= 1e-5 * want.abs(), "{mode} column {col}: {got} vs {want}");
+        }
+    }
     let md = std::fs::read_to_string(d.join("bench.md")).unwrap();
     assert!(md.contains("| uniform | fresh |") && md.contains("| uniform | coherent |"), "{md}");
     assert_eq!(&std::fs::read(d.join("flicker.png")).unwrap()[1..4], b"PNG");

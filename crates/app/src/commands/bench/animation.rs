@@ -9,7 +9,7 @@
 //! Per method and mode it reports the mean over frames of relMSE (mean of (t − r)² / (r² + 0.01)) and of
 //! the flicker, `metrics::flicker`: mean of ((t_k − t_{k−1}) − (r_k − r_{k−1}))² / (r_k² + 0.01) over
 //! frames 1..N−1, the relMSE of the frame-to-frame differences, so noise that is the same in every
-//! frame does not count and noise that changes does. It writes `bench.csv` (one row per frame),
+//! frame does not count and noise that changes does. It writes `bench.csv` (one row per frame, then the means per method and mode),
 //! `bench.md` (the means, and the GPU time per frame) and `flicker.png` (both figures over the frames).
 //! The frames after a method's first keep what the light does not change (voxels, G-buffer), as an
 //! interactive session would; the GPU time is the mean over those frames.
@@ -137,8 +137,17 @@ fn references(
     Ok(truth)
 }
 
+/// One row per method, mode and frame, then per method and mode a row with frame `mean`: the means
+/// bench.md reports (GPU ms and flicker over frames 1.., relMSE over all frames).
 fn csv(samples: &[FrameSample]) -> String {
     let mut csv = String::from("method,temporal,frame,gpu_ms,rel_mse,flicker\n");
+    let mut modes: Vec<(&str, &str)> = vec![];
+    for s in samples {
+        let mode = (s.method.name(), s.temporal.name());
+        if !modes.contains(&mode) {
+            modes.push(mode);
+        }
+    }
     for s in samples {
         csv.push_str(&format!(
             "{},{},{},{:.4},{:.6e},{}\n",
@@ -148,6 +157,16 @@ fn csv(samples: &[FrameSample]) -> String {
             s.gpu_ms,
             s.rel_mse,
             s.flicker.map(|f| format!("{f:.6e}")).unwrap_or_default()
+        ));
+    }
+    for (m, t) in modes {
+        let of = || samples.iter().filter(move |s| s.method.name() == m && s.temporal.name() == t);
+        let later = || of().filter(|s| s.frame > 0);
+        csv.push_str(&format!(
+            "{m},{t},mean,{:.4},{:.6e},{:.6e}\n",
+            mean(later().map(|s| s.gpu_ms)),
+            mean(of().map(|s| s.rel_mse)),
+            mean(later().filter_map(|s| s.flicker))
         ));
     }
     csv
