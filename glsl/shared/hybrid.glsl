@@ -29,17 +29,10 @@ layout(std430, set = 0, binding = B_CELL_TRIS) readonly buffer CellTris { uint c
 // BVH hand-over keep this much ray on the safe side. Far below CELL_MARGIN's 1/64, far above f32 rounding.
 const float HYBRID_STOP = 1.0 / 256.0;
 
-// What the last hybrid_trace did: march steps, triangle tests, and whether the BVH finished it.
-uint hybrid_steps = 0u;
-uint hybrid_tests = 0u;
-bool hybrid_handed_over = false;
 
 float hybrid_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint tri, out vec2 bary) {
     tri = BVH_NO_TRI;
     bary = vec2(0.0);
-    hybrid_steps = 0u;
-    hybrid_tests = 0u;
-    hybrid_handed_over = false;
     float dmax = max(abs(d.x), max(abs(d.y), abs(d.z)));
     if (!voxel_finite(o) || !voxel_finite(d) || !(dmax >= BVH_MIN_DIR) || isnan(tmin) || isnan(tmax) || !(tmax > tmin))
         return -1.0;
@@ -75,7 +68,6 @@ float hybrid_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uin
         uint tests = 0u;
         int max_steps = dims.x + dims.y + dims.z + 3;
         for (int n = 0; n < max_steps; n++) {
-            hybrid_steps++;
             uint c = uint(cell.x) + du.x * (uint(cell.y) + du.y * uint(cell.z));
             uint j = cell_offsets[c], jend = cell_offsets[c + 1u];
             if (jend > j) {
@@ -113,11 +105,9 @@ float hybrid_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uin
             if (cell[m] < 0 || cell[m] >= dims[m]) break;
             enter = exit_t;
         }
-        hybrid_tests = tests;
     }
     if (handover >= 0.0 && !(found && any_hit)) {
         // One call site of bvh_trace (each inlined copy costs llvmpipe registers and time).
-        hybrid_handed_over = true;
         uint t2;
         vec2 b2;
         float t = bvh_trace(o, d, handover, any_hit || !found ? tmax : best_t, any_hit, t2, b2);
