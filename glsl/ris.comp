@@ -9,7 +9,8 @@
 //   combined with last frame's reservoir at the same pixel and layer.
 // RIS_SPATIAL (W × H × R): the reservoir combined with k neighbours' of the same layer, generalized
 //   balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
-// The target may weigh in the voxel march's visibility (ris.target_floor < 1, see target_at).
+// The target may weigh in the voxel march's visibility (RIS_VOXEL_TARGET variants, ris.target_floor < 1:
+// see target_at).
 // RIS_SHADE (W × H): L = 1/R Σ_r f(y_r) V(y_r) W_r over the reservoirs [first, last), visibility as the
 //   gather's (voxel, EXACT_VISIBILITY, HYBRID_VISIBILITY).
 #include "shared/scene.glsl"
@@ -75,7 +76,9 @@ float ris_rand(ivec2 q, uint stream, uint i) {
 float target_at(vec3 x, vec3 n, vec3 a, uint v) {
     Vpl vpl = vpl_fetch(v);
     float t = luminance(vpl_unshadowed(x, n, a, vpl, pc.clamp_d2));
-    if (t > 0.0 && ris.target_floor < 1.0) t *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
+#ifdef RIS_VOXEL_TARGET
+    if (t > 0.0) t *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
+#endif
     return t;
 }
 

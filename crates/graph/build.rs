@@ -73,6 +73,9 @@ const SHADERS: &[Shader] = &[
     // ris: its three stages, the shade with the gather's visibility variants (voxel, exact, hybrid).
     variant("ris.initial.comp", "ris.comp", &["RIS_INITIAL"]),
     variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
+    // `--target-floor` < 1: the target marches the voxel grid (so only these bind it).
+    variant("ris.initial_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_VOXEL_TARGET"]),
+    variant("ris.spatial_voxel_target.comp", "ris.comp", &["RIS_SPATIAL", "RIS_VOXEL_TARGET"]),
     variant("ris.shade.comp", "ris.comp", &["RIS_SHADE"]),
     variant("ris.shade_exact.comp", "ris.comp", &["RIS_SHADE", "EXACT_VISIBILITY"]),
     variant("ris.shade_hybrid.comp", "ris.comp", &["RIS_SHADE", "HYBRID_VISIBILITY"]),

@@ -1,7 +1,7 @@
 //! `--method ris` (resampled importance sampling over the VPLs, `passes/ris.rs`) against independent
 //! judges: unbiased with respect to `all` (the same test as every method, `vpl::converges_to`) without
 //! reuse, with spatial reuse and with temporal reuse over progressive frames, for the voxel and the exact
-//! visibility; its mean within 1 % of the exact one-bounce reference with exact visibility; with one
+//! visibility, and with a CDF source and the voxel-visibility-aware target; its mean within 1 % of the exact one-bounce reference with exact visibility; with one
 //! candidate and no reuse it is its source method; the candidates' split over dispatches (lavapipe's
 //! loop limit) does not change the image; bad flag combinations are a `SettingsError`.
 
@@ -56,6 +56,31 @@ fn ris_is_unbiased_without_reuse_and_with_spatial_reuse() {
             converges_to(&name, &all, |seed| indirect_with(&mut r, ris(visibility, seed, reuse, 0.0), w, h, res, vox));
         }
     }
+}
+
+/// A CDF source (gbg) and the voxel-visibility-aware target (`--target-floor 0.3`, glsl/ris.comp's
+/// target_at), with exact visibility in the shade and two spatial passes (whose weights evaluate the same
+/// target at each neighbour): still unbiased against `all`. The target also changes the image, so the
+/// march is really in it.
+#[test]
+fn ris_with_a_cdf_source_and_the_voxel_target_is_unbiased() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let all = all(&mut r, Visibility::Exact);
+    let settings = |seed, floor| {
+        let mut s = ris(Visibility::Exact, seed, 2, 0.0);
+        s.ris.source = RisSource::Gbg;
+        s.ris.target_floor = floor;
+        s
+    };
+    converges_to("ris (gbg source, target floor 0.3, exact, 2 spatial passes)", &all, |seed| {
+        indirect_with(&mut r, settings(seed, 0.3), w, h, res, vox)
+    });
+    let plain = indirect_with(&mut r, settings(5, 1.0), w, h, res, vox);
+    let marched = indirect_with(&mut r, settings(5, 0.3), w, h, res, vox);
+    assert_ne!(plain, marched, "the voxel target changed nothing");
 }
 
 /// Progressive frames of one view (seeds s, s + 1, …, one CDF) with temporal and spatial reuse: each run
@@ -194,6 +219,7 @@ fn ris_rejects_bad_flag_combinations() {
         ("--spatial-neighbors", with(&|s| s.ris.spatial_neighbors = 0)),
         ("--spatial-radius", with(&|s| s.ris.spatial_radius = f32::NAN)),
         ("--temporal-cap", with(&|s| s.ris.temporal_cap = -1.0)),
+        ("--target-floor", with(&|s| s.ris.target_floor = 0.0)),
     ];
     for (names, s) in cases {
         let e = r.render(&s).err().unwrap_or_else(|| panic!("{names}: accepted"));

@@ -71,9 +71,9 @@ pub fn build_frame<'a>(
     chunk: Range<u32>,
 ) -> FrameOut {
     let (f, k) = (i.f, &i.keys);
-    // The voxel grid only where something marches it: exact and hybrid rays need none (ris's shaders
-    // always bind it: their target may march it, `--target-floor`).
-    let marched = !s.visibility.traces_gathering() || s.method == Method::Ris;
+    // The voxel grid only where something marches it: exact and hybrid rays need none; ris's target
+    // marches it under `--target-floor` < 1.
+    let marched = !s.visibility.traces_gathering() || (s.method == Method::Ris && s.ris.target_floor < 1.0);
     let voxels = marched.then(|| g.cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid)));
     let vpls = g.cached("vpls", &k.vpls, |g| r.dprsm.add(g, f));
     let shadow = g.cached("shadow", &k.shadow, |g| r.dprsm.add_depth(g, f));

@@ -27,21 +27,68 @@ use crate::shader_types::GatherPush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{Binding, Buffer, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
+use bounce_device::{vk, Binding, Buffer, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
 
 pub struct Gather {
     name: &'static str,
-    pipeline: ComputePipeline,
-    /// The `--visibility exact` variant (shadow rays against the BVH).
-    exact: ComputePipeline,
+    /// The voxel, exact and hybrid variants.
+    vis: VisibilityVariants,
     /// The `--visibility psm` variant (the frame's shared VPL set and its shadow maps).
     psm: ComputePipeline,
     /// The `--visibility psm-exact` variant (the shared set with exact rays; binds the BVH).
     psm_exact: ComputePipeline,
-    /// The `--visibility hybrid` variant (exact rays through the grid's per-cell triangle lists; binds the
-    /// BVH and the lists).
-    hybrid: ComputePipeline,
     sampler: Sampler,
+}
+
+/// One shader in its three per-pixel visibility variants (`voxel.glsl`'s march; `EXACT_VISIBILITY`, which
+/// also binds the BVH; `HYBRID_VISIBILITY`, which also binds the BVH and the triangle lists), and the
+/// choice among them for a frame: the gather and ris's shade share it.
+pub struct VisibilityVariants {
+    voxel: ComputePipeline,
+    exact: ComputePipeline,
+    hybrid: ComputePipeline,
+}
+
+impl VisibilityVariants {
+    /// `spirv`: the voxel, exact and hybrid variants; `bindings`: what all three bind.
+    pub fn new(
+        gpu: &Gpu,
+        name: &'static str,
+        spirv: [&[u8]; 3],
+        mut bindings: Vec<Binding>,
+        push: u32,
+    ) -> Result<Self> {
+        let [voxel, exact, hybrid] = spirv;
+        let voxel = ComputePipeline::new(gpu, name, &crate::spirv(voxel), &bindings, push, &[])?;
+        bindings.extend(crate::bvh::GpuBvh::bindings());
+        let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
+        bindings.extend(crate::bvh::cells::GpuCells::bindings());
+        let hybrid = ComputePipeline::new(gpu, name, &crate::spirv(hybrid), &bindings, push, &[])?;
+        Ok(VisibilityVariants { voxel, exact, hybrid })
+    }
+
+    /// The frame's variant, with `w` plus what it binds (the BVH, the lists).
+    pub fn pick(&self, f: &FrameInputs, w: DescriptorWrites) -> (&ComputePipeline, DescriptorWrites) {
+        match (f.bvh, f.cells) {
+            (Some(bvh), Some(cells)) => (&self.hybrid, cells.writes(bvh.writes(w))),
+            (Some(bvh), None) => (&self.exact, bvh.writes(w)),
+            _ => (&self.voxel, w),
+        }
+    }
+}
+
+/// What every VPL-sampling pass binds: scene, G-buffer, VPL images, voxels, importance and CDF
+/// (written by [`GatherInputs::sampling_writes`]).
+pub fn sampling_bindings() -> Vec<Binding> {
+    let mut bindings = scene_bindings();
+    bindings.extend(super::gbuffer_bindings());
+    bindings.extend(super::vpl_bindings());
+    bindings.extend([
+        Binding::storage_buffer(B_VOXELS),
+        Binding::storage_buffer(B_IMPORTANCE),
+        Binding::storage_buffer(B_CDF),
+    ]);
+    bindings
 }
 
 /// Everything the gather reads.
@@ -106,12 +153,20 @@ impl GatherInputs {
         self.voxels.into_iter().chain([self.importance, self.cdf]).collect()
     }
 
-    /// `w` with the voxel grid bound, when the frame has one.
-    pub fn voxel_writes(&self, ctx: &PassContext, w: DescriptorWrites) -> DescriptorWrites {
-        match &self.voxels {
+    /// The writes of [`sampling_bindings`] (the voxel grid when the frame has one).
+    pub fn sampling_writes(&self, f: &FrameInputs, ctx: &PassContext, s: vk::Sampler) -> DescriptorWrites {
+        let w = super::gbuffer_writes(
+            f.scene.writes(f.uniforms),
+            ctx,
+            [&self.g_position, &self.g_normal, &self.g_albedo],
+            s,
+        );
+        let w = super::vpl_writes(w, ctx, [&self.vpl_position, &self.vpl_normal, &self.vpl_flux], s);
+        let w = match &self.voxels {
             Some(v) => w.storage_buffer(B_VOXELS, ctx.buffer(v)),
             None => w,
-        }
+        };
+        w.storage_buffer(B_IMPORTANCE, ctx.buffer(&self.importance)).storage_buffer(B_CDF, ctx.buffer(&self.cdf))
     }
 }
 
@@ -126,16 +181,8 @@ impl Gather {
     }
 
     fn bindings() -> (Vec<Binding>, u32) {
-        let mut bindings = scene_bindings();
-        bindings.extend(super::gbuffer_bindings());
-        bindings.extend(super::vpl_bindings());
-        bindings.extend([
-            Binding::storage_buffer(B_VOXELS),
-            Binding::storage_buffer(B_IMPORTANCE),
-            Binding::storage_buffer(B_CDF),
-            Binding::sampled_image(B_GATHER_DIRECT),
-            Binding::storage_image(B_GATHER_OUT),
-        ]);
+        let mut bindings = sampling_bindings();
+        bindings.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
         (bindings, std::mem::size_of::<GatherPush>() as u32)
     }
 
@@ -145,7 +192,7 @@ impl Gather {
     /// the per-cell triangle lists).
     pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 5]) -> Result<Self> {
         let [spirv, exact, psm, psm_exact, hybrid] = spirv;
-        let (mut bindings, push) = Self::bindings();
+        let (bindings, push) = Self::bindings();
         let mut b = bindings.clone();
         b.extend(crate::passes::psm::gather_bindings(true));
         let psm = ComputePipeline::new(gpu, name, &crate::spirv(psm), &b, push, &[])?;
@@ -153,12 +200,8 @@ impl Gather {
         b.extend(crate::passes::psm::gather_bindings(false));
         b.extend(crate::bvh::GpuBvh::bindings());
         let psm_exact = ComputePipeline::new(gpu, name, &crate::spirv(psm_exact), &b, push, &[])?;
-        let pipeline = ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &[])?;
-        bindings.extend(crate::bvh::GpuBvh::bindings());
-        let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
-        bindings.extend(crate::bvh::cells::GpuCells::bindings());
-        let hybrid = ComputePipeline::new(gpu, name, &crate::spirv(hybrid), &bindings, push, &[])?;
-        Ok(Gather { name, pipeline, exact, psm, psm_exact, hybrid, sampler: Sampler::nearest(gpu)? })
+        let vis = VisibilityVariants::new(gpu, name, [spirv, exact, hybrid], bindings, push)?;
+        Ok(Gather { name, vis, psm, psm_exact, sampler: Sampler::nearest(gpu)? })
     }
 
     /// The shader variant of the frame's visibility, with what it binds besides the common set.
@@ -181,11 +224,7 @@ impl Gather {
                     self.sampler.raw,
                 ),
             ),
-            (None, Some(bvh)) => match f.cells {
-                Some(cells) => (&self.hybrid, cells.writes(bvh.writes(writes))),
-                None => (&self.exact, bvh.writes(writes)),
-            },
-            (None, None) => (&self.pipeline, writes),
+            (None, _) => self.vis.pick(&f, writes),
         }
     }
 
@@ -227,13 +266,8 @@ impl Gather {
                 (Some(d), 1) => ctx.image(d),
                 _ => ctx.image(&i.g_albedo),
             };
-            let writes =
-                super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&i.g_position, &i.g_normal, &i.g_albedo], s);
-            let writes = super::vpl_writes(writes, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s);
             let writes = i
-                .voxel_writes(ctx, writes)
-                .storage_buffer(B_IMPORTANCE, ctx.buffer(&i.importance))
-                .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
+                .sampling_writes(&f, ctx, s)
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
             let (pipeline, writes) = self.variant(ctx, f, &i, writes);

@@ -39,10 +39,9 @@
 //! history buffer (this frame's and last frame's version), the spatial passes ping-ponging with a
 //! transient one.
 
-use super::gather::GatherInputs;
+use super::gather::{GatherInputs, VisibilityVariants};
 use super::FrameInputs;
 use crate::bindings::*;
-use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle, PassBuilder, PassContext};
 use crate::shader_types::{GatherPush, Reservoir, RisPush, RisPushBlock};
 use crate::shaders;
@@ -51,13 +50,12 @@ use bounce_device::sync::Access;
 use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
 
 pub struct Ris {
-    initial: ComputePipeline,
-    spatial: ComputePipeline,
-    shade: ComputePipeline,
-    /// The shade with `--visibility exact` (binds the BVH).
-    shade_exact: ComputePipeline,
-    /// The shade with `--visibility hybrid` (binds the BVH and the triangle lists).
-    shade_hybrid: ComputePipeline,
+    /// The initial and spatial stages with the unshadowed target ([0]) and the voxel-visibility one ([1],
+    /// `--target-floor` < 1: only these read the voxel grid).
+    initial: [ComputePipeline; 2],
+    spatial: [ComputePipeline; 2],
+    /// The shade in the gather's visibility variants (voxel, exact, hybrid).
+    shade: VisibilityVariants,
     sampler: Sampler,
 }
 
@@ -88,36 +86,40 @@ pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, ta
 impl Ris {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         use shaders::*;
-        let base = || {
-            let mut b = scene_bindings();
-            b.extend(super::gbuffer_bindings());
-            b.extend(super::vpl_bindings());
-            b.extend([
-                Binding::storage_buffer(B_VOXELS),
-                Binding::storage_buffer(B_IMPORTANCE),
-                Binding::storage_buffer(B_CDF),
-            ]);
-            b
-        };
+        let base = super::gather::sampling_bindings;
         let push = std::mem::size_of::<RisPushBlock>() as u32;
-        let mut b = base();
-        b.extend([Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_HISTORY)]);
-        let initial = ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_COMP), &b, push, &[])?;
-        let mut b = base();
-        b.extend([Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)]);
-        let spatial = ComputePipeline::new(gpu, "ris_spatial", &crate::spirv(RIS_SPATIAL_COMP), &b, push, &[])?;
+        let stage = |name, spirv: [&[u8]; 2], extra: [Binding; 2]| -> Result<[ComputePipeline; 2]> {
+            let mut b = base();
+            b.extend(extra);
+            Ok([
+                ComputePipeline::new(gpu, name, &crate::spirv(spirv[0]), &b, push, &[])?,
+                ComputePipeline::new(gpu, name, &crate::spirv(spirv[1]), &b, push, &[])?,
+            ])
+        };
+        let initial = stage(
+            "ris_initial",
+            [RIS_INITIAL_COMP, RIS_INITIAL_VOXEL_TARGET_COMP],
+            [Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_HISTORY)],
+        )?;
+        let spatial = stage(
+            "ris_spatial",
+            [RIS_SPATIAL_COMP, RIS_SPATIAL_VOXEL_TARGET_COMP],
+            [Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)],
+        )?;
         let mut b = base();
         b.extend([
             Binding::storage_buffer(B_RIS_IN),
             Binding::sampled_image(B_GATHER_DIRECT),
             Binding::storage_image(B_GATHER_OUT),
         ]);
-        let shade = ComputePipeline::new(gpu, "ris_shade", &crate::spirv(RIS_SHADE_COMP), &b, push, &[])?;
-        b.extend(crate::bvh::GpuBvh::bindings());
-        let shade_exact = ComputePipeline::new(gpu, "ris_shade", &crate::spirv(RIS_SHADE_EXACT_COMP), &b, push, &[])?;
-        b.extend(crate::bvh::cells::GpuCells::bindings());
-        let shade_hybrid = ComputePipeline::new(gpu, "ris_shade", &crate::spirv(RIS_SHADE_HYBRID_COMP), &b, push, &[])?;
-        Ok(Ris { initial, spatial, shade, shade_exact, shade_hybrid, sampler: Sampler::nearest(gpu)? })
+        let shade = VisibilityVariants::new(
+            gpu,
+            "ris_shade",
+            [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP, RIS_SHADE_HYBRID_COMP],
+            b,
+            push,
+        )?;
+        Ok(Ris { initial, spatial, shade, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Bytes of one layer of reservoirs for a `w` × `h` image.
@@ -164,12 +166,12 @@ impl Ris {
 
     /// The descriptor writes every stage shares: scene, G-buffer, VPLs, voxels, importance, CDF.
     fn base_writes(&self, f: FrameInputs, ctx: &PassContext, i: &GatherInputs) -> DescriptorWrites {
-        let s = self.sampler.raw;
-        let w = super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&i.g_position, &i.g_normal, &i.g_albedo], s);
-        let w = super::vpl_writes(w, ctx, [&i.vpl_position, &i.vpl_normal, &i.vpl_flux], s);
-        i.voxel_writes(ctx, w)
-            .storage_buffer(B_IMPORTANCE, ctx.buffer(&i.importance))
-            .storage_buffer(B_CDF, ctx.buffer(&i.cdf))
+        i.sampling_writes(&f, ctx, self.sampler.raw)
+    }
+
+    /// Which variant of the initial and spatial stages: 1 when the target marches the voxel grid.
+    fn voxel_target(push: &RisPush) -> usize {
+        (push.target_floor < 1.0) as usize
     }
 
     /// Declare the reads every stage shares.
@@ -220,7 +222,13 @@ impl Ris {
                     ris: RisPush { history: previous.is_some() as u32, ..r.push },
                 };
                 let size = [f.width, f.height, r.push.reservoirs];
-                self.initial.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
+                self.initial[Self::voxel_target(&r.push)].dispatch(
+                    ctx.cmd,
+                    &writes,
+                    bytemuck::bytes_of(&block),
+                    size,
+                    [WG_2D, WG_2D, 1],
+                );
                 first = last;
             }
         });
@@ -246,7 +254,13 @@ impl Ris {
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o));
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
-            self.spatial.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
+            self.spatial[Self::voxel_target(&ris)].dispatch(
+                ctx.cmd,
+                &writes,
+                bytemuck::bytes_of(&block),
+                size,
+                [WG_2D, WG_2D, 1],
+            );
         });
     }
 
@@ -276,14 +290,8 @@ impl Ris {
                 .storage_buffer(B_RIS_IN, ctx.buffer(&reservoirs))
                 .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            // The gather's visibility variants, bound as the gather binds them.
-            let (pipeline, writes) = match f.bvh {
-                Some(bvh) => match f.cells {
-                    Some(cells) => (&self.shade_hybrid, cells.writes(bvh.writes(writes))),
-                    None => (&self.shade_exact, bvh.writes(writes)),
-                },
-                None => (&self.shade, writes),
-            };
+            // The gather's visibility variants, chosen and bound as the gather's.
+            let (pipeline, writes) = self.shade.pick(&f, writes);
             let chunk = f.vpls_per_dispatch.max(1);
             let mut first = 0;
             while first < ris.reservoirs {
