@@ -204,7 +204,6 @@ pub struct GpuCells {
     pub spec: VoxelGridSpec,
     pub offsets: Buffer,
     pub tris: Buffer,
-    pub stats: CellStats,
     /// The list grid: cells per axis, voxel cells per list cell (FrameUniforms::cells).
     pub grid: [u32; 4],
 }
@@ -228,7 +227,6 @@ impl GpuCells {
             spec,
             offsets: up("cell offsets", &lists.offsets)?,
             tris: up("cell triangles", &lists.tris)?,
-            stats: lists.stats(),
             grid: [lists.dims.x, lists.dims.y, lists.dims.z, lists.factor],
         })
     }
