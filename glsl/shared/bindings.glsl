@@ -97,6 +97,12 @@ const uint CDF_HEADER = 4u;
 // Node and triangle buffers, and the traversal's bounds (loop iterations per trace, stack depth).
 #define B_BVH_NODES 26
 #define B_BVH_TRIS 27
+// The same tree threaded for stackless any-hit traversal (bvh_any_hit): one record per node and per triangle.
+#define B_BVH_THREADED 46
+// Set in a threaded record's link for a triangle record (a box record's link is its subtree's end).
+#define BVH_THREAD_TRI 0x80000000u
+// Steps of the threaded walk per loop iteration (written out in bvh_any_hit; divides BVH_MAX_STEPS).
+#define BVH_THREAD_UNROLL 8
 #define BVH_MAX_STEPS 16384
 #define BVH_STACK_SIZE 64
 // bvh_tri of "no hit".

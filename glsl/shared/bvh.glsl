@@ -2,14 +2,16 @@
 // crates/graph/src/bvh.rs builds the buffers (from the CPU reference's SAH tree, crates/graph/src/cpu_ref.rs)
 // and documents the layout; tests/tests/bvh.rs checks every function here against that CPU reference.
 //
-// Buffers (std430, read-only, mirrored by GpuBvhNode / GpuBvhTri in bvh.rs, 32 and 48 bytes):
-//  * bvh_nodes[i] = { lo, first, hi, count }: the box [lo, hi] (f32, exact bounds of the f32 vertices). A leaf
-//    (count > 0) holds the triangles bvh_tris[first .. first + count]; an interior node (count == 0) has the
+// Buffers (read-only uvec4 texel buffers holding the std430 bytes of GpuBvhNode / GpuBvhTri / GpuThreadRec in
+// bvh/gpu.rs, 32, 48 and 48 bytes: two, three and three texels; read through bvh_node / bvh_tri / the walk):
+//  * node i = { lo, first, hi, count }: the box [lo, hi] (f32, exact bounds of the f32 vertices). A leaf
+//    (count > 0) holds the triangles first .. first + count; an interior node (count == 0) has the
 //    children first and first + 1 (adjacent, so one visit reads both boxes). Node 0 is the root. The tree is at
 //    most BVH_STACK_SIZE levels deep below the root (bvh.rs guarantees it), so the stack never overflows.
-//  * bvh_tris[j] = { v0, tri, v1, -, v2, - }: the three vertex positions of the scene triangle `tri` (vertices
+//  * triangle j = { v0, tri, v1, -, v2, - }: the three vertex positions of the scene triangle `tri` (vertices
 //    3·tri .. 3·tri+3 of the scene), stored again in leaf order so a leaf is one contiguous run. Zero-area
 //    triangles are left out (they are never hit, as in the CPU reference).
+//  * the threaded records: the same tree for the stackless any-hit walk (bvh_any_hit, below).
 //
 // Functions (d need not be unit; t is in units of |d|, the hit is at o + t·d):
 //  * float bvh_closest(o, d, tmax, out tri, out bary): the closest hit with t ∈ (0, tmax], or −1. `tri` is the
@@ -22,8 +24,11 @@
 //    of the plane) while any occluder farther than 0.01 % of the segment length from both ends counts.
 //  * bool bvh_occluded_lifted(a, b): the same with a window of BVH_LIFTED_EPS = 1e-6 at both ends, for ends
 //    already lifted off their surfaces (the exact gather's shadow rays; see the function).
-//  * float bvh_trace(o, d, tmin, tmax, any_hit, out tri, out bary): both of the above. Closest mode accepts
-//    t ∈ (tmin, tmax]; any-hit mode t ∈ (tmin, tmax) and stops at the first such hit.
+//    Both are bvh_any_hit(o, d, tmin, tmax): the stackless walk over the threaded records, with its own
+//    iteration bound (see the function).
+//  * float bvh_trace(o, d, tmin, tmax, any_hit, out tri, out bary): the stack traversal behind bvh_closest.
+//    Closest mode accepts t ∈ (tmin, tmax]; any-hit mode t ∈ (tmin, tmax) and stops at the first such hit
+//    (the same answer as bvh_any_hit, which the tests check).
 // Non-finite input, a direction with no component of magnitude ≥ 1e-30, or tmax ≤ tmin gives "no hit" at once.
 //
 // Triangle test: watertight ray–triangle intersection (Woop, Benthin and Wald 2013) in f32. The ray is sheared
@@ -37,7 +42,7 @@
 // a ray lying exactly in the plane of a flat box then sees it only at its origin, which loses nothing: such a
 // box holds only triangles in that plane, which the ray could meet edge-on at most.
 //
-// Traversal and its iteration bound. One loop; each iteration is exactly one of: test one triangle of the
+// Traversal and its iteration bound (bvh_trace; bvh_any_hit's walk has its own, see there). One loop; each iteration is exactly one of: test one triangle of the
 // current leaf; visit one node (read its two children, test both boxes, descend into the nearer one and push the
 // other with its entry distance); pop a node whose entry distance is beyond the closest hit so far (culled); or
 // the final iteration that finds the stack empty. A node is visited or popped at most once and a triangle tested
@@ -49,7 +54,8 @@
 // see bvh.rs), it gives up and answers "no hit" (bvh_closest −1, bvh_occluded false) with bvh_exhausted = true;
 // a stack overflow, impossible with buffers from bvh.rs, gives the same answer.
 //
-// After every call, bvh_steps holds the loop iterations it used and bvh_exhausted whether it gave up.
+// After every call, bvh_steps holds the steps it used (bvh_trace: loop iterations; bvh_any_hit: records read)
+// and bvh_exhausted whether it gave up.
 #ifndef BOUNCE_BVH_GLSL
 #define BOUNCE_BVH_GLSL
 
@@ -80,8 +86,24 @@ struct BvhTri {
     uint pad2;
 };
 
-layout(std430, set = 0, binding = B_BVH_NODES) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(std430, set = 0, binding = B_BVH_TRIS) readonly buffer BvhTris { BvhTri bvh_tris[]; };
+// Both buffers are read as uvec4 texel buffers (a node is two texels, a triangle three, their std430 bytes):
+// llvmpipe fetches a texel for all lanes of a vector at once, where a storage-buffer read with a different
+// index per lane goes lane by lane (measured: BENCHMARKS.md, "Exact shadow rays").
+layout(set = 0, binding = B_BVH_NODES) uniform usamplerBuffer bvh_nodes;
+layout(set = 0, binding = B_BVH_TRIS) uniform usamplerBuffer bvh_tris;
+
+BvhNode bvh_node(uint i) {
+    uvec4 a = texelFetch(bvh_nodes, int(2u * i));
+    uvec4 b = texelFetch(bvh_nodes, int(2u * i + 1u));
+    return BvhNode(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), b.w);
+}
+
+BvhTri bvh_tri(uint j) {
+    uvec4 a = texelFetch(bvh_tris, int(3u * j));
+    vec3 b = uintBitsToFloat(texelFetch(bvh_tris, int(3u * j + 1u)).xyz);
+    vec3 c = uintBitsToFloat(texelFetch(bvh_tris, int(3u * j + 2u)).xyz);
+    return BvhTri(uintBitsToFloat(a.xyz), a.w, b, 0u, c, 0u);
+}
 
 // Loop iterations of the last bvh_* call, and whether it gave up (see the header).
 uint bvh_steps = 0u;
@@ -146,7 +168,8 @@ float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint t
 
     // The node to visit next (when `have`), and the triangles of the current leaf still to test.
     float troot;
-    bool have = bvh_hit_box(r, bvh_nodes[0].lo, bvh_nodes[0].hi, tmin, tmax, troot);
+    BvhNode root = bvh_node(0u);
+    bool have = bvh_hit_box(r, root.lo, root.hi, tmin, tmax, troot);
     uint node = 0u;
     uint next_tri = 0u;
     uint end_tri = 0u;
@@ -154,7 +177,7 @@ float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint t
     uint steps = 0u;
     for (; steps < uint(BVH_MAX_STEPS); steps++) {
         if (next_tri < end_tri) {
-            BvhTri tr = bvh_tris[next_tri];
+            BvhTri tr = bvh_tri(next_tri);
             next_tri++;
             float t;
             vec2 b;
@@ -191,15 +214,15 @@ float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint t
             node = stack_node[sp];
         }
         have = false;
-        BvhNode n = bvh_nodes[node];
+        BvhNode n = bvh_node(node);
         if (n.count > 0u) {
             next_tri = n.first;
             end_tri = n.first + n.count;
             continue;
         }
         uint l = n.first;
-        BvhNode cl = bvh_nodes[l];
-        BvhNode cr = bvh_nodes[l + 1u];
+        BvhNode cl = bvh_node(l);
+        BvhNode cr = bvh_node(l + 1u);
         float tl, trr;
         bool hl = bvh_hit_box(r, cl.lo, cl.hi, tmin, best_t, tl);
         bool hr = bvh_hit_box(r, cr.lo, cr.hi, tmin, best_t, trr);
@@ -235,14 +258,85 @@ float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint t
     return best_t;
 }
 
+
+// Any-hit traversal for occlusion, stackless over the threaded records (FlatBvh::threaded in bvh/gpu.rs):
+// the tree's nodes and triangles in depth-first preorder, a box's link skipping its subtree. Each step reads
+// one record and tests it, a box or a triangle; a missed box jumps past its subtree. Same answer as
+// bvh_trace's any-hit mode: whether a triangle of the tree crosses the ray with t ∈ (tmin, tmax) (only which
+// triangle stops it may differ). The walk only moves forward, so it reads at most records = nodes + triangles
+// of them; at BVH_MAX_STEPS it gives up (not occluded, bvh_exhausted).
+//
+// Why this shape (measured in BENCHMARKS.md, "Exact shadow rays"): llvmpipe runs every branch of a loop body
+// for all lanes of a SIMD vector under masks, and reads a storage buffer lane by lane when the index differs
+// per lane. bvh_trace's body (a triangle, a node and its two children from storage buffers, a stack push)
+// paid all of that every iteration; a step here is three texel fetches (one gather per vector each) and
+// one test. And BVH_THREAD_UNROLL steps share one loop iteration, so llvmpipe's loop limit counts a trace
+// as at most ⌈min(BVH_MAX_STEPS, records + 1) / BVH_THREAD_UNROLL⌉ iterations
+// (GpuBvh::max_iterations_occluded): more shadow rays fit in one dispatch.
+//
+// Record k is texels 3k (a.xyz, link), 3k + 1 (b.xyz, -) and 3k + 2 (c.xyz, -) of a uvec4 texel buffer: a box
+// (a = lo, b = hi, link = the first record after its subtree) or a triangle (its vertices, link =
+// BVH_THREAD_TRI; its successor is the next record).
+layout(set = 0, binding = B_BVH_THREADED) uniform usamplerBuffer bvh_threaded;
+
+// One step of the walk: read and test record i, then move on (nothing once `done`).
+void bvh_thread_step(BvhRay r, float tmin, float tmax, int end, inout int i, inout uint steps, inout bool done,
+                     inout bool hit) {
+    if (done) return;
+    steps++;
+    uvec4 a = texelFetch(bvh_threaded, 3 * i);
+    vec3 b = uintBitsToFloat(texelFetch(bvh_threaded, 3 * i + 1).xyz);
+    if (a.w == BVH_THREAD_TRI) {
+        vec3 c = uintBitsToFloat(texelFetch(bvh_threaded, 3 * i + 2).xyz);
+        float t;
+        vec2 bary;
+        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), b, c, t, bary) && t > tmin && t < tmax) {
+            hit = true;
+            done = true;
+        }
+        i++;
+    } else {
+        float tnear;
+        i = bvh_hit_box(r, uintBitsToFloat(a.xyz), b, tmin, tmax, tnear) ? i + 1 : int(a.w);
+    }
+    // Past the last record: nothing left to test (the walk never starts there: the tree has a record).
+    if (i >= end) done = true;
+}
+
+bool bvh_any_hit(vec3 o, vec3 d, float tmin, float tmax) {
+    bvh_steps = 0u;
+    bvh_exhausted = false;
+    float dmax = max(abs(d.x), max(abs(d.y), abs(d.z)));
+    if (!bvh_finite(o) || !bvh_finite(d) || !(dmax >= BVH_MIN_DIR) || isnan(tmin) || isnan(tmax) || !(tmax > tmin))
+        return false;
+    BvhRay r = bvh_make_ray(o, d);
+    int end = textureSize(bvh_threaded) / 3;
+    int i = 0;
+    bool hit = false;
+    bool done = false;
+    uint steps = 0u;
+    // BVH_THREAD_UNROLL (8) steps per iteration, written out: a loop would count in llvmpipe's limit.
+    for (uint k = 0u; k < uint(BVH_MAX_STEPS / BVH_THREAD_UNROLL) && !done; k++) {
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    }
+    bvh_steps = steps;
+    bvh_exhausted = !done;
+    return hit;
+}
+
 float bvh_closest(vec3 o, vec3 d, float tmax, out uint tri, out vec2 bary) {
     return bvh_trace(o, d, 0.0, tmax, false, tri, bary);
 }
 
 bool bvh_occluded(vec3 a, vec3 b) {
-    uint tri;
-    vec2 bary;
-    return bvh_trace(a, b - a, BVH_SHADOW_EPS, 1.0 - BVH_SHADOW_EPS, true, tri, bary) >= 0.0;
+    return bvh_any_hit(a, b - a, BVH_SHADOW_EPS, 1.0 - BVH_SHADOW_EPS);
 }
 
 // Occlusion between two points already lifted off their surfaces (surface_lift, ~32 ulps of their
@@ -252,9 +346,7 @@ bool bvh_occluded(vec3 a, vec3 b) {
 // by 2e-5, saw out through the wall next to it from 0.9 away.
 const float BVH_LIFTED_EPS = 1e-6;
 bool bvh_occluded_lifted(vec3 a, vec3 b) {
-    uint tri;
-    vec2 bary;
-    return bvh_trace(a, b - a, BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS, true, tri, bary) >= 0.0;
+    return bvh_any_hit(a, b - a, BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
 }
 
 #endif

@@ -77,7 +77,7 @@ float hybrid_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uin
                 }
                 tests += jend - j;
                 for (; j < jend; j++) {
-                    BvhTri tr = bvh_tris[cell_tris[j]];
+                    BvhTri tr = bvh_tri(cell_tris[j]);
                     float t;
                     vec2 b;
                     if (!bvh_hit_triangle(r, tr, t, b) || !(t > tmin)) continue;

@@ -58,6 +58,7 @@ impl Gpu {
 enum Info {
     Buffer(vk::DescriptorBufferInfo),
     Image(vk::DescriptorImageInfo),
+    TexelBuffer(vk::BufferView),
 }
 
 /// Descriptor writes for one push-descriptor set, by binding number (the constants from
@@ -102,6 +103,12 @@ impl DescriptorWrites {
         self
     }
 
+    /// A buffer read through its view with `texelFetch` (a `samplerBuffer`).
+    pub fn uniform_texel_buffer(mut self, binding: u32, b: &crate::TexelBuffer) -> Self {
+        self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(b.view)));
+        self
+    }
+
     /// Push the set as set 0 of `layout`.
     pub fn push(
         &self,
@@ -115,7 +122,7 @@ impl DescriptorWrites {
             .iter()
             .map(|(_, _, i)| match i {
                 Info::Buffer(b) => [*b],
-                Info::Image(_) => [vk::DescriptorBufferInfo::default()],
+                _ => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
         let images: Vec<[vk::DescriptorImageInfo; 1]> = self
@@ -123,7 +130,15 @@ impl DescriptorWrites {
             .iter()
             .map(|(_, _, i)| match i {
                 Info::Image(b) => [*b],
-                Info::Buffer(_) => [vk::DescriptorImageInfo::default()],
+                _ => [vk::DescriptorImageInfo::default()],
+            })
+            .collect();
+        let views: Vec<[vk::BufferView; 1]> = self
+            .entries
+            .iter()
+            .map(|(_, _, i)| match i {
+                Info::TexelBuffer(v) => [*v],
+                _ => [vk::BufferView::null()],
             })
             .collect();
         let writes: Vec<vk::WriteDescriptorSet> = self
@@ -135,6 +150,7 @@ impl DescriptorWrites {
                 match info {
                     Info::Buffer(_) => w.buffer_info(&buffers[k]),
                     Info::Image(_) => w.image_info(&images[k]),
+                    Info::TexelBuffer(_) => w.texel_buffer_view(&views[k]),
                 }
             })
             .collect();

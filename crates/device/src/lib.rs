@@ -36,7 +36,7 @@ pub use command::DescriptorWrites;
 pub use error::{Error, Result};
 pub use gpu::{DeviceInfo, Gpu, GpuOptions, ValidationLog};
 pub use gpu_allocator::MemoryLocation;
-pub use memory::{is_depth_format, texel_size, Buffer, BufferDesc, Image, ImageDesc, Sampler};
+pub use memory::{is_depth_format, texel_size, Buffer, BufferDesc, Image, ImageDesc, Sampler, TexelBuffer};
 pub use pipeline::{Binding, ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc};
 pub use swapchain::{Presented, Swapchain};
 pub use timestamps::TimestampPool;

@@ -147,6 +147,48 @@ impl Drop for Buffer {
     }
 }
 
+/// A read-only buffer of 16-byte texels (`R32G32B32A32_UINT`) with its view, for `usamplerBuffer`
+/// `texelFetch`: on llvmpipe a texel fetch loads a vector's lanes as one gather, where a storage-buffer
+/// read with a different index per lane loads them one by one.
+pub struct TexelBuffer {
+    pub buffer: Buffer,
+    pub view: vk::BufferView,
+    /// Texels in the buffer.
+    pub texels: u64,
+}
+
+impl TexelBuffer {
+    /// Uploads `data` (whole 16-byte texels, at most `maxTexelBufferElements` of them) and makes its view.
+    pub fn with_data(gpu: &Gpu, name: &str, data: &[u8]) -> Result<TexelBuffer> {
+        assert!(data.len().is_multiple_of(16) && !data.is_empty(), "{name}: whole 16-byte texels");
+        let texels = data.len() as u64 / 16;
+        let max = gpu.limits().max_texel_buffer_elements as u64;
+        if texels > max {
+            return Err(Error::Limit {
+                what: format!("`{name}` ({texels} texels)"),
+                limit: "maxTexelBufferElements",
+                value: texels,
+                max,
+            });
+        }
+        let buffer = Buffer::with_data(gpu, name, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER, data)?;
+        let info = vk::BufferViewCreateInfo::default()
+            .buffer(buffer.raw)
+            .format(vk::Format::R32G32B32A32_UINT)
+            .offset(0)
+            .range(vk::WHOLE_SIZE);
+        let view = unsafe { gpu.device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+        gpu.set_name(view, name);
+        Ok(TexelBuffer { buffer, view, texels })
+    }
+}
+
+impl Drop for TexelBuffer {
+    fn drop(&mut self) {
+        unsafe { self.buffer.gpu.device.destroy_buffer_view(self.view, None) };
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ImageDesc {
     pub name: String,

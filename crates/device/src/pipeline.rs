@@ -25,6 +25,9 @@ impl Binding {
     pub const fn sampled_image(binding: u32) -> Self {
         Binding { binding, ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER }
     }
+    pub const fn uniform_texel_buffer(binding: u32) -> Self {
+        Binding { binding, ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER }
+    }
 }
 
 struct Layouts {

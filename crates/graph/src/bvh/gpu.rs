@@ -12,7 +12,10 @@
 //! is taken: the boxes are recomputed here in f32 from the f32 vertices (min/max are exact, so a box
 //! holds its triangles exactly).
 //!
-//! **Layout** (std430, two storage buffers, bindings [`B_BVH_NODES`] and [`B_BVH_TRIS`]):
+//! **Layout** (three read-only `uvec4` texel buffers, bindings [`B_BVH_NODES`], [`B_BVH_TRIS`] and
+//! [`B_BVH_THREADED`], holding the std430 bytes below; texel buffers because llvmpipe fetches a texel
+//! for a whole SIMD vector at once, where a storage-buffer read with a per-lane index goes lane by lane:
+//! measured 1.8× on Sibenik's shadow rays, BENCHMARKS.md):
 //! * nodes: [`GpuBvhNode`] `{ vec3 lo; uint first; vec3 hi; uint count; }`, 32 bytes. A leaf
 //!   (`count > 0`) holds `tris[first .. first + count]`; an interior node (`count == 0`) has the
 //!   children `first` and `first + 1`, adjacent so that one visit reads both boxes (the traversal tests
@@ -24,6 +27,9 @@
 //!   buffer is not reused: its 96 bytes per triangle interleave normals and uvs the traversal never
 //!   reads. Zero-area triangles are absent (never hit, as in the CPU reference). A scene without
 //!   triangles becomes one leaf holding one degenerate triangle that nothing hits.
+//! * threaded: [`GpuThreadRec`], 48 bytes, [`FlatBvh::threaded`]: the same tree in depth-first preorder,
+//!   one record per node (its box and the index past its subtree) and per triangle (its positions), for
+//!   the stackless any-hit walk of the shadow rays (`bvh_any_hit`).
 //!
 //! **Depth and stack.** The traversal keeps a stack of [`STACK_SIZE`] = 64 entries, and a tree of
 //! height h (levels below the root) needs at most h. The SAH builder may go deeper on pathological
@@ -32,7 +38,9 @@
 //! ⌈log2(n / 2)⌉) wherever a child would otherwise be unable to fit below the limit: the result never
 //! exceeds 64 levels for any triangle count the buffers can hold. On real scenes nothing is rebuilt.
 //!
-//! **Iteration bound.** One trace runs one loop of at most [`MAX_STEPS`] iterations (one triangle
+//! **Iteration bound.** An occlusion test (`bvh_occluded*`) walks the threaded records forward, at
+//! most min([`MAX_STEPS`], records + 1) steps, [`THREAD_UNROLL`] steps to a loop iteration:
+//! [`GpuBvh::max_iterations_occluded`]. A closest-hit trace runs one loop of at most [`MAX_STEPS`] iterations (one triangle
 //! test, node visit or culled pop each; see `bvh.glsl`), and never more than nodes + triangles + 1:
 //! [`GpuBvh::max_iterations_per_ray`] is the smaller of the two, an honest upper bound. llvmpipe stops
 //! every loop of an invocation after 65535 iterations in total ([`bounce_device::Gpu`]'s
@@ -54,12 +62,17 @@ use super::build::Bvh;
 use crate::scene::Scene;
 use crate::shader_types::Vertex;
 use anyhow::{Context, Result};
-use bounce_device::{vk, Binding, Buffer, DescriptorWrites, Gpu};
+use bounce_device::{Binding, DescriptorWrites, Gpu, TexelBuffer};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::mem::{offset_of, size_of};
 
-pub use crate::bindings::{B_BVH_NODES, B_BVH_TRIS};
+pub use crate::bindings::{B_BVH_NODES, B_BVH_THREADED, B_BVH_TRIS};
+/// The link bit of a threaded triangle record (`BVH_THREAD_TRI`).
+pub const THREAD_TRI: u32 = crate::bindings::BVH_THREAD_TRI;
+/// Steps of the threaded walk per loop iteration (`BVH_THREAD_UNROLL`).
+pub const THREAD_UNROLL: u32 = crate::bindings::BVH_THREAD_UNROLL;
+const _: () = assert!(MAX_STEPS.is_multiple_of(THREAD_UNROLL));
 /// Most loop iterations of one trace (`BVH_MAX_STEPS`); see the module doc.
 pub const MAX_STEPS: u32 = crate::bindings::BVH_MAX_STEPS;
 /// Traversal stack entries, and the most levels below the root a tree may have (`BVH_STACK_SIZE`).
@@ -105,6 +118,24 @@ const _: () = assert!(size_of::<GpuBvhTri>() == 48);
 const _: () = assert!(offset_of!(GpuBvhTri, tri) == 12);
 const _: () = assert!(offset_of!(GpuBvhTri, v1) == 16);
 const _: () = assert!(offset_of!(GpuBvhTri, v2) == 32);
+
+/// A record of the threaded layout ([`FlatBvh::threaded`]): a box (`a` = lo, `b` = hi, `link` = the index
+/// of the first record after its subtree) or a triangle (`a`, `b`, `c` its positions, `link` =
+/// [`THREAD_TRI`]; the next record follows). GLSL: `BvhThreadRec`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuThreadRec {
+    pub a: [f32; 3],
+    pub link: u32,
+    pub b: [f32; 3],
+    pub pad1: u32,
+    pub c: [f32; 3],
+    pub pad2: u32,
+}
+const _: () = assert!(size_of::<GpuThreadRec>() == 48);
+const _: () = assert!(offset_of!(GpuThreadRec, link) == 12);
+const _: () = assert!(offset_of!(GpuThreadRec, b) == 16);
+const _: () = assert!(offset_of!(GpuThreadRec, c) == 32);
 
 impl GpuBvhTri {
     pub fn positions(&self) -> [Vec3; 3] {
@@ -191,10 +222,54 @@ impl FlatBvh {
         FlatBvh { nodes, tris, triangle_count, height, rebuilt_subtrees: f.rebuilt }
     }
 
+    /// The tree threaded for stackless any-hit traversal (`bvh_any_hit`): its nodes and triangles in
+    /// depth-first preorder, one record each. A node is a box record followed by its subtree (a leaf's
+    /// triangles, or its two children's subtrees, the child of larger surface area first: a random ray
+    /// meets it more often, so an occluded ray tends to stop sooner); a box's link skips its subtree.
+    /// The walk only moves forward (to the next record, or past a missed box's subtree), so it visits
+    /// each record at most once: nodes + triangles iterations, the bound of the stack traversal.
+    pub fn threaded(&self) -> Vec<GpuThreadRec> {
+        let mut out: Vec<GpuThreadRec> = Vec::with_capacity(self.nodes.len() + self.tris.len());
+        // (node, index of its box record once placed): patched with the subtree's end when it is done.
+        let mut stack: Vec<(u32, Option<usize>)> = vec![(0, None)];
+        while let Some((i, placed)) = stack.pop() {
+            if let Some(at) = placed {
+                out[at].link = out.len() as u32;
+                continue;
+            }
+            let n = self.nodes[i as usize];
+            let at = out.len();
+            out.push(GpuThreadRec { a: n.lo, b: n.hi, ..Default::default() });
+            stack.push((i, Some(at)));
+            if n.is_leaf() {
+                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
+                    out.push(GpuThreadRec { a: t.v0, link: THREAD_TRI, b: t.v1, pad1: 0, c: t.v2, pad2: 0 });
+                }
+            } else {
+                let area = |k: u32| {
+                    let c = self.nodes[k as usize];
+                    let d = (Vec3::from(c.hi) - Vec3::from(c.lo)).max(Vec3::ZERO);
+                    d.x * d.y + d.y * d.z + d.z * d.x
+                };
+                let (l, r) = (n.first, n.first + 1);
+                let (first, second) = if area(r) > area(l) { (r, l) } else { (l, r) };
+                stack.push((second, None));
+                stack.push((first, None));
+            }
+        }
+        out
+    }
+
     /// An upper bound of the loop iterations of one trace (see the module doc).
     pub fn max_iterations_per_ray(&self) -> u32 {
         let walk = self.nodes.len() as u64 + self.tris.len() as u64 + 1;
         walk.min(MAX_STEPS as u64) as u32
+    }
+
+    /// An upper bound of the loop iterations of one occlusion test (`bvh_occluded*`, the threaded walk):
+    /// its steps, at most min([`MAX_STEPS`], records + 1), [`THREAD_UNROLL`] to an iteration.
+    pub fn max_iterations_occluded(&self) -> u32 {
+        self.max_iterations_per_ray().div_ceil(THREAD_UNROLL)
     }
 }
 
@@ -353,16 +428,19 @@ fn fit_boxes(nodes: &mut [GpuBvhNode], tris: &[GpuBvhTri]) {
 
 /// The BVH on the GPU: uploaded once, read-only afterwards.
 pub struct GpuBvh {
-    /// [`GpuBvhNode`]s, binding [`B_BVH_NODES`].
-    pub nodes: Buffer,
-    /// [`GpuBvhTri`]s in leaf order, binding [`B_BVH_TRIS`].
-    pub tris: Buffer,
+    /// [`GpuBvhNode`]s as two `uvec4` texels each, binding [`B_BVH_NODES`].
+    pub nodes: TexelBuffer,
+    /// [`GpuBvhTri`]s in leaf order as three `uvec4` texels each, binding [`B_BVH_TRIS`].
+    pub tris: TexelBuffer,
+    /// [`GpuThreadRec`]s ([`FlatBvh::threaded`]) as three `uvec4` texels each, binding [`B_BVH_THREADED`].
+    pub threaded: TexelBuffer,
     pub node_count: u32,
     /// Scene triangles that can be hit (zero-area ones excluded).
     pub triangle_count: u32,
     /// Levels below the root (≤ [`STACK_SIZE`]).
     pub height: u32,
     max_iterations: u32,
+    max_iterations_occluded: u32,
 }
 
 impl GpuBvh {
@@ -375,23 +453,18 @@ impl GpuBvh {
     /// Uploads a flattened tree (for a tree the caller already has, or a custom height limit).
     pub fn upload(gpu: &Gpu, flat: &FlatBvh) -> Result<GpuBvh> {
         anyhow::ensure!(flat.height <= STACK_SIZE, "BVH of height {} exceeds the stack ({STACK_SIZE})", flat.height);
-        let max_range = gpu.limits().max_storage_buffer_range as u64;
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let up = |name: &str, bytes: &[u8]| {
-            anyhow::ensure!(
-                bytes.len() as u64 <= max_range,
-                "the {name} buffer ({} bytes) exceeds the device limit maxStorageBufferRange ({max_range} bytes)",
-                bytes.len()
-            );
-            Buffer::with_data(gpu, name, storage, bytes).with_context(|| format!("uploading {name}"))
+            TexelBuffer::with_data(gpu, name, bytes).with_context(|| format!("uploading the {name}"))
         };
         Ok(GpuBvh {
             nodes: up("bvh nodes", bytemuck::cast_slice(&flat.nodes))?,
             tris: up("bvh triangles", bytemuck::cast_slice(&flat.tris))?,
+            threaded: up("bvh threaded records", bytemuck::cast_slice(&flat.threaded()))?,
             node_count: flat.nodes.len() as u32,
             triangle_count: flat.triangle_count,
             height: flat.height,
             max_iterations: flat.max_iterations_per_ray(),
+            max_iterations_occluded: flat.max_iterations_occluded(),
         })
     }
 
@@ -402,14 +475,26 @@ impl GpuBvh {
         self.max_iterations
     }
 
-    /// The two descriptor bindings, for pipeline layouts.
-    pub fn bindings() -> [Binding; 2] {
-        [Binding::storage_buffer(B_BVH_NODES), Binding::storage_buffer(B_BVH_TRIS)]
+    /// An honest upper bound of the loop iterations of one `bvh_occluded` / `bvh_occluded_lifted` /
+    /// `bvh_any_hit` call ([`FlatBvh::max_iterations_occluded`]).
+    pub fn max_iterations_occluded(&self) -> u32 {
+        self.max_iterations_occluded
     }
 
-    /// `w` with the two buffers bound.
+    /// The three descriptor bindings, for pipeline layouts.
+    pub fn bindings() -> [Binding; 3] {
+        [
+            Binding::uniform_texel_buffer(B_BVH_NODES),
+            Binding::uniform_texel_buffer(B_BVH_TRIS),
+            Binding::uniform_texel_buffer(B_BVH_THREADED),
+        ]
+    }
+
+    /// `w` with the three buffers bound.
     pub fn writes(&self, w: DescriptorWrites) -> DescriptorWrites {
-        w.storage_buffer(B_BVH_NODES, &self.nodes).storage_buffer(B_BVH_TRIS, &self.tris)
+        w.uniform_texel_buffer(B_BVH_NODES, &self.nodes)
+            .uniform_texel_buffer(B_BVH_TRIS, &self.tris)
+            .uniform_texel_buffer(B_BVH_THREADED, &self.threaded)
     }
 }
 
@@ -496,6 +581,36 @@ mod tests {
         assert_eq!(max_depth, flat.height);
         assert!(flat.height <= max_height.min(STACK_SIZE), "height {} > {max_height}", flat.height);
         assert_eq!(flat.triangle_count as usize, hittable.len());
+        // The threaded layout: one record per node and triangle; a box's link closes its subtree, which
+        // lies inside the box and nests in the subtrees around it; every triangle once.
+        let th = flat.threaded();
+        assert_eq!(th.len(), flat.nodes.len() + flat.tris.len());
+        let mut ends = vec![th.len()];
+        let mut tri_records = Vec::new();
+        for (k, r) in th.iter().enumerate() {
+            while ends.last() == Some(&k) {
+                ends.pop();
+            }
+            if r.link == THREAD_TRI {
+                tri_records.push([r.a, r.b, r.c]);
+                continue;
+            }
+            let end = r.link as usize;
+            assert!(end > k && end <= *ends.last().unwrap(), "record {k}: link {end} does not nest");
+            ends.push(end);
+            let (lo, hi) = (Vec3::from(r.a), Vec3::from(r.b));
+            for q in &th[k + 1..end] {
+                let pts = if q.link == THREAD_TRI { vec![q.a, q.b, q.c] } else { vec![q.a, q.b] };
+                for p in pts {
+                    assert!(Vec3::from(p).cmpge(lo).all() && Vec3::from(p).cmple(hi).all(), "record {k}");
+                }
+            }
+        }
+        let mut want: Vec<[[f32; 3]; 3]> = flat.tris.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
+        let key = |t: &[[f32; 3]; 3]| t.map(|v| v.map(f32::to_bits));
+        want.sort_by_key(key);
+        tri_records.sort_by_key(key);
+        assert_eq!(tri_records, want);
         let bound = (flat.nodes.len() + flat.tris.len() + 1).min(MAX_STEPS as usize) as u32;
         assert_eq!(flat.max_iterations_per_ray(), bound);
     }

@@ -13,5 +13,6 @@ pub mod gpu;
 
 pub use build::{Bvh, BvhNode, BvhTri, MEDIAN_DEPTH};
 pub use gpu::{
-    FlatBvh, GpuBvh, GpuBvhNode, GpuBvhTri, B_BVH_NODES, B_BVH_TRIS, MAX_STEPS, NO_TRI, SHADOW_EPS, STACK_SIZE,
+    FlatBvh, GpuBvh, GpuBvhNode, GpuBvhTri, GpuThreadRec, B_BVH_NODES, B_BVH_THREADED, B_BVH_TRIS, MAX_STEPS, NO_TRI,
+    SHADOW_EPS, STACK_SIZE, THREAD_TRI, THREAD_UNROLL,
 };

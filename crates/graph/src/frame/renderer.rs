@@ -326,10 +326,15 @@ impl RenderContext {
         let sections = 1 + self.importance_params(s).kind.method_sections();
         let faces = s.light_map.faces() * self.scene.light_count;
         let grid_march = dims.x + dims.y + dims.z + 3;
+        // A shadow ray's (exact: the threaded any-hit walk) and a first-hit ray's (MIS's gathering rays).
+        let occlusion = match (&self.bvh, s.visibility) {
+            (Some(b), Visibility::Exact | Visibility::PsmExact) => b.max_iterations_occluded(),
+            _ => self.trace_iterations(s).unwrap_or(grid_march),
+        };
         let march = self.trace_iterations(s).unwrap_or(grid_march);
         // draw_vpl: its two Owen-scrambled Sobol pairs (sobol2 loops once per bit of the scrambled index:
         // ≤ 32 each), its two binary searches (≤ 32 each), the sections and faces.
-        let per_vpl = march + 64 + 2 * 32 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
+        let per_vpl = occlusion + 64 + 2 * 32 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
         // MIS: a CDF sample adds one march (its gathering indicator); a gathering ray marches once to
         // its hit and then, per light, does a CDF sample's work (visibility march, probability look-up).
         let per_vpl = if s.method == Method::Mis {
