@@ -14,7 +14,7 @@ layout(set = 0, binding = B_VPL_POSITION) uniform sampler2DArray vpl_position;
 layout(set = 0, binding = B_VPL_NORMAL) uniform sampler2DArray vpl_normal;
 layout(set = 0, binding = B_VPL_FLUX) uniform sampler2DArray vpl_flux;
 layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
-layout(std430, set = 0, binding = B_CDF) readonly buffer Cdf { float cdf[]; };
+layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 layout(std430, set = 0, binding = B_PSM_VIEWS) writeonly buffer PsmViews { PsmView psm_views[]; };
 
 #include "shared/cdf.glsl"

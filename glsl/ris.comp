@@ -35,7 +35,7 @@ layout(set = 0, binding = B_VPL_POSITION) uniform sampler2DArray vpl_position;
 layout(set = 0, binding = B_VPL_NORMAL) uniform sampler2DArray vpl_normal;
 layout(set = 0, binding = B_VPL_FLUX) uniform sampler2DArray vpl_flux;
 layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
-layout(std430, set = 0, binding = B_CDF) readonly buffer Cdf { float cdf[]; };
+layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 #ifdef RIS_SHADE
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;

@@ -1,18 +1,22 @@
 // Sampling the two-level CDF built by cdf_reduce.comp (see crates/graph/src/passes/cdf_reduce.rs).
 // The including shader declares, before including this file:
 //   layout(std430, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
-//   layout(std430, binding = B_CDF) readonly buffer Cdf { float cdf[]; };
+//   layout(binding = B_CDF) uniform usamplerBuffer cdf_texels;   (the cdf buffer's R32_UINT texel view: llvmpipe
+//   fetches a texel for a whole SIMD vector at once, where a storage buffer is read lane by lane)
 #ifndef BOUNCE_CDF_GLSL
 #define BOUNCE_CDF_GLSL
 #include "bindings.glsl"
 #include "common.glsl"
 
+// Element i of the cdf buffer.
+float cdf_at(uint i) { return uintBitsToFloat(texelFetch(cdf_texels, int(i)).r); }
+
 // Layout of the cdf buffer: a header (CDF_HEADER floats, bindings.glsl), then one inclusive prefix per row
 // (over row totals), then the inclusive prefix within each row.
 
 // A section's CDF starts at `cb` (= section · cdf_len) and its importance at `ib` (= section · texels).
-float cdf_total_at(uint cb) { return cdf[cb]; }
-float cdf_total() { return cdf[0]; }
+float cdf_total_at(uint cb) { return cdf_at(cb); }
+float cdf_total() { return cdf_at(0u); }
 
 // Sanitised importance: negative, NaN and infinite values count as 0, as in cdf_reduce.comp.
 float cdf_mass_at(uint ib, uint v) {
@@ -27,24 +31,24 @@ float cdf_below(float x) {
 }
 
 // The prefix over row totals restarts at each face, a run of `len` rows (cdf_reduce.comp).
-uint cdf_len(uint cb) { return floatBitsToUint(cdf[cb + 2u]); }
-uint cdf_rows(uint cb) { return floatBitsToUint(cdf[cb + 1u]); }
+uint cdf_len(uint cb) { return floatBitsToUint(cdf_at(cb + 2u)); }
+uint cdf_rows(uint cb) { return floatBitsToUint(cdf_at(cb + 1u)); }
 
 // Total of face f (its last row's prefix).
 float cdf_face_total(uint cb, uint f) {
-    return cdf[cb + CDF_HEADER + min((f + 1u) * cdf_len(cb), cdf_rows(cb)) - 1u];
+    return cdf_at(cb + CDF_HEADER + min((f + 1u) * cdf_len(cb), cdf_rows(cb)) - 1u);
 }
 
 // The in-face prefix before row r (0 at a face's first row).
 float cdf_row_start(uint cb, uint r) {
-    return r % cdf_len(cb) == 0u ? 0.0 : cdf[cb + CDF_HEADER + r - 1u];
+    return r % cdf_len(cb) == 0u ? 0.0 : cdf_at(cb + CDF_HEADER + r - 1u);
 }
 
 // Total weight of rows [r0, r1): either inside one face, or whole faces (summed in face order).
 float cdf_rows_total(uint cb, uint r0, uint r1) {
     uint len = cdf_len(cb);
     uint f0 = r0 / len, f1 = (r1 - 1u) / len;
-    if (f0 == f1) return cdf[cb + CDF_HEADER + r1 - 1u] - cdf_row_start(cb, r0);
+    if (f0 == f1) return cdf_at(cb + CDF_HEADER + r1 - 1u) - cdf_row_start(cb, r0);
     float t = 0.0;
     for (uint f = f0; f <= f1; f++) t += cdf_face_total(cb, f);
     return t;
@@ -82,23 +86,23 @@ uint cdf_sample_rows3(uint cb, uint ib, vec3 u, uint r0, uint r1) {
         b = min((f + 1u) * len, rows);
     }
     float before0 = cdf_row_start(cb, a);
-    float end = cdf[cb + CDF_HEADER + b - 1u];
+    float end = cdf_at(cb + CDF_HEADER + b - 1u);
     float target = min(before0 + ur.x * (end - before0), cdf_below(end));
     target = max(target, before0);
     uint lo = a, hi = b - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (cdf[cb + CDF_HEADER + mid] > target) hi = mid; else lo = mid + 1u;
+        if (cdf_at(cb + CDF_HEADER + mid) > target) hi = mid; else lo = mid + 1u;
     }
     uint r = lo;
     uint base = cb + CDF_HEADER + rows + r * len;
-    float last = cdf[base + len - 1u];
+    float last = cdf_at(base + len - 1u);
     float tt = min(ur.y * last, cdf_below(last));
     lo = 0u;
     hi = len - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (cdf[base + mid] > tt) hi = mid; else lo = mid + 1u;
+        if (cdf_at(base + mid) > tt) hi = mid; else lo = mid + 1u;
     }
     return r * len + lo;
 }
@@ -139,22 +143,22 @@ float cdf_prob_rows(uint cb, uint v, uint r0, uint r1) {
         a = f * len;
         b = min((f + 1u) * len, rows);
     }
-    float range = cdf[cb + CDF_HEADER + b - 1u] - cdf_row_start(cb, a);
-    float delta = cdf[cb + CDF_HEADER + r] - cdf_row_start(cb, r);
+    float range = cdf_at(cb + CDF_HEADER + b - 1u) - cdf_row_start(cb, a);
+    float delta = cdf_at(cb + CDF_HEADER + r) - cdf_row_start(cb, r);
     if (!(range > 0.0) || !(delta > 0.0)) return 0.0;
     uint base = cb + CDF_HEADER + rows + r * len;
-    float last = cdf[base + len - 1u];
+    float last = cdf_at(base + len - 1u);
     if (!(last > 0.0)) return 0.0;
-    float hi = cdf[base + i];
-    float lo = i > 0u ? cdf[base + i - 1u] : 0.0;
+    float hi = cdf_at(base + i);
+    float lo = i > 0u ? cdf_at(base + i - 1u) : 0.0;
     return p_face * (delta / range) * (max(hi - lo, 0.0) / last);
 }
 
 // The whole of section 0, with the texel's probability (its weight over the total).
 uint cdf_sample(float u, out float prob) {
-    uint rows = floatBitsToUint(cdf[1]);
+    uint rows = floatBitsToUint(cdf_at(1u));
     uint v = cdf_sample_rows(0u, 0u, u, 0u, rows);
-    prob = cdf_mass(v) / cdf[0];
+    prob = cdf_mass(v) / cdf_at(0u);
     return v;
 }
 

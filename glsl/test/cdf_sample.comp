@@ -25,7 +25,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { float importance[]; };
-layout(std430, set = 0, binding = B_CDF) readonly buffer Cdf { float cdf[]; };
+layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 layout(std430, set = 0, binding = B_TEST_IN) readonly buffer Us { float us[]; };
 layout(std430, set = 0, binding = B_TEST_OUT) writeonly buffer Results { uvec2 results[]; };
 

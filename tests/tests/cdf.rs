@@ -78,7 +78,7 @@ impl Kernels {
     fn new(gpu: &Gpu) -> Kernels {
         let bindings = [
             Binding::storage_buffer(B_IMPORTANCE),
-            Binding::storage_buffer(B_CDF),
+            Binding::uniform_texel_buffer(B_CDF),
             Binding::storage_buffer(T_US),
             Binding::storage_buffer(T_RESULTS),
         ];
@@ -162,7 +162,7 @@ fn run(gpu: &Gpu, k: &Kernels, weights: &[f32], s: Shape, ops: &[(Op, &[f32])]) 
             .record(move |ctx| {
                 let w = DescriptorWrites::new()
                     .storage_buffer(B_IMPORTANCE, ctx.buffer(&hi))
-                    .storage_buffer(B_CDF, ctx.buffer(&cdf))
+                    .texel_view(B_CDF, ctx.buffer(&cdf))
                     .storage_buffer(T_US, ctx.buffer(&hu))
                     .storage_buffer(T_RESULTS, ctx.buffer(&ho));
                 let mut first = 0;

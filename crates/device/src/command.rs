@@ -103,9 +103,16 @@ impl DescriptorWrites {
         self
     }
 
-    /// A buffer read through its view with `texelFetch` (a `samplerBuffer`).
+    /// A buffer read through its view with `texelFetch` (a `usamplerBuffer`).
     pub fn uniform_texel_buffer(mut self, binding: u32, b: &crate::TexelBuffer) -> Self {
         self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(b.view)));
+        self
+    }
+
+    /// A storage buffer read through its `R32_UINT` view ([`Buffer::texel_view`]: made with both usages).
+    pub fn texel_view(mut self, binding: u32, b: &Buffer) -> Self {
+        let view = b.texel_view.unwrap_or_else(|| panic!("`{}` was made without UNIFORM_TEXEL_BUFFER usage", b.name));
+        self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(view)));
         self
     }
 

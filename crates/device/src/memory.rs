@@ -33,6 +33,10 @@ pub struct Buffer {
     pub raw: vk::Buffer,
     pub size: u64,
     pub name: String,
+    /// An `R32_UINT` view of the whole buffer, made for a storage buffer whose usage also has
+    /// `UNIFORM_TEXEL_BUFFER` (written as a storage buffer, read as a `usamplerBuffer`: see
+    /// [`TexelBuffer`] for why).
+    pub texel_view: Option<vk::BufferView>,
     allocation: Option<Allocation>,
     gpu: Gpu,
 }
@@ -65,9 +69,20 @@ impl Buffer {
             }
         };
         let bound = unsafe { gpu.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
-        let buffer = Buffer { raw, size, name: desc.name.clone(), allocation: Some(allocation), gpu: gpu.clone() };
+        let mut buffer = Buffer {
+            raw,
+            size,
+            name: desc.name.clone(),
+            texel_view: None,
+            allocation: Some(allocation),
+            gpu: gpu.clone(),
+        };
         bound.vk("vkBindBufferMemory")?;
         gpu.set_name(raw, &desc.name);
+        let both = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        if desc.usage.contains(both) {
+            buffer.texel_view = Some(texel_view(gpu, &buffer, vk::Format::R32_UINT, 4)?);
+        }
         Ok(buffer)
     }
 
@@ -138,8 +153,29 @@ impl Buffer {
     }
 }
 
+/// A view of the whole of `b` as texels of `format` (`texel_bytes` each), within the device's limit.
+fn texel_view(gpu: &Gpu, b: &Buffer, format: vk::Format, texel_bytes: u64) -> Result<vk::BufferView> {
+    let texels = b.size / texel_bytes;
+    let max = gpu.limits().max_texel_buffer_elements as u64;
+    if texels > max {
+        return Err(Error::Limit {
+            what: format!("`{}` ({texels} texels)", b.name),
+            limit: "maxTexelBufferElements",
+            value: texels,
+            max,
+        });
+    }
+    let info = vk::BufferViewCreateInfo::default().buffer(b.raw).format(format).offset(0).range(texels * texel_bytes);
+    let view = unsafe { gpu.device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+    gpu.set_name(view, &b.name);
+    Ok(view)
+}
+
 impl Drop for Buffer {
     fn drop(&mut self) {
+        if let Some(v) = self.texel_view.take() {
+            unsafe { self.gpu.device.destroy_buffer_view(v, None) };
+        }
         unsafe { self.gpu.device.destroy_buffer(self.raw, None) };
         if let Some(a) = self.allocation.take() {
             let _ = self.gpu.allocator().free(a);
@@ -161,25 +197,9 @@ impl TexelBuffer {
     /// Uploads `data` (whole 16-byte texels, at most `maxTexelBufferElements` of them) and makes its view.
     pub fn with_data(gpu: &Gpu, name: &str, data: &[u8]) -> Result<TexelBuffer> {
         assert!(data.len().is_multiple_of(16) && !data.is_empty(), "{name}: whole 16-byte texels");
-        let texels = data.len() as u64 / 16;
-        let max = gpu.limits().max_texel_buffer_elements as u64;
-        if texels > max {
-            return Err(Error::Limit {
-                what: format!("`{name}` ({texels} texels)"),
-                limit: "maxTexelBufferElements",
-                value: texels,
-                max,
-            });
-        }
         let buffer = Buffer::with_data(gpu, name, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER, data)?;
-        let info = vk::BufferViewCreateInfo::default()
-            .buffer(buffer.raw)
-            .format(vk::Format::R32G32B32A32_UINT)
-            .offset(0)
-            .range(vk::WHOLE_SIZE);
-        let view = unsafe { gpu.device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
-        gpu.set_name(view, name);
-        Ok(TexelBuffer { buffer, view, texels })
+        let view = texel_view(gpu, &buffer, vk::Format::R32G32B32A32_UINT, 16)?;
+        Ok(TexelBuffer { texels: buffer.size / 16, buffer, view })
     }
 }
 

@@ -22,7 +22,7 @@ use crate::shader_types::CdfPush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
+use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
 
 pub struct CdfReduce {
     pipeline: ComputePipeline,
@@ -58,7 +58,11 @@ impl CdfReduce {
         sections: u32,
     ) -> Handle<Buffer> {
         let n = Self::section_len(rows, row_length) * sections as u64;
-        let mut cdf = g.create_buffer(BufferDesc::storage("cdf", 4 * n));
+        // Written here as a storage buffer; the samplers read it through its texel view (Buffer::texel_view:
+        // llvmpipe's per-lane storage reads made the binary searches the gather's largest cost).
+        let mut desc = BufferDesc::storage("cdf", 4 * n);
+        desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        let mut cdf = g.create_buffer(desc);
         let (imp, out) = (*importance, cdf);
         g.add_pass("cdf_reduce").read(&imp, Access::ComputeRead).overwrite(&mut cdf, Access::ComputeWrite).record(
             move |ctx| {

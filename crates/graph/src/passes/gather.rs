@@ -86,7 +86,7 @@ pub fn sampling_bindings() -> Vec<Binding> {
     bindings.extend([
         Binding::storage_buffer(B_VOXELS),
         Binding::storage_buffer(B_IMPORTANCE),
-        Binding::storage_buffer(B_CDF),
+        Binding::uniform_texel_buffer(B_CDF),
     ]);
     bindings
 }
@@ -166,7 +166,7 @@ impl GatherInputs {
             Some(v) => w.storage_buffer(B_VOXELS, ctx.buffer(v)),
             None => w,
         };
-        w.storage_buffer(B_IMPORTANCE, ctx.buffer(&self.importance)).storage_buffer(B_CDF, ctx.buffer(&self.cdf))
+        w.storage_buffer(B_IMPORTANCE, ctx.buffer(&self.importance)).texel_view(B_CDF, ctx.buffer(&self.cdf))
     }
 }
 

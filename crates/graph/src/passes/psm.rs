@@ -59,7 +59,7 @@ impl Psm {
         bindings.extend(super::vpl_bindings());
         bindings.extend([
             Binding::storage_buffer(B_IMPORTANCE),
-            Binding::storage_buffer(B_CDF),
+            Binding::uniform_texel_buffer(B_CDF),
             Binding::storage_buffer(B_PSM_VIEWS),
         ]);
         let push = std::mem::size_of::<GatherPush>() as u32;
@@ -117,7 +117,7 @@ impl Psm {
                 let s = self.sampler.raw;
                 let writes = super::vpl_writes(f.scene.writes(f.uniforms), ctx, [&v.position, &v.normal, &v.flux], s)
                     .storage_buffer(B_IMPORTANCE, ctx.buffer(&importance))
-                    .storage_buffer(B_CDF, ctx.buffer(&cdf))
+                    .texel_view(B_CDF, ctx.buffer(&cdf))
                     .storage_buffer(B_PSM_VIEWS, ctx.buffer(&view_h));
                 self.select.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [n, 1, 1], [WG_1D, 1, 1]);
             });
