@@ -7,6 +7,11 @@
 // RIS_INITIAL (dispatch W × H × R): reservoir r streams candidates [first, last) of its M: v ~ p,
 //   w = p̂(v)/p_v, v kept with probability w / Σw; after the M-th, W = Σw / (M p̂(y)), then (RIS_HISTORY)
 //   combined with last frame's reservoir at the same pixel and layer.
+// RIS_PRESAMPLE (RIS_POOL_TILE × T, --pool-tiles T > 0): the candidate pool, T tiles of RIS_POOL_TILE VPLs; tile
+//   j's entries are points 0 .. RIS_POOL_TILE − 1 of one stratified set of the source (draw_vpl, seeded by j
+//   and the frame), stored with their data and p_v, so a candidate costs three texel fetches and its target.
+// RIS_INITIAL with RIS_POOL: reservoir r's candidates are consecutive entries of one tile, from a start, both
+//   chosen by a hash of (pixel, layer, frame); each is a draw of the source (its marginal law is p: ris.rs).
 // RIS_SPATIAL (W × H × R): the reservoir combined with k neighbours' of the same layer, generalized
 //   balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
 // The target may weigh in the voxel march's visibility (RIS_VOXEL_TARGET variants, ris.target_floor < 1:
@@ -48,6 +53,13 @@ layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]
 #ifdef RIS_INITIAL
 layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Reservoir res_history[]; };
 #endif
+#ifdef RIS_POOL
+layout(set = 0, binding = B_RIS_POOL) uniform usamplerBuffer pool_texels;
+#endif
+#ifdef RIS_PRESAMPLE
+// Entry e: texels 3e (position, v), 3e + 1 (normal, p_v; 0: no draw), 3e + 2 (flux, valid).
+layout(std430, set = 0, binding = B_RIS_POOL) writeonly buffer RisPool { vec4 pool_out[]; };
+#endif
 #endif
 
 #include "shared/cdf.glsl"
@@ -73,8 +85,7 @@ float ris_rand(ivec2 q, uint stream, uint i) {
 // is, so the estimate stays unbiased (the shade tests the frame's real visibility), and VPLs the march
 // sees as hidden are drawn δ times as often, which is what an unshadowed target gets wrong behind walls.
 // Deterministic per pixel, so the spatial weights evaluate the same p̂ at each neighbour.
-float target_at(vec3 x, vec3 n, vec3 a, uint v) {
-    Vpl vpl = vpl_fetch(v);
+float target_of(vec3 x, vec3 n, vec3 a, Vpl vpl) {
     float t = luminance(vpl_unshadowed(x, n, a, vpl, pc.clamp_d2));
 #ifdef RIS_VOXEL_TARGET
     if (t > 0.0) t *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
@@ -82,11 +93,56 @@ float target_at(vec3 x, vec3 n, vec3 a, uint v) {
     return t;
 }
 
+float target_at(vec3 x, vec3 n, vec3 a, uint v) {
+    return target_of(x, n, a, vpl_fetch(v));
+}
+
 Reservoir empty_reservoir(float confidence) {
     return Reservoir(RIS_NONE, 0.0, confidence, 0.0);
 }
 
+#ifdef RIS_PRESAMPLE
+void main() {
+    uint k = gl_GlobalInvocationID.x, tile = gl_GlobalInvocationID.y;
+    if (k >= uint(RIS_POOL_TILE) || tile >= ris.pool_tiles) return;
+    uint e = tile * uint(RIS_POOL_TILE) + k;
+    vec4 a = vec4(0.0), b = vec4(0.0), c = vec4(0.0);
+    if (cdf_total_at(0u) > 0.0) {
+        float prob;
+        uint v = draw_vpl(k, pcg_hash(tile ^ 0x6A09E667u) ^ pc.seed, prob);
+        if (prob > 0.0) {
+            Vpl vpl = vpl_fetch(v);
+            a = vec4(vpl.position, uintBitsToFloat(v));
+            b = vec4(vpl.normal, prob);
+            c = vec4(vpl.flux, vpl.valid ? 1.0 : 0.0);
+        }
+    }
+    pool_out[3u * e] = a;
+    pool_out[3u * e + 1u] = b;
+    pool_out[3u * e + 2u] = c;
+}
+#endif
+
 #ifdef RIS_INITIAL
+// Candidate i of reservoir `layer` at pixel q and its probability: a draw of the source either way.
+uint candidate(ivec2 q, uint layer, uint i, uint seed, out float prob, out Vpl vpl) {
+#ifdef RIS_POOL
+    uint tile = uint(ris_rand(q, 3u, layer) * float(ris.pool_tiles)) % ris.pool_tiles;
+    uint start = uint(ris_rand(q, 4u, layer) * float(RIS_POOL_TILE)) % uint(RIS_POOL_TILE);
+    int e = int(tile * uint(RIS_POOL_TILE) + (start + i) % uint(RIS_POOL_TILE));
+    uvec4 a = texelFetch(pool_texels, 3 * e);
+    vec4 b = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 1));
+    vec4 c = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 2));
+    prob = b.w;
+    vpl = Vpl(uintBitsToFloat(a.xyz), b.xyz, c.rgb, c.w != 0.0);
+    return a.w;
+#else
+    uint v = draw_vpl(layer * ris.candidates + i, seed, prob);
+    if (prob > 0.0) vpl = vpl_fetch(v);
+    return v;
+#endif
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     uint layer = gl_GlobalInvocationID.z;
@@ -106,9 +162,10 @@ void main() {
         for (uint i = pc.first; i < pc.last; i++) {
             uint k = layer * ris.candidates + i;
             float prob;
-            uint v = draw_vpl(k, seed, prob);
+            Vpl vpl;
+            uint v = candidate(px, layer, i, seed, prob, vpl);
             if (!(prob > 0.0)) continue;
-            float t = target_at(x, nx, ax, v);
+            float t = target_of(x, nx, ax, vpl);
             float w = t / prob;
             if (!(w > 0.0)) continue;
             r.weight += w;

@@ -72,6 +72,8 @@ const SHADERS: &[Shader] = &[
     variant("mis.hybrid.comp", "mis.comp", &["HYBRID_VISIBILITY"]),
     // ris: its three stages, the shade with the gather's visibility variants (voxel, exact, hybrid).
     variant("ris.initial.comp", "ris.comp", &["RIS_INITIAL"]),
+    variant("ris.presample.comp", "ris.comp", &["RIS_PRESAMPLE"]),
+    variant("ris.initial_pool.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL"]),
     variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
     // `--target-floor` < 1: the target marches the voxel grid (so only these bind it).
     variant("ris.initial_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_VOXEL_TARGET"]),

@@ -132,6 +132,10 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define B_RIS_HISTORY 33
 // Reservoir.vpl of an empty reservoir.
 #define RIS_NONE 0xFFFFFFFFu
+// ris's presampled candidate pool (--pool-tiles): written by ris.presample, read by ris.initial_pool as a
+// uvec4 texel view, three texels per entry; VPLs per tile.
+#define B_RIS_POOL 47
+#define RIS_POOL_TILE 1024
 // Most neighbours of one spatial pass (its loops are bounded by it).
 #define RIS_MAX_NEIGHBORS 8
 

@@ -76,6 +76,10 @@ struct RisPush {
     float history_cap;// the history's confidence is capped at history_cap · M
     uint history;     // 1: last frame's reservoirs are bound at B_RIS_HISTORY
     float target_floor;// δ: the target weighs a VPL the voxel march calls occluded by δ (1: no march)
+    uint pool_tiles;  // candidates from a presampled pool of pool_tiles × RIS_POOL_TILE VPLs (0: per pixel)
+    uint pad0;
+    uint pad1;
+    uint pad2;
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

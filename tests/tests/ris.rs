@@ -2,7 +2,7 @@
 //! judges: unbiased with respect to `all` (the same test as every method, `vpl::converges_to`) without
 //! reuse, with spatial reuse and with temporal reuse over progressive frames, for the voxel and the exact
 //! visibility, and with a CDF source and the voxel-visibility-aware target; its mean within 1 % of the exact one-bounce reference with exact visibility; with one
-//! candidate and no reuse it is its source method; the candidates' split over dispatches (lavapipe's
+//! candidate and no reuse it is its source method; candidates from the presampled pool are unbiased too; the candidates' split over dispatches (lavapipe's
 //! loop limit) does not change the image; bad flag combinations are a `SettingsError`.
 
 use crate::vpl::{converges_to, indirect_with};
@@ -81,6 +81,33 @@ fn ris_with_a_cdf_source_and_the_voxel_target_is_unbiased() {
     let plain = indirect_with(&mut r, settings(5, 1.0), w, h, res, vox);
     let marched = indirect_with(&mut r, settings(5, 0.3), w, h, res, vox);
     assert_ne!(plain, marched, "the voxel target changed nothing");
+}
+
+/// Candidates from the presampled pool (`--pool-tiles`, glsl/ris.comp's RIS_PRESAMPLE): a pixel's
+/// candidates are entries of a shared tile, correlated with its neighbours' but each a draw of the
+/// source, so the estimate stays unbiased against `all`, without reuse and with two spatial passes; a
+/// gbg source included (its probabilities travel with the pool's entries). And the pool is really used:
+/// the image differs from the per-pixel draws'.
+#[test]
+fn ris_from_a_presampled_pool_is_unbiased() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let all = all(&mut r, Visibility::Exact);
+    let settings = |seed, reuse, source, tiles| {
+        let mut s = ris(Visibility::Exact, seed, reuse, 0.0);
+        s.ris.source = source;
+        s.ris.pool_tiles = tiles;
+        s
+    };
+    for (reuse, source) in [(0, RisSource::Uniform), (2, RisSource::Uniform), (0, RisSource::Gbg)] {
+        let name = format!("ris (pool of 3 tiles, {source:?} source, {reuse} spatial passes, exact)");
+        converges_to(&name, &all, |seed| indirect_with(&mut r, settings(seed, reuse, source, 3), w, h, res, vox));
+    }
+    let pooled = indirect_with(&mut r, settings(5, 0, RisSource::Uniform, 3), w, h, res, vox);
+    let drawn = indirect_with(&mut r, settings(5, 0, RisSource::Uniform, 0), w, h, res, vox);
+    assert_ne!(pooled, drawn, "the pool changed nothing");
 }
 
 /// Progressive frames of one view (seeds s, s + 1, …, one CDF) with temporal and spatial reuse: each run
@@ -220,6 +247,8 @@ fn ris_rejects_bad_flag_combinations() {
         ("--spatial-radius", with(&|s| s.ris.spatial_radius = f32::NAN)),
         ("--temporal-cap", with(&|s| s.ris.temporal_cap = -1.0)),
         ("--target-floor", with(&|s| s.ris.target_floor = 0.0)),
+        ("--pool-tiles", with(&|s| s.ris.pool_tiles = 4097)),
+        ("--pool-tiles", with(&|s| (s.ris.pool_tiles, s.ris.target_floor) = (4, 0.5))),
     ];
     for (names, s) in cases {
         let e = r.render(&s).err().unwrap_or_else(|| panic!("{names}: accepted"));

@@ -272,6 +272,10 @@ pub struct FrameArgs {
     /// unshadowed target, no march).
     #[arg(long, default_value_t = RisSettings::default().target_floor)]
     pub target_floor: f32,
+    /// --method ris draws its candidates from a pool of this many tiles of 1024 source draws, made once
+    /// per frame (0: each pixel draws its own).
+    #[arg(long, default_value_t = RisSettings::default().pool_tiles)]
+    pub pool_tiles: u32,
     /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
     #[arg(long)]
     pub device: Option<String>,
@@ -314,6 +318,7 @@ impl FrameArgs {
                 spatial_radius: self.spatial_radius,
                 temporal_cap: self.temporal_cap,
                 target_floor: self.target_floor,
+                pool_tiles: self.pool_tiles,
                 candidates_chunk: None,
             },
             ..FrameSettings::default()

@@ -116,6 +116,13 @@ impl DescriptorWrites {
         self
     }
 
+    /// A storage buffer read through its `R32G32B32A32_UINT` view ([`Buffer::texel_view4`]).
+    pub fn texel_view4(mut self, binding: u32, b: &Buffer) -> Self {
+        let view = b.texel_view4.unwrap_or_else(|| panic!("`{}` has no uvec4 texel view", b.name));
+        self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(view)));
+        self
+    }
+
     /// Push the set as set 0 of `layout`.
     pub fn push(
         &self,

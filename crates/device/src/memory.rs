@@ -37,6 +37,8 @@ pub struct Buffer {
     /// `UNIFORM_TEXEL_BUFFER` (written as a storage buffer, read as a `usamplerBuffer`: see
     /// [`TexelBuffer`] for why).
     pub texel_view: Option<vk::BufferView>,
+    /// The same as `R32G32B32A32_UINT` texels (when the size is a whole number of them).
+    pub texel_view4: Option<vk::BufferView>,
     allocation: Option<Allocation>,
     gpu: Gpu,
 }
@@ -74,6 +76,7 @@ impl Buffer {
             size,
             name: desc.name.clone(),
             texel_view: None,
+            texel_view4: None,
             allocation: Some(allocation),
             gpu: gpu.clone(),
         };
@@ -82,6 +85,9 @@ impl Buffer {
         let both = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         if desc.usage.contains(both) {
             buffer.texel_view = Some(texel_view(gpu, &buffer, vk::Format::R32_UINT, 4)?);
+            if size.is_multiple_of(16) {
+                buffer.texel_view4 = Some(texel_view(gpu, &buffer, vk::Format::R32G32B32A32_UINT, 16)?);
+            }
         }
         Ok(buffer)
     }
@@ -173,7 +179,7 @@ fn texel_view(gpu: &Gpu, b: &Buffer, format: vk::Format, texel_bytes: u64) -> Re
 
 impl Drop for Buffer {
     fn drop(&mut self) {
-        if let Some(v) = self.texel_view.take() {
+        for v in [self.texel_view.take(), self.texel_view4.take()].into_iter().flatten() {
             unsafe { self.gpu.device.destroy_buffer_view(v, None) };
         }
         unsafe { self.gpu.device.destroy_buffer(self.raw, None) };

@@ -124,8 +124,11 @@ pub struct RisPush {
     pub history: u32,
     /// δ: the target weighs a VPL the voxel march calls occluded by δ (1: the unshadowed target).
     pub target_floor: f32,
+    /// Candidates from a presampled pool of `pool_tiles` × `RIS_POOL_TILE` VPLs (0: drawn per pixel).
+    pub pool_tiles: u32,
+    pub pad: [u32; 3],
 }
-const _: () = assert!(size_of::<RisPush>() == 32);
+const _: () = assert!(size_of::<RisPush>() == 48);
 
 /// ris's push constant block: the gather's sampling fields, then ris's own.
 #[repr(C)]
@@ -134,7 +137,7 @@ pub struct RisPushBlock {
     pub gather: GatherPush,
     pub ris: RisPush,
 }
-const _: () = assert!(size_of::<RisPushBlock>() == 96);
+const _: () = assert!(size_of::<RisPushBlock>() == 112);
 const _: () = assert!(offset_of!(RisPushBlock, ris) == 64);
 
 /// One reservoir of ris (`Reservoir` in `glsl/shared/types.glsl`).

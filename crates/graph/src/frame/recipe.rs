@@ -205,6 +205,7 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
         radius: ris.spatial_radius,
         history_cap: ris.temporal_cap,
         target_floor: ris.target_floor,
+        pool_tiles: ris.pool_tiles,
         ..RisPush::default()
     };
     let sampling = GatherPush { seed: 0, ..gather };

@@ -391,6 +391,7 @@ impl RenderContext {
                 importance.kind.method_sections(),
                 s.light_map.faces() * self.scene.light_count,
                 self.ris_target_iterations(s),
+                s.ris.pool_tiles > 0,
             ),
             reference_per_dispatch: self
                 .bvh
@@ -575,6 +576,12 @@ impl RenderContext {
                 + 4);
         if cdf_bytes > max_range {
             reject!("the CDF would take {cdf_bytes} bytes, over the device limit maxStorageBufferRange ({max_range}); lower --dprsm-res");
+        }
+        // The samplers read the CDF (every section) through a texel view.
+        let cdf_texels = cdf_bytes / 4 * (1 + self.importance_params(s).kind.method_sections() as u64);
+        let max_texels = self.gpu.limits().max_texel_buffer_elements as u64;
+        if cdf_texels > max_texels {
+            reject!("the CDF would take {cdf_texels} texels, over the device limit maxTexelBufferElements ({max_texels}); lower --dprsm-res or --regions");
         }
         voxelize::check_grid(&self.gpu, &self.voxel_spec(s)).map_err(|e| SettingsError(e.to_string()))?;
         if let (Method::Ris, Some(limit)) = (s.method, self.gpu.loop_iteration_limit) {

@@ -103,6 +103,10 @@ pub struct RisSettings {
     /// δ in (0, 1]: the target weighs a VPL the voxel march calls occluded by δ (1: the unshadowed
     /// target, no march). Any δ > 0 keeps the estimate unbiased (glsl/ris.comp, `target_at`).
     pub target_floor: f32,
+    /// Candidates from a pool presampled once per frame: this many tiles of `RIS_POOL_TILE` source draws
+    /// (RTXDI's light tiles), a candidate costing three texel fetches instead of a draw (0: each pixel
+    /// draws its own, stratified).
+    pub pool_tiles: u32,
     /// Candidates per initial dispatch (`None`: as many as the device's loop limit allows). The image
     /// does not depend on it (the reservoirs' streaming state is carried between dispatches).
     pub candidates_chunk: Option<std::num::NonZeroU32>,
@@ -122,6 +126,7 @@ impl Default for RisSettings {
             spatial_radius: 16.0,
             temporal_cap: 0.0,
             target_floor: 1.0,
+            pool_tiles: 0,
             candidates_chunk: None,
         }
     }
@@ -401,6 +406,12 @@ impl FrameSettings {
                 "--target-floor must be in (0, 1] (got {}): 0 would leave VPLs the march wrongly hides undrawable",
                 r.target_floor
             );
+        }
+        if r.pool_tiles > 4096 {
+            reject!("--pool-tiles must be at most 4096 (got {})", r.pool_tiles);
+        }
+        if r.pool_tiles > 0 && r.target_floor < 1.0 {
+            reject!("--pool-tiles needs the unshadowed target (--target-floor 1)");
         }
         if !(r.temporal_cap.is_finite() && r.temporal_cap >= 0.0) {
             reject!("--temporal-cap must be finite and non-negative (got {})", r.temporal_cap);

@@ -47,13 +47,16 @@ use crate::shader_types::{GatherPush, Reservoir, RisPush, RisPushBlock};
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
+use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
 
 pub struct Ris {
     /// The initial and spatial stages with the unshadowed target ([0]) and the voxel-visibility one ([1],
     /// `--target-floor` < 1: only these read the voxel grid).
     initial: [ComputePipeline; 2],
     spatial: [ComputePipeline; 2],
+    /// The pool's presampling and the initial stage that draws from it (`--pool-tiles` > 0).
+    presample: ComputePipeline,
+    initial_pool: ComputePipeline,
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -75,11 +78,13 @@ pub struct RisFrame {
 
 /// Candidates per initial dispatch under a loop iteration `limit`: per candidate `draw_vpl`'s loops (two
 /// Sobol pairs' bit loops and two binary searches, ≤ 32 each, the sections 3 · `sections`, the faces
-/// 2 · `faces` · (`sections` + 1)), the target's own loops (`target`: the voxel march under
-/// `--target-floor` < 1) and 64 for the rest; 128 kept for the history's combination and the code outside.
-pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, target: u32) -> u32 {
+/// 2 · `faces` · (`sections` + 1)), or none for a candidate from the pool (`pool`), the target's own
+/// loops (`target`: the voxel march under `--target-floor` < 1) and 64 for the rest; 128 kept for the
+/// history's combination and the code outside.
+pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, target: u32, pool: bool) -> u32 {
     let Some(limit) = limit else { return u32::MAX };
-    let per = 64 + 4 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2) + target;
+    let draw = if pool { 0 } else { 4 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2) };
+    let per = 64 + draw + target;
     (limit.saturating_sub(128 + target) / per).max(1)
 }
 
@@ -107,6 +112,17 @@ impl Ris {
             [Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)],
         )?;
         let mut b = base();
+        b.push(Binding::storage_buffer(B_RIS_POOL));
+        let presample = ComputePipeline::new(gpu, "ris_presample", &crate::spirv(RIS_PRESAMPLE_COMP), &b, push, &[])?;
+        let mut b = base();
+        b.extend([
+            Binding::storage_buffer(B_RIS_OUT),
+            Binding::storage_buffer(B_RIS_HISTORY),
+            Binding::uniform_texel_buffer(B_RIS_POOL),
+        ]);
+        let initial_pool =
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?;
+        let mut b = base();
         b.extend([
             Binding::storage_buffer(B_RIS_IN),
             Binding::sampled_image(B_GATHER_DIRECT),
@@ -119,7 +135,7 @@ impl Ris {
             b,
             push,
         )?;
-        Ok(Ris { initial, spatial, shade, sampler: Sampler::nearest(gpu)? })
+        Ok(Ris { initial, spatial, presample, initial_pool, shade, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Bytes of one layer of reservoirs for a `w` × `h` image.
@@ -148,9 +164,10 @@ impl Ris {
         let mut current = history.current;
         let mut scratch = (r.spatial_passes > 0).then(|| g.create_buffer(desc("ris.scratch")));
         let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
+        let pool = (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push));
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
-            self.add_initial(g, f, i, dst, previous, push, r);
+            self.add_initial(g, f, i, dst, previous, pool, push, r);
         }
         for pass in 0..r.spatial_passes {
             let s = pass + 1;
@@ -185,6 +202,31 @@ impl Ris {
         b
     }
 
+    /// The candidate pool: `pool_tiles` tiles of `RIS_POOL_TILE` draws of the source with their VPLs'
+    /// data and probabilities, three `uvec4` texels each (written as a storage buffer, read through its
+    /// texel view).
+    fn add_presample<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        i: &GatherInputs,
+        push: GatherPush,
+        ris: RisPush,
+    ) -> Handle<Buffer> {
+        let i = *i;
+        let mut desc = BufferDesc::storage("ris.pool", 48 * RIS_POOL_TILE as u64 * ris.pool_tiles as u64);
+        desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        let mut pool = g.create_buffer(desc);
+        let o = pool;
+        Self::reads(g.add_pass("ris_presample"), &i).overwrite(&mut pool, Access::ComputeWrite).record(move |ctx| {
+            let writes = self.base_writes(f, ctx, &i).storage_buffer(B_RIS_POOL, ctx.buffer(&o));
+            let block = RisPushBlock { gather: push, ris };
+            let size = [RIS_POOL_TILE, ris.pool_tiles, 1];
+            self.presample.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
+        });
+        pool
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn add_initial<'a>(
         &'a self,
@@ -193,12 +235,13 @@ impl Ris {
         i: &GatherInputs,
         dst: &mut Handle<Buffer>,
         previous: Option<Handle<Buffer>>,
+        pool: Option<Handle<Buffer>>,
         push: GatherPush,
         r: RisFrame,
     ) {
         let (i, o) = (*i, *dst);
         let mut b = Self::reads(g.add_pass("ris_initial"), &i);
-        if let Some(p) = &previous {
+        for p in previous.iter().chain(pool.iter()) {
             b = b.read(p, Access::ComputeRead);
         }
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
@@ -208,6 +251,10 @@ impl Ris {
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_HISTORY, history);
+            let (pipeline, writes) = match &pool {
+                Some(p) => (&self.initial_pool, writes.texel_view4(B_RIS_POOL, ctx.buffer(p))),
+                None => (&self.initial[Self::voxel_target(&r.push)], writes),
+            };
             let m = r.push.candidates;
             let chunk = r.candidates_per_dispatch.max(1);
             let mut first = 0;
@@ -222,13 +269,7 @@ impl Ris {
                     ris: RisPush { history: previous.is_some() as u32, ..r.push },
                 };
                 let size = [f.width, f.height, r.push.reservoirs];
-                self.initial[Self::voxel_target(&r.push)].dispatch(
-                    ctx.cmd,
-                    &writes,
-                    bytemuck::bytes_of(&block),
-                    size,
-                    [WG_2D, WG_2D, 1],
-                );
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
                 first = last;
             }
         });
