@@ -30,6 +30,8 @@ fn ris(visibility: Visibility, seed: u64, reuse: u32, cap: f32) -> FrameSettings
             spatial_neighbors: 4,
             spatial_radius: 6.0,
             temporal_cap: cap,
+            // Per-pixel draws here; the pool has its own test.
+            pool_tiles: 0,
             ..RisSettings::default()
         },
         ..FrameSettings::default()
@@ -86,7 +88,8 @@ fn ris_with_a_cdf_source_and_the_voxel_target_is_unbiased() {
 /// Candidates from the presampled pool (`--pool-tiles`, glsl/ris.comp's RIS_PRESAMPLE): a pixel's
 /// candidates are entries of a shared tile, correlated with its neighbours' but each a draw of the
 /// source, so the estimate stays unbiased against `all`, without reuse and with two spatial passes; a
-/// gbg source included (its probabilities travel with the pool's entries). And the pool is really used:
+/// gbg source included (its probabilities travel with the pool's entries) and the voxel-visibility
+/// target. And the pool is really used:
 /// the image differs from the per-pixel draws'.
 #[test]
 fn ris_from_a_presampled_pool_is_unbiased() {
@@ -105,6 +108,12 @@ fn ris_from_a_presampled_pool_is_unbiased() {
         let name = format!("ris (pool of 3 tiles, {source:?} source, {reuse} spatial passes, exact)");
         converges_to(&name, &all, |seed| indirect_with(&mut r, settings(seed, reuse, source, 3), w, h, res, vox));
     }
+    // With the voxel-visibility target (its own pool variant).
+    converges_to("ris (pool of 3 tiles, target floor 0.3, exact)", &all, |seed| {
+        let mut s = settings(seed, 0, RisSource::Uniform, 3);
+        s.ris.target_floor = 0.3;
+        indirect_with(&mut r, s, w, h, res, vox)
+    });
     let pooled = indirect_with(&mut r, settings(5, 0, RisSource::Uniform, 3), w, h, res, vox);
     let drawn = indirect_with(&mut r, settings(5, 0, RisSource::Uniform, 0), w, h, res, vox);
     assert_ne!(pooled, drawn, "the pool changed nothing");
@@ -191,7 +200,14 @@ fn ris_with_one_candidate_is_its_source_method() {
     let (w, h, res, vox) = SIZE;
     for source in [RisSource::Uniform, RisSource::Gbg, RisSource::Local] {
         let base = FrameSettings { seed: 3, vpls: 8, ..FrameSettings::default() };
-        let ris = RisSettings { source, candidates: 1, spatial_passes: 0, temporal_cap: 0.0, ..RisSettings::default() };
+        let ris = RisSettings {
+            source,
+            candidates: 1,
+            spatial_passes: 0,
+            temporal_cap: 0.0,
+            pool_tiles: 0,
+            ..RisSettings::default()
+        };
         let a = indirect_with(&mut r, FrameSettings { method: Method::Ris, ris, ..base.clone() }, w, h, res, vox);
         let b = indirect_with(&mut r, FrameSettings { method: source.method(), ..base }, w, h, res, vox);
         let worst = a
@@ -248,7 +264,6 @@ fn ris_rejects_bad_flag_combinations() {
         ("--temporal-cap", with(&|s| s.ris.temporal_cap = -1.0)),
         ("--target-floor", with(&|s| s.ris.target_floor = 0.0)),
         ("--pool-tiles", with(&|s| s.ris.pool_tiles = 4097)),
-        ("--pool-tiles", with(&|s| (s.ris.pool_tiles, s.ris.target_floor) = (4, 0.5))),
     ];
     for (names, s) in cases {
         let e = r.render(&s).err().unwrap_or_else(|| panic!("{names}: accepted"));

@@ -56,7 +56,7 @@ pub struct Ris {
     spatial: [ComputePipeline; 2],
     /// The pool's presampling and the initial stage that draws from it (`--pool-tiles` > 0).
     presample: ComputePipeline,
-    initial_pool: ComputePipeline,
+    initial_pool: [ComputePipeline; 2],
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -120,8 +120,10 @@ impl Ris {
             Binding::storage_buffer(B_RIS_HISTORY),
             Binding::uniform_texel_buffer(B_RIS_POOL),
         ]);
-        let initial_pool =
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?;
+        let initial_pool = [
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?,
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_VOXEL_TARGET_COMP), &b, push, &[])?,
+        ];
         let mut b = base();
         b.extend([
             Binding::storage_buffer(B_RIS_IN),
@@ -252,7 +254,9 @@ impl Ris {
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_HISTORY, history);
             let (pipeline, writes) = match &pool {
-                Some(p) => (&self.initial_pool, writes.texel_view4(B_RIS_POOL, ctx.buffer(p))),
+                Some(p) => {
+                    (&self.initial_pool[Self::voxel_target(&r.push)], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
+                }
                 None => (&self.initial[Self::voxel_target(&r.push)], writes),
             };
             let m = r.push.candidates;
