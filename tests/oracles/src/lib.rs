@@ -7,6 +7,7 @@
 //!   renders the committed reference images with it.
 //! - [`cpu_voxel`]: the CPU twin of the voxelizer and the voxel march (same f32 operations in the same
 //!   order, so the results are bit-identical).
+//! - [`cpu_threaded`]: the CPU twin of the shadow rays' stackless walk over the threaded BVH.
 //! - [`cpu_cdf`]: the CPU twin of `cdf_reduce` and of the CDF sampling (same f32 operations).
 //! - [`scene_fuzz`]: the scene loader's robustness contract as one function, shared by the fuzz target
 //!   (`tests/fuzz`) and the corpus replay test.
@@ -16,5 +17,6 @@
 pub mod cpu_cdf;
 pub mod cpu_cells;
 pub mod cpu_ref;
+pub mod cpu_threaded;
 pub mod cpu_voxel;
 pub mod scene_fuzz;

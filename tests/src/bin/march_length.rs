@@ -1,8 +1,9 @@
 //! Cells visited per visibility march, over random pairs of surface points of a scene (default: the
 //! Cornell box), for the voxel march (CPU twin `bounce_oracles::cpu_voxel`, which stops at the first
 //! occupied cell) and for `--visibility hybrid`'s march over its triangle lists (CPU twin
-//! `bounce_oracles::cpu_cells`: list cells entered and triangle tests). Also checks the lists against
-//! every triangle: a pair the brute force finds occluded must be found occluded by the hybrid march.
+//! `bounce_oracles::cpu_cells`: list cells entered and triangle tests), and the records the exact shadow
+//! rays' threaded BVH walk reads (CPU twin `bounce_oracles::cpu_threaded`). Also checks both against
+//! every triangle: a pair the brute force finds occluded must be found occluded by both.
 //!
 //!     cargo run -p bounce-tests --bin march-length [scene.toml] [voxels]
 
@@ -10,7 +11,7 @@ use bounce_graph::bvh::cells::CellLists;
 use bounce_graph::bvh::{Bvh, FlatBvh};
 use bounce_graph::passes::voxelize;
 use bounce_graph::scene::Scene;
-use bounce_oracles::{cpu_cells, cpu_voxel};
+use bounce_oracles::{cpu_cells, cpu_threaded, cpu_voxel};
 use glam::Vec3;
 
 fn main() -> anyhow::Result<()> {
@@ -21,6 +22,7 @@ fn main() -> anyhow::Result<()> {
     let grid = cpu_voxel::voxelize_scene(&scene, spec);
     let flat = FlatBvh::new(&Bvh::new(&scene), &scene.vertices);
     let lists = CellLists::build(&flat.tris, &spec);
+    let threaded = flat.threaded();
     let tris: Vec<[Vec3; 3]> =
         scene.vertices.chunks(3).map(|v| [v[0].position(), v[1].position(), v[2].position()]).collect();
     let mut rng = bounce_tests::Rng(7);
@@ -31,6 +33,7 @@ fn main() -> anyhow::Result<()> {
     };
     let (mut cells, mut pairs, mut blocked) = (0u64, 0u64, 0u64);
     let (mut h_cells, mut h_tests, mut h_blocked, mut missed) = (0u64, 0u64, 0u64, 0u64);
+    let (mut t_records, mut t_tests, mut t_missed) = (0u64, 0u64, 0u64);
     let check = flat.tris.len() <= 20_000;
     for _ in 0..20_000 {
         let ((x, nx), (y, ny)) = (point(), point());
@@ -52,8 +55,13 @@ fn main() -> anyhow::Result<()> {
         h_cells += h.cells as u64;
         h_tests += h.tests as u64;
         h_blocked += h.occluded as u64;
-        if check && h.occluded != cpu_cells::brute_force(&flat.tris, a, b, 1e-4, 1.0 - 1e-4) {
-            missed += 1;
+        let w = cpu_threaded::walk(&threaded, a, b, 1e-4, 1.0 - 1e-4);
+        t_records += w.records as u64;
+        t_tests += w.tests as u64;
+        if check {
+            let truth = cpu_cells::brute_force(&flat.tris, a, b, 1e-4, 1.0 - 1e-4);
+            missed += (h.occluded != truth) as u64;
+            t_missed += (w.occluded != truth) as u64;
         }
     }
     let s = lists.stats();
@@ -72,6 +80,14 @@ fn main() -> anyhow::Result<()> {
         100.0 * h_blocked as f64 / n,
         if check { format!("; {missed} of {pairs} pairs disagree with the brute force") } else { String::new() }
     );
+    println!(
+        "exact (the threaded BVH walk, {} records): {:.1} records read per ray, {:.1} of them triangles{}",
+        threaded.len(),
+        t_records as f64 / n,
+        t_tests as f64 / n,
+        if check { format!("; {t_missed} of {pairs} pairs disagree with the brute force") } else { String::new() }
+    );
     anyhow::ensure!(missed == 0, "the triangle lists miss an occluder");
+    anyhow::ensure!(t_missed == 0, "the threaded walk misses an occluder");
     Ok(())
 }

@@ -1,0 +1,60 @@
+//! CPU twin of the shadow rays' stackless walk (`bvh_any_hit` in `glsl/shared/bvh.glsl`) over the
+//! renderer's threaded BVH records ([`bounce_graph::bvh::FlatBvh::threaded`]), in f64: the records it
+//! reads and whether a triangle crosses the segment. With [`crate::cpu_cells::brute_force`] (every
+//! triangle) it checks the layout's claim: a box's link skips only triangles inside that box, so the walk
+//! misses no occluder. `march-length` reports its records per ray for BENCHMARKS.md.
+
+use crate::cpu_cells::crosses;
+use bounce_graph::bvh::{GpuBvhTri, GpuThreadRec, THREAD_TRI};
+use glam::DVec3;
+
+/// What one walk did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WalkCount {
+    pub occluded: bool,
+    /// Records read (boxes and triangles): the GPU walk's steps.
+    pub records: u32,
+    /// Of which triangles.
+    pub tests: u32,
+}
+
+/// Whether the segment a → b meets box [lo, hi] at a parameter in [0, 1] (slabs in f64, closed).
+fn meets_box(lo: DVec3, hi: DVec3, a: DVec3, b: DVec3) -> bool {
+    let d = b - a;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (u, v) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
+        t0 = t0.max(u.min(v));
+        t1 = t1.min(u.max(v));
+    }
+    t0 <= t1
+}
+
+/// The walk over `records` for the segment a → b, occluders counted at parameters in (lo, hi).
+pub fn walk(records: &[GpuThreadRec], a: DVec3, b: DVec3, lo: f64, hi: f64) -> WalkCount {
+    let mut c = WalkCount::default();
+    let mut i = 0;
+    while i < records.len() {
+        let r = &records[i];
+        c.records += 1;
+        if r.link == THREAD_TRI {
+            c.tests += 1;
+            let t = GpuBvhTri { v0: r.a, tri: 0, v1: r.b, pad1: 0, v2: r.c, pad2: 0 };
+            if crosses(&t, a, b, lo, hi) {
+                c.occluded = true;
+                return c;
+            }
+            i += 1;
+        } else {
+            let (blo, bhi) = (DVec3::from(r.a.map(f64::from)), DVec3::from(r.b.map(f64::from)));
+            i = if meets_box(blo, bhi, a, b) { i + 1 } else { r.link as usize };
+        }
+    }
+    c
+}
