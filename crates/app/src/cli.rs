@@ -166,8 +166,9 @@ pub struct PictureArgs {
     /// Which radiance to render.
     #[arg(long, value_parser = COMPONENTS, default_value = "combined")]
     pub component: Component,
-    /// How the gather picks VPLs.
-    #[arg(long, value_parser = METHODS, default_value = "uniform")]
+    /// How the gather picks VPLs. Default ris: the lowest error at equal time of the VPL methods on every
+    /// scene measured (BENCHMARKS.md).
+    #[arg(long, value_parser = METHODS, default_value = "ris")]
     pub method: Method,
     /// VPLs per pixel (sampled methods).
     #[arg(long, default_value_t = 64)]
