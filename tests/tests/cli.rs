@@ -239,7 +239,8 @@ fn bench_animate_writes_relmse_and_flicker_per_frame() {
     // The same frames through `render --frames` (coherent: seed 1 and CDF seed 1 for every frame).
     let frames = d.join("frames");
     let mut a = vec!["render", scene.to_str().unwrap(), "--frames", "3", "--out-dir", frames.to_str().unwrap()];
-    a.extend(["--light-path", "orbit:8", "--component", "indirect", "--vpls", "4", "--cdf-seed", "1"]);
+    a.extend(["--light-path", "orbit:8", "--component", "indirect", "--method", "uniform", "--vpls", "4"]);
+    a.extend(["--cdf-seed", "1"]);
     a.extend(size);
     assert_eq!(bounce(&a).code, 0);
     let truth: Vec<Vec<[f32; 3]>> = (0..3)
