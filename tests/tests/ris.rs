@@ -129,15 +129,17 @@ fn ris_with_temporal_reuse_converges_over_progressive_frames() {
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = SIZE;
-    for visibility in [Visibility::Voxel, Visibility::Exact] {
+    // Per-pixel draws with the voxel march; the candidate pool with exact rays.
+    for (visibility, pool) in [(Visibility::Voxel, 0), (Visibility::Exact, 3)] {
         let all = all(&mut r, visibility);
         let (mut first, mut last) = (0.0, 0.0);
-        converges_to(&format!("ris ({visibility:?} visibility, temporal + spatial)"), &all, |run| {
+        converges_to(&format!("ris ({visibility:?} visibility, pool {pool}, temporal + spatial)"), &all, |run| {
             // A fresh history: nothing of the previous run is kept.
             r.clear_frame_cache();
             let mut sum = vec![[0.0f32; 3]; all.len()];
             for k in 0..FRAMES {
-                let s = FrameSettings { cdf_seed: Some(run), ..ris(visibility, run * FRAMES + k, 1, 20.0) };
+                let mut s = FrameSettings { cdf_seed: Some(run), ..ris(visibility, run * FRAMES + k, 1, 20.0) };
+                s.ris.pool_tiles = pool;
                 let img = indirect_with(&mut r, s, w, h, res, vox);
                 let e = bounce_tests::rel_mse(&img, &all);
                 if k == 0 {
