@@ -11,7 +11,7 @@ cd "$here"
 out="${1:-${CARGO_TARGET_DIR:-target}/bench-visibility}"
 shift || true
 scenes=("$@")
-[ ${#scenes[@]} -gt 0 ] || scenes=(cornell-box two-rooms box-on-floor doorway clutter sibenik)
+[ ${#scenes[@]} -gt 0 ] || scenes=(cornell-box two-rooms box-on-floor doorway clutter sibenik conference)
 mkdir -p "$out"
 cargo build -q -p bounce
 bin="${CARGO_TARGET_DIR:-target}/debug/bounce"
