@@ -1,6 +1,19 @@
 //! ris: resampled importance sampling over the VPLs (Talbot et al. 2005) with spatial and temporal
 //! reuse (ReSTIR, Bitterli et al. 2020; generalized RIS, Lin et al. 2022). `glsl/ris.comp`, three
-//! graph passes:
+//! graph passes, and a fourth before them with `--pool-tiles` T > 0 (the default):
+//!
+//! - `ris_presample` (1024 × T invocations): the candidate pool, T tiles of `RIS_POOL_TILE` = 1024 draws
+//!   of the source; tile j holds points 0..1024 of one stratified set (seeded by j and the frame's seed)
+//!   with each draw's VPL data and exact probability p_v. A reservoir then takes its M candidates as
+//!   consecutive entries of one tile from a start, tile and start picked by a hash of (pixel, layer,
+//!   seed): a candidate costs three texel fetches instead of a draw (RTXDI's light tiles, Wyman and
+//!   Panteleev 2021). Why it stays unbiased: each entry is a draw of p (a point of an Owen-scrambled
+//!   set is uniform), and the entry a candidate reads is uniform and independent of the entries'
+//!   values, so each candidate is marginally a draw of p. RIS needs nothing more: given the candidates
+//!   the kept one is y = x_i with probability w_i / Σw, so E[f(y) W | candidates] = 1/M Σ_i f(x_i) /
+//!   p(x_i), whose expectation is Σ_v f(v) however the candidates depend on each other (they do: a
+//!   tile's entries are stratified, and neighbouring pixels share tiles). Pixels sharing a tile have
+//!   correlated errors; each pixel's own is what it would be with independent candidates or better.
 //!
 //! - `ris_initial` (W × H × R invocations): each of a pixel's R reservoirs streams M candidates
 //!   v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
