@@ -13,7 +13,7 @@
 //!   the kept one is y = x_i with probability w_i / Σw, so E[f(y) W | candidates] = 1/M Σ_i f(x_i) /
 //!   p(x_i), whose expectation is Σ_v f(v) however the candidates depend on each other (they do: a
 //!   tile's entries are stratified, and neighbouring pixels share tiles). Pixels sharing a tile have
-//!   correlated errors; each pixel's own is what it would be with independent candidates or better.
+//!   correlated errors; what that does to each pixel's error is measured (BENCHMARKS.md), not assumed.
 //!
 //! - `ris_initial` (W × H × R invocations): each of a pixel's R reservoirs streams M candidates
 //!   v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
