@@ -119,8 +119,9 @@ impl Default for RisSettings {
             // source adds rare heavy weights where it underrates a VPL the target favours), and no reuse
             // by default: spatial reuse cost more than it gained, and temporal reuse correlates the frames
             // a progressive render averages (3–10× the error in the two rooms).
-            // A pool of 16 tiles and 32 candidates (2026-11-30): at equal time a pooled candidate costs
-            // about a tenth of a drawn one, which bought 3–8× lower error on the Cornell box and the two rooms.
+            // A pool of 16 tiles and 32 candidates (2026-11-30): a pooled candidate costs about a tenth
+            // of a drawn one, which bought 5–15× lower error at equal time on the Cornell box and the
+            // two rooms.
             source: RisSource::Uniform,
             candidates: 32,
             spatial_passes: 0,
