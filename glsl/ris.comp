@@ -45,6 +45,7 @@ layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
+layout(std430, set = 0, binding = B_RIS_VIS) buffer RisVis { uint vis_counts[]; };
 #else
 #ifdef RIS_SPATIAL
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
@@ -56,8 +57,13 @@ layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Re
 #ifdef RIS_POOL
 layout(set = 0, binding = B_RIS_POOL) uniform usamplerBuffer pool_texels;
 #endif
+#ifdef RIS_LEARNED
+// Read through the counts' texel view (a texel fetch gathers a vector's lanes at once).
+layout(set = 0, binding = B_RIS_VIS) uniform usamplerBuffer vis_texels;
+#endif
 #ifdef RIS_PRESAMPLE
-// Entry e: texels 3e (position, v), 3e + 1 (normal, p_v; 0: no draw), 3e + 2 (flux, valid).
+// Entry e: texels 3e (position, v), 3e + 1 (normal, p_v; 0: no draw), 3e + 2 (flux, the VPL's learned-
+// visibility cell, or RIS_NONE for an empty texel).
 layout(std430, set = 0, binding = B_RIS_POOL) writeonly buffer RisPool { vec4 pool_out[]; };
 #endif
 #endif
@@ -97,6 +103,27 @@ float target_at(vec3 x, vec3 n, vec3 a, uint v) {
     return target_of(x, n, a, vpl_fetch(v));
 }
 
+// The learned visibility's counts for pixel q and VPL v: (visible, traced) at vis_counts[i], [i + 1] with
+// i = vis_tile_base(q) + 2 · vis_cell_of(v), for q's screen tile (vis_tile pixels per side) and v's
+// light-map cell (vis_cell texels per side). Split so a loop over candidates divides only once per pixel
+// (llvmpipe divides integers lane by lane); the pool stores each entry's cell.
+uint vis_side() {
+    return (frame.size.w + ris.vis_cell - 1u) / ris.vis_cell;
+}
+
+uint vis_cell_of(uint v) {
+    uint res = frame.size.w, side = vis_side();
+    uint layer = v / (res * res), tx = (v % res) / ris.vis_cell, ty = ((v / res) % res) / ris.vis_cell;
+    return (layer * side + ty) * side + tx;
+}
+
+uint vis_tile_base(ivec2 q) {
+    uint tiles_x = (frame.size.x + ris.vis_tile - 1u) / ris.vis_tile;
+    uint tile = (uint(q.y) / ris.vis_tile) * tiles_x + uint(q.x) / ris.vis_tile;
+    uint side = vis_side();
+    return 2u * tile * (lm_faces() * frame.size.z * side * side);
+}
+
 Reservoir empty_reservoir(float confidence) {
     return Reservoir(RIS_NONE, 0.0, confidence, 0.0);
 }
@@ -114,7 +141,7 @@ void main() {
             Vpl vpl = vpl_fetch(v);
             a = vec4(vpl.position, uintBitsToFloat(v));
             b = vec4(vpl.normal, prob);
-            c = vec4(vpl.flux, vpl.valid ? 1.0 : 0.0);
+            c = vec4(vpl.flux, uintBitsToFloat(vpl.valid ? vis_cell_of(v) : RIS_NONE));
         }
     }
     pool_out[3u * e] = a;
@@ -125,7 +152,7 @@ void main() {
 
 #ifdef RIS_INITIAL
 // Candidate i of reservoir `layer` at pixel q and its probability: a draw of the source either way.
-uint candidate(ivec2 q, uint layer, uint i, uint seed, out float prob, out Vpl vpl) {
+uint candidate(ivec2 q, uint layer, uint i, uint seed, out float prob, out Vpl vpl, out uint cell) {
 #ifdef RIS_POOL
     uint tile = uint(ris_rand(q, 3u, layer) * float(ris.pool_tiles)) % ris.pool_tiles;
     uint start = uint(ris_rand(q, 4u, layer) * float(RIS_POOL_TILE)) % uint(RIS_POOL_TILE);
@@ -134,11 +161,13 @@ uint candidate(ivec2 q, uint layer, uint i, uint seed, out float prob, out Vpl v
     vec4 b = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 1));
     vec4 c = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 2));
     prob = b.w;
-    vpl = Vpl(uintBitsToFloat(a.xyz), b.xyz, c.rgb, c.w != 0.0);
+    cell = floatBitsToUint(c.w);
+    vpl = Vpl(uintBitsToFloat(a.xyz), b.xyz, c.rgb, cell != RIS_NONE);
     return a.w;
 #else
     uint v = draw_vpl(layer * ris.candidates + i, seed, prob);
     if (prob > 0.0) vpl = vpl_fetch(v);
+    cell = 0u; // the learned visibility needs the pool
     return v;
 #endif
 }
@@ -159,13 +188,25 @@ void main() {
     if (cdf_total_at(0u) > 0.0) {
         // Candidate i of layer r is point r·M + i of the pixel's stratified set, the gather's seed.
         uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+#ifdef RIS_LEARNED
+        uint tile_base = vis_tile_base(px);
+#endif
         for (uint i = pc.first; i < pc.last; i++) {
             uint k = layer * ris.candidates + i;
             float prob;
             Vpl vpl;
-            uint v = candidate(px, layer, i, seed, prob, vpl);
+            uint cell;
+            uint v = candidate(px, layer, i, seed, prob, vpl, cell);
             if (!(prob > 0.0)) continue;
             float t = target_of(x, nx, ax, vpl);
+#ifdef RIS_LEARNED
+            // V̂ = (visible + 1) / (traced + 2) from earlier frames only (this frame's shade adds after every
+            // initial dispatch), floored at δ_L > 0: a target that depends on the past, positive wherever
+            // the unshadowed one is, so each frame stays unbiased (passes/ris.rs).
+            uint vi = tile_base + 2u * cell;
+            uint seen = texelFetch(vis_texels, int(vi)).r, traced = texelFetch(vis_texels, int(vi + 1u)).r;
+            t *= max(float(seen + 1u) / float(traced + 2u), ris.learned);
+#endif
             float w = t / prob;
             if (!(w > 0.0)) continue;
             r.weight += w;
@@ -293,7 +334,15 @@ void main() {
         vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
         for (uint layer = pc.first; layer < pc.last; layer++) {
             Reservoir r = res_in[res_index(px, layer)];
-            if (r.vpl != RIS_NONE && r.weight > 0.0) sum += contribution(x, nx, ax, r.vpl) * r.weight;
+            if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
+            vec3 c = contribution(x, nx, ax, r.vpl);
+            sum += c * r.weight;
+            if (ris.learned > 0.0) {
+                // A kept VPL has an unshadowed contribution (its target is positive): 0 means occluded.
+                uint vi = vis_tile_base(px) + 2u * vis_cell_of(r.vpl);
+                if (c != vec3(0.0)) atomicAdd(vis_counts[vi], 1u);
+                atomicAdd(vis_counts[vi + 1u], 1u);
+            }
         }
         sum /= float(ris.reservoirs);
     }

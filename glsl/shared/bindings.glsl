@@ -135,6 +135,9 @@ const float BVH_SHADOW_EPS = 1e-4;
 // ris's presampled candidate pool (--pool-tiles): written by ris.presample, read by ris.initial_pool as a
 // uvec4 texel view, three texels per entry; VPLs per tile.
 #define B_RIS_POOL 47
+// ris's learned visibility (--learn-visibility): (visible, traced) shadow-ray counts per screen tile and
+// light-map cell, added to by the shade, read by the next frames' initial stage.
+#define B_RIS_VIS 48
 #define RIS_POOL_TILE 1024
 // Most neighbours of one spatial pass (its loops are bounded by it).
 #define RIS_MAX_NEIGHBORS 8

@@ -77,9 +77,9 @@ struct RisPush {
     uint history;     // 1: last frame's reservoirs are bound at B_RIS_HISTORY
     float target_floor;// δ: the target weighs a VPL the voxel march calls occluded by δ (1: no march)
     uint pool_tiles;  // candidates from a presampled pool of pool_tiles × RIS_POOL_TILE VPLs (0: per pixel)
-    uint pad0;
-    uint pad1;
-    uint pad2;
+    float learned;    // δ_L: the target weighs a VPL by max(V̂, δ_L), V̂ learned from earlier frames (0: off)
+    uint vis_tile;    // the learned visibility's screen tiles, pixels per side
+    uint vis_cell;    // its light-map cells, texels per side
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

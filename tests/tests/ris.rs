@@ -119,6 +119,44 @@ fn ris_from_a_presampled_pool_is_unbiased() {
     assert_ne!(pooled, drawn, "the pool changed nothing");
 }
 
+/// The learned visibility (`--learn-visibility`): frame k's target is weighed by the visibility counted
+/// from frames 0..k of the same view, so the frames are correlated through the target, but each is
+/// unbiased (its target depends on earlier frames only and stays positive wherever the unshadowed one is):
+/// the mean of a progressive run converges to `all`. And the counts are really used: the last frame
+/// differs from the same seed's frame without them.
+#[test]
+fn ris_with_learned_visibility_converges_over_progressive_frames() {
+    const FRAMES: u64 = 4;
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let all = all(&mut r, Visibility::Exact);
+    let settings = |seed, learn| {
+        let mut s = FrameSettings { cdf_seed: Some(1), ..ris(Visibility::Exact, seed, 0, 0.0) };
+        (s.ris.pool_tiles, s.ris.learn_visibility) = (3, learn);
+        s
+    };
+    let mut last = (vec![], vec![]);
+    converges_to("ris (pool of 3 tiles, learned visibility 0.1, exact)", &all, |run| {
+        // A fresh view: nothing learned in the previous run is kept.
+        r.clear_frame_cache();
+        let mut sum = vec![[0.0f32; 3]; all.len()];
+        for k in 0..FRAMES {
+            let img = indirect_with(&mut r, settings(run * FRAMES + k, 0.1), w, h, res, vox);
+            for (a, p) in sum.iter_mut().zip(&img) {
+                (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
+            }
+            if k == FRAMES - 1 {
+                last.0 = img;
+            }
+        }
+        last.1 = indirect_with(&mut r, settings(run * FRAMES + FRAMES - 1, 0.0), w, h, res, vox);
+        sum
+    });
+    assert_ne!(last.0, last.1, "the learned visibility changed nothing");
+}
+
 /// Progressive frames of one view (seeds s, s + 1, …, one CDF) with temporal and spatial reuse: each run
 /// starts from an empty history and its mean over `FRAMES` frames converges to `all`; and the history
 /// is used: the last frame alone has a lower error than the first.
@@ -266,6 +304,8 @@ fn ris_rejects_bad_flag_combinations() {
         ("--temporal-cap", with(&|s| s.ris.temporal_cap = -1.0)),
         ("--target-floor", with(&|s| s.ris.target_floor = 0.0)),
         ("--pool-tiles", with(&|s| s.ris.pool_tiles = 4097)),
+        ("--learn-visibility", with(&|s| s.ris.learn_visibility = 1.5)),
+        ("--learn-visibility", with(&|s| s.ris.learn_visibility = 0.1)), // base has reuse
     ];
     for (names, s) in cases {
         let e = r.render(&s).err().unwrap_or_else(|| panic!("{names}: accepted"));

@@ -277,6 +277,10 @@ pub struct FrameArgs {
     /// per frame (0: each pixel draws its own).
     #[arg(long, default_value_t = RisSettings::default().pool_tiles)]
     pub pool_tiles: u32,
+    /// --method ris weighs its target by the visibility learned from earlier progressive frames' shadow
+    /// rays, floored at this (in (0, 1]; 0: off).
+    #[arg(long, default_value_t = RisSettings::default().learn_visibility)]
+    pub learn_visibility: f32,
     /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
     #[arg(long)]
     pub device: Option<String>,
@@ -320,6 +324,7 @@ impl FrameArgs {
                 temporal_cap: self.temporal_cap,
                 target_floor: self.target_floor,
                 pool_tiles: self.pool_tiles,
+                learn_visibility: self.learn_visibility,
                 candidates_chunk: None,
             },
             ..FrameSettings::default()

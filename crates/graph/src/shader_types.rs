@@ -126,7 +126,12 @@ pub struct RisPush {
     pub target_floor: f32,
     /// Candidates from a presampled pool of `pool_tiles` × `RIS_POOL_TILE` VPLs (0: drawn per pixel).
     pub pool_tiles: u32,
-    pub pad: [u32; 3],
+    /// δ_L: the target weighs a VPL by max(V̂, δ_L), V̂ the visibility learned from earlier frames' shadow
+    /// rays (0: off).
+    pub learned: f32,
+    /// The learned visibility's screen tiles (pixels per side) and light-map cells (texels per side).
+    pub vis_tile: u32,
+    pub vis_cell: u32,
 }
 const _: () = assert!(size_of::<RisPush>() == 48);
 

@@ -206,6 +206,9 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
         history_cap: ris.temporal_cap,
         target_floor: ris.target_floor,
         pool_tiles: ris.pool_tiles,
+        learned: ris.learn_visibility,
+        vis_tile: crate::passes::ris::vis_tile(s.width, s.height),
+        vis_cell: crate::passes::ris::vis_cell(s.dprsm_res),
         ..RisPush::default()
     };
     let sampling = GatherPush { seed: 0, ..gather };

@@ -107,6 +107,10 @@ pub struct RisSettings {
     /// (RTXDI's light tiles), a candidate costing three texel fetches instead of a draw (0: each pixel
     /// draws its own, stratified).
     pub pool_tiles: u32,
+    /// δ_L in (0, 1], or 0 for off: the target weighs a VPL by max(V̂, δ_L), V̂ the fraction of earlier
+    /// frames' shadow rays from the pixel's screen tile to the VPL's light-map cell that were unoccluded
+    /// (progressive frames of one view; needs the pool, no reuse and the unshadowed target).
+    pub learn_visibility: f32,
     /// Candidates per initial dispatch (`None`: as many as the device's loop limit allows). The image
     /// does not depend on it (the reservoirs' streaming state is carried between dispatches).
     pub candidates_chunk: Option<std::num::NonZeroU32>,
@@ -130,6 +134,7 @@ impl Default for RisSettings {
             temporal_cap: 0.0,
             target_floor: 1.0,
             pool_tiles: 16,
+            learn_visibility: 0.0,
             candidates_chunk: None,
         }
     }
@@ -409,6 +414,14 @@ impl FrameSettings {
                 "--target-floor must be in (0, 1] (got {}): 0 would leave VPLs the march wrongly hides undrawable",
                 r.target_floor
             );
+        }
+        if !(r.learn_visibility >= 0.0 && r.learn_visibility <= 1.0) {
+            reject!("--learn-visibility must be in [0, 1] (got {})", r.learn_visibility);
+        }
+        if r.learn_visibility > 0.0
+            && (r.pool_tiles == 0 || r.spatial_passes > 0 || r.temporal_cap > 0.0 || r.target_floor < 1.0)
+        {
+            reject!("--learn-visibility needs the pool (--pool-tiles ≥ 1), no reuse (--spatial-passes 0, --temporal-cap 0) and --target-floor 1");
         }
         if r.pool_tiles > 4096 {
             reject!("--pool-tiles must be at most 4096 (got {})", r.pool_tiles);

@@ -14,6 +14,13 @@
 //!   p(x_i), whose expectation is Σ_v f(v) however the candidates depend on each other (they do: a
 //!   tile's entries are stratified, and neighbouring pixels share tiles). Pixels sharing a tile have
 //!   correlated errors; what that does to each pixel's error is measured (BENCHMARKS.md), not assumed.
+//! - With `--learn-visibility δ_L` > 0 (the pool, no reuse): the target is p̂(v) · max(V̂, δ_L), where V̂ =
+//!   (visible + 1) / (traced + 2) counts the earlier frames' shadow rays from the pixel's screen tile to
+//!   the VPL's light-map cell (`ris.visibility`, kept across the frames of one view like the history; the
+//!   shade adds to it after the frame's initial stage has read it). Unbiased frame by frame: a frame's
+//!   target depends on earlier frames only, so given them it is a fixed function, positive wherever p̂
+//!   is (δ_L > 0), and RIS is unbiased for any such target; the progressive mean of unbiased frames is
+//!   unbiased. It is what makes a VPL behind a wall rare once the rays have seen the wall.
 //!
 //! - `ris_initial` (W × H × R invocations): each of a pixel's R reservoirs streams M candidates
 //!   v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
@@ -70,6 +77,8 @@ pub struct Ris {
     /// The pool's presampling and the initial stage that draws from it (`--pool-tiles` > 0).
     presample: ComputePipeline,
     initial_pool: [ComputePipeline; 2],
+    /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
+    initial_pool_learned: ComputePipeline,
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -87,6 +96,23 @@ pub struct RisFrame {
     /// What the history depends on (camera, CDF, every setting but the seed): reservoirs are carried to
     /// the next frame only while it is unchanged.
     pub key: u64,
+}
+
+/// The learned visibility's screen tiles, pixels per side: at least 8, and at most 64 tiles a side.
+pub fn vis_tile(width: u32, height: u32) -> u32 {
+    width.max(height).div_ceil(64).max(8)
+}
+
+/// The learned visibility's light-map cells, texels per side: at least 4, and at most 16 cells a side.
+pub fn vis_cell(res: u32) -> u32 {
+    res.div_ceil(16).max(4)
+}
+
+/// Bytes of the learned visibility's counts: two per (screen tile, light-map cell).
+pub fn vis_bytes(width: u32, height: u32, res: u32, faces: u32) -> u64 {
+    let (t, c) = (vis_tile(width, height), vis_cell(res));
+    let tiles = width.div_ceil(t) as u64 * height.div_ceil(t) as u64;
+    8 * tiles * faces as u64 * (res.div_ceil(c) as u64).pow(2)
 }
 
 /// Candidates per initial dispatch under a loop iteration `limit`: per candidate `draw_vpl`'s loops (two
@@ -133,6 +159,10 @@ impl Ris {
             Binding::storage_buffer(B_RIS_HISTORY),
             Binding::uniform_texel_buffer(B_RIS_POOL),
         ]);
+        let mut bl = b.clone();
+        bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
+        let initial_pool_learned =
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
         let initial_pool = [
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?,
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_VOXEL_TARGET_COMP), &b, push, &[])?,
@@ -142,6 +172,7 @@ impl Ris {
             Binding::storage_buffer(B_RIS_IN),
             Binding::sampled_image(B_GATHER_DIRECT),
             Binding::storage_image(B_GATHER_OUT),
+            Binding::storage_buffer(B_RIS_VIS),
         ]);
         let shade = VisibilityVariants::new(
             gpu,
@@ -150,7 +181,15 @@ impl Ris {
             b,
             push,
         )?;
-        Ok(Ris { initial, spatial, presample, initial_pool, shade, sampler: Sampler::nearest(gpu)? })
+        Ok(Ris {
+            initial,
+            spatial,
+            presample,
+            initial_pool,
+            initial_pool_learned,
+            shade,
+            sampler: Sampler::nearest(gpu)?,
+        })
     }
 
     /// Bytes of one layer of reservoirs for a `w` × `h` image.
@@ -180,9 +219,28 @@ impl Ris {
         let mut scratch = (r.spatial_passes > 0).then(|| g.create_buffer(desc("ris.scratch")));
         let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
         let pool = (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push));
+        // The learned visibility's counts: kept across the frames of one view (the history's key), zeroed
+        // when new; a stand-in the shade never writes when off.
+        let mut vis = if r.push.learned > 0.0 {
+            let bytes = vis_bytes(f.width, f.height, f.dprsm_res, f.vpl_faces * f.scene.light_count);
+            let mut desc = BufferDesc::storage("ris.visibility", bytes);
+            desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+            let t = g.temporal_buffer("ris.visibility", desc, &r.key);
+            let mut h = t.handle;
+            if t.fresh {
+                let hc = h;
+                g.add_pass("ris_visibility_clear").overwrite(&mut h, Access::TransferWrite).record(move |ctx| unsafe {
+                    ctx.gpu.device.cmd_fill_buffer(ctx.cmd, ctx.buffer(&hc).raw, 0, vk::WHOLE_SIZE, 0);
+                });
+            }
+            h
+        } else {
+            g.create_buffer(BufferDesc::storage("ris.visibility (off)", 16))
+        };
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
-            self.add_initial(g, f, i, dst, previous, pool, push, r);
+            let learned = (r.push.learned > 0.0).then_some(vis);
+            self.add_initial(g, f, i, dst, previous, pool, learned, push, r);
         }
         for pass in 0..r.spatial_passes {
             let s = pass + 1;
@@ -193,7 +251,7 @@ impl Ris {
             };
             self.add_spatial(g, f, i, src, dst, push, RisPush { pass, ..r.push });
         }
-        self.add_shade(g, f, i, current, out, push, r.push);
+        self.add_shade(g, f, i, current, &mut vis, out, push, r.push);
     }
 
     /// The descriptor writes every stage shares: scene, G-buffer, VPLs, voxels, importance, CDF.
@@ -251,12 +309,13 @@ impl Ris {
         dst: &mut Handle<Buffer>,
         previous: Option<Handle<Buffer>>,
         pool: Option<Handle<Buffer>>,
+        learned: Option<Handle<Buffer>>,
         push: GatherPush,
         r: RisFrame,
     ) {
         let (i, o) = (*i, *dst);
         let mut b = Self::reads(g.add_pass("ris_initial"), &i);
-        for p in previous.iter().chain(pool.iter()) {
+        for p in previous.iter().chain(pool.iter()).chain(learned.iter()) {
             b = b.read(p, Access::ComputeRead);
         }
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
@@ -266,11 +325,15 @@ impl Ris {
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_HISTORY, history);
-            let (pipeline, writes) = match &pool {
-                Some(p) => {
+            let (pipeline, writes) = match (&pool, &learned) {
+                (Some(p), Some(v)) => (
+                    &self.initial_pool_learned,
+                    writes.texel_view4(B_RIS_POOL, ctx.buffer(p)).texel_view(B_RIS_VIS, ctx.buffer(v)),
+                ),
+                (Some(p), None) => {
                     (&self.initial_pool[Self::voxel_target(&r.push)], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
                 }
-                None => (&self.initial[Self::voxel_target(&r.push)], writes),
+                (None, _) => (&self.initial[Self::voxel_target(&r.push)], writes),
             };
             let m = r.push.candidates;
             let chunk = r.candidates_per_dispatch.max(1);
@@ -329,12 +392,15 @@ impl Ris {
         f: FrameInputs<'a>,
         i: &GatherInputs,
         reservoirs: Handle<Buffer>,
+        vis: &mut Handle<Buffer>,
         out: &mut Handle<Image>,
         push: GatherPush,
         ris: RisPush,
     ) {
-        let (i, o) = (*i, *out);
+        let (i, o, hv) = (*i, *out, *vis);
         let mut b = Self::reads(g.add_pass("ris_shade"), &i).read(&reservoirs, Access::ComputeRead);
+        // The learned visibility's counts are added to (or, off, the stand-in is never touched).
+        b = b.write(vis, Access::ComputeWrite);
         if let Some(d) = &i.direct {
             b = b.read(d, Access::ComputeRead);
         }
@@ -346,6 +412,7 @@ impl Ris {
             let writes = self
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_IN, ctx.buffer(&reservoirs))
+                .storage_buffer(B_RIS_VIS, ctx.buffer(&hv))
                 .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
             // The gather's visibility variants, chosen and bound as the gather's.
