@@ -45,8 +45,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = ["cornell-box", "two-rooms", "sibenik", "conference"]
 METHODS = ["uniform", "global", "stratified", "local", "gbg", "mis", "reference", "ris"]
 # Per-frame settings of a method where the render default does not fit a progressive frame: ris's --vpls is
-# its reservoirs per pixel, each worth --candidates VPL candidates (4 × 16 candidates per pixel and frame).
-METHOD_ARGS = {"ris": ["--vpls", "4"]}
+# its reservoirs per pixel, each worth --candidates VPL candidates (4 × 32 candidates per pixel and frame).
+# `ris-learned` is ris with the visibility learned over the progressive frames (--learn-visibility).
+METHOD_ARGS = {"ris": ["--vpls", "4"], "ris-learned": ["--vpls", "4", "--learn-visibility", "0.1"]}
+# Labels that run another bounce method with their METHOD_ARGS.
+METHOD_OF = {"ris-learned": "ris"}
 DEFAULT_ALBEDO = 0.5
 # Segment visibility ignores hits within this fraction of either end (bounce's BVH_SHADOW_EPS).
 SHADOW_EPS = 1e-4
@@ -411,7 +414,7 @@ def run_scene(a, mi, name):
     for method in a.methods:
         out_exr = os.path.join(a.out, f"{name}-{a.size}-{method}.exr")
         extra = ["--time-limit", f"{wall:.3f}"] + (["--spp", str(a.ref_frame_spp)] if method == "reference" else []) + METHOD_ARGS.get(method, [])
-        whole, _ = run_timed(bounce_cmd(a, scene_path, out_exr, method, extra))
+        whole, _ = run_timed(bounce_cmd(a, scene_path, out_exr, METHOD_OF.get(method, method), extra))
         meta = exr_meta(mi, out_exr)
         rows.append((f"bounce {method}", float(meta.get("bounce.wall_s", "nan")), meta.get("bounce.frames", "?"),
                      compare(a.bounce, out_exr, gt), whole))
@@ -431,7 +434,8 @@ def main():
     p.add_argument("--gt-spp", type=int, default=16384, help="samples per pixel of the ground truth")
     p.add_argument("--check-spp", type=int, default=1024, help="Mitsuba samples of the convergence check")
     p.add_argument("--ref-frame-spp", type=int, default=16, help="spp per progressive frame of bounce's reference")
-    p.add_argument("--methods", default=",".join(METHODS), help="bounce methods to run")
+    p.add_argument("--methods", default=",".join(METHODS),
+                   help="bounce methods to run (also: " + ", ".join(METHOD_OF) + ")")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--out", default=os.path.join(ROOT, "target", "compare-mitsuba"), help="cache and output folder")
     p.add_argument("--bounce", default=os.path.join(os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")), "debug", "bounce"))
