@@ -101,30 +101,35 @@ fn an_overwrite_kills_earlier_writers_but_a_write_keeps_them() {
     assert!(px.iter().all(|&v| v == 1.0));
 }
 
+/// The frame-skipping tests' settings: a 24² combined frame of `method`, small maps, the voxel march (so
+/// that the grid is made and kept: exact rays need none).
+fn small_frame(method: bounce_graph::frame::Method) -> bounce_graph::frame::FrameSettings {
+    bounce_graph::frame::FrameSettings {
+        width: 24,
+        height: 24,
+        component: bounce_graph::frame::Component::Combined,
+        method,
+        vpls: 4,
+        dprsm_res: 32,
+        shadow_res: 128,
+        voxels: 32,
+        visibility: bounce_graph::frame::Visibility::Voxel,
+        ..bounce_graph::frame::FrameSettings::default()
+    }
+}
+
 /// Skipping what a frame does not need: a second frame whose inputs are unchanged records only the
 /// gather (read from the graph's list of recorded passes, not from timings) and gives the same image;
 /// another seed for `uniform` (whose CDF does not depend on it) still records only the gather; a method
 /// whose importance depends on the seed, or another image size, rebuilds.
 #[test]
 fn an_unchanged_frame_records_only_the_gather() {
-    use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+    use bounce_graph::frame::{FrameSettings, Method, Renderer};
     use bounce_graph::scene::Scene;
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
-    let s = FrameSettings {
-        width: 24,
-        height: 24,
-        component: Component::Combined,
-        method: Method::Uniform,
-        vpls: 4,
-        dprsm_res: 32,
-        shadow_res: 128,
-        voxels: 32,
-        // The voxel march, so that the grid is made (and kept): exact rays need none.
-        visibility: bounce_graph::frame::Visibility::Voxel,
-        ..FrameSettings::default()
-    };
+    let s = small_frame(Method::Uniform);
     let first = r.render(&s).unwrap();
     for pass in ["gbuffer", "dprsm_depth", "direct", "dprsm", "voxelize", "importance", "cdf_reduce", "gather"] {
         assert!(first.ran.contains(&pass), "the first frame lacks {pass}: {:?}", first.ran);
@@ -165,19 +170,7 @@ fn a_camera_move_keeps_the_light_side() {
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
-    let s = FrameSettings {
-        width: 24,
-        height: 24,
-        component: Component::Combined,
-        method: Method::Global,
-        vpls: 4,
-        dprsm_res: 32,
-        shadow_res: 128,
-        voxels: 32,
-        // The voxel march, so that the grid is made (and kept): exact rays need none.
-        visibility: bounce_graph::frame::Visibility::Voxel,
-        ..FrameSettings::default()
-    };
+    let s = small_frame(Method::Global);
     r.render(&s).unwrap();
     let mut moved = scene.camera;
     moved.eye += glam::Vec3::new(0.2, -0.1, -0.5);
@@ -216,25 +209,13 @@ fn a_camera_move_keeps_the_light_side() {
 /// bits (the light upload is exact).
 #[test]
 fn a_light_move_records_exactly_the_light_side() {
-    use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+    use bounce_graph::frame::{Method, Renderer};
     use bounce_graph::scene::{point_light, Scene};
     use glam::Vec3;
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
-    let s = FrameSettings {
-        width: 24,
-        height: 24,
-        component: Component::Combined,
-        method: Method::Global,
-        vpls: 4,
-        dprsm_res: 32,
-        shadow_res: 128,
-        voxels: 32,
-        // The voxel march, so that the grid is made (and kept): exact rays need none.
-        visibility: bounce_graph::frame::Visibility::Voxel,
-        ..FrameSettings::default()
-    };
+    let s = small_frame(Method::Global);
     let first = r.render(&s).unwrap();
     let (p0, i0) =
         (Vec3::from_slice(&scene.lights[0].position[..3]), Vec3::from_slice(&scene.lights[0].intensity[..3]));

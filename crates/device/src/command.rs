@@ -103,24 +103,24 @@ impl DescriptorWrites {
         self
     }
 
-    /// A buffer read through its view with `texelFetch` (a `usamplerBuffer`).
-    pub fn uniform_texel_buffer(mut self, binding: u32, b: &crate::TexelBuffer) -> Self {
-        self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(b.view)));
+    fn texel(mut self, binding: u32, view: vk::BufferView) -> Self {
+        self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(view)));
         self
+    }
+
+    /// A buffer read through its view with `texelFetch` (a `usamplerBuffer`).
+    pub fn uniform_texel_buffer(self, binding: u32, b: &crate::TexelBuffer) -> Self {
+        self.texel(binding, b.view)
     }
 
     /// A storage buffer read through its `R32_UINT` view ([`Buffer::texel_view`]: made with both usages).
-    pub fn texel_view(mut self, binding: u32, b: &Buffer) -> Self {
-        let view = b.texel_view.unwrap_or_else(|| panic!("`{}` was made without UNIFORM_TEXEL_BUFFER usage", b.name));
-        self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(view)));
-        self
+    pub fn texel_view(self, binding: u32, b: &Buffer) -> Self {
+        self.texel(binding, b.texel_view.unwrap_or_else(|| panic!("`{}` has no texel view", b.name)))
     }
 
     /// A storage buffer read through its `R32G32B32A32_UINT` view ([`Buffer::texel_view4`]).
-    pub fn texel_view4(mut self, binding: u32, b: &Buffer) -> Self {
-        let view = b.texel_view4.unwrap_or_else(|| panic!("`{}` has no uvec4 texel view", b.name));
-        self.entries.push((binding, vk::DescriptorType::UNIFORM_TEXEL_BUFFER, Info::TexelBuffer(view)));
-        self
+    pub fn texel_view4(self, binding: u32, b: &Buffer) -> Self {
+        self.texel(binding, b.texel_view4.unwrap_or_else(|| panic!("`{}` has no uvec4 texel view", b.name)))
     }
 
     /// Push the set as set 0 of `layout`.

@@ -195,8 +195,6 @@ impl Drop for Buffer {
 pub struct TexelBuffer {
     pub buffer: Buffer,
     pub view: vk::BufferView,
-    /// Texels in the buffer.
-    pub texels: u64,
 }
 
 impl TexelBuffer {
@@ -205,7 +203,7 @@ impl TexelBuffer {
         assert!(data.len().is_multiple_of(16) && !data.is_empty(), "{name}: whole 16-byte texels");
         let buffer = Buffer::with_data(gpu, name, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER, data)?;
         let view = texel_view(gpu, &buffer, vk::Format::R32G32B32A32_UINT, 16)?;
-        Ok(TexelBuffer { texels: buffer.size / 16, buffer, view })
+        Ok(TexelBuffer { buffer, view })
     }
 }
 

@@ -562,6 +562,20 @@ impl<'a> Graph<'a> {
         PassBuilder { graph: self, pass: PassEntry { name, uses: vec![], record: None } }
     }
 
+    /// A pass `name` that zeroes `buffers` (a transfer fill): accumulators the next passes add into.
+    pub fn add_clear(&mut self, name: &'static str, buffers: &mut [&mut Handle<Buffer>]) {
+        let handles: Vec<Handle<Buffer>> = buffers.iter().map(|h| **h).collect();
+        let mut pass = self.add_pass(name);
+        for h in buffers.iter_mut() {
+            pass = pass.overwrite(*h, Access::TransferWrite);
+        }
+        pass.record(move |ctx| {
+            for h in &handles {
+                unsafe { ctx.gpu.device.cmd_fill_buffer(ctx.cmd, ctx.buffer(h).raw, 0, vk::WHOLE_SIZE, 0) };
+            }
+        });
+    }
+
     /// Mark a resource as wanted after execution: the passes producing it are live.
     pub fn export<T>(&mut self, h: &Handle<T>) {
         self.exported.push(h.id);

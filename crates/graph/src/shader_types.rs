@@ -111,6 +111,21 @@ pub struct GatherPush {
 }
 const _: () = assert!(size_of::<GatherPush>() == 64);
 
+impl GatherPush {
+    /// This push (items `first..last`, its whole range) for the dispatch of items `f..l` of it: only the
+    /// range's first dispatch keeps `accumulate` and `add_direct`; the later ones add to what it stored.
+    pub fn chunk(&self, f: u32, l: u32) -> GatherPush {
+        let head = f == self.first;
+        GatherPush {
+            first: f,
+            last: l,
+            accumulate: if head { self.accumulate } else { 1 },
+            add_direct: if head { self.add_direct } else { 0 },
+            ..*self
+        }
+    }
+}
+
 /// ris push constants, after a [`GatherPush`] (`RisPush` in `glsl/shared/types.glsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

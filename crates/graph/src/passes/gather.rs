@@ -271,26 +271,13 @@ impl Gather {
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
             let (pipeline, writes) = self.variant(ctx, f, &i, writes);
-            let chunk = f.vpls_per_dispatch.max(1);
-            let mut first = push.first;
-            loop {
-                let last = first.saturating_add(chunk).min(push.last);
-                let p = GatherPush {
-                    first,
-                    last,
-                    accumulate: if first == push.first { push.accumulate } else { 1 },
-                    add_direct: if first == push.first { push.add_direct } else { 0 },
-                    ..push
-                };
+            for (first, last) in super::dispatch_ranges(push.first, push.last, f.vpls_per_dispatch) {
                 if first != push.first {
                     // The next chunk adds to what the previous one stored.
                     ctx.serialize(&o);
                 }
+                let p = push.chunk(first, last);
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
-                first = last;
-                if first >= push.last {
-                    break;
-                }
             }
         });
     }

@@ -158,15 +158,7 @@ impl Importance {
     fn add_clear(g: &mut Graph, texels: u64) -> (Handle<Buffer>, Handle<Buffer>) {
         let mut sums = g.create_buffer(BufferDesc::storage("gbg.sums", 8 * texels));
         let mut counts = g.create_buffer(BufferDesc::storage("gbg.counts", 4 * texels));
-        let (hs, hc) = (sums, counts);
-        g.add_pass("importance_clear")
-            .overwrite(&mut sums, Access::TransferWrite)
-            .overwrite(&mut counts, Access::TransferWrite)
-            .record(move |ctx| unsafe {
-                for b in [ctx.buffer(&hs), ctx.buffer(&hc)] {
-                    ctx.gpu.device.cmd_fill_buffer(ctx.cmd, b.raw, 0, bounce_device::vk::WHOLE_SIZE, 0);
-                }
-            });
+        g.add_clear("importance_clear", &mut [&mut sums, &mut counts]);
         (sums, counts)
     }
 

@@ -124,3 +124,32 @@ pub fn vpl_writes(w: DescriptorWrites, ctx: &PassContext, v: [&Handle<Image>; 3]
         s,
     )
 }
+
+/// `[first, last)` split into dispatches of at most `chunk` items (lavapipe's loop limit): each
+/// dispatch's `(first, last)`, in order. At least one, so an empty range still gets the dispatch that
+/// writes the pass's output.
+pub fn dispatch_ranges(first: u32, last: u32, chunk: u32) -> impl Iterator<Item = (u32, u32)> {
+    let chunk = chunk.max(1);
+    let mut next = Some(first);
+    std::iter::from_fn(move || {
+        let f = next?;
+        let l = f.saturating_add(chunk).min(last).max(f);
+        next = (l < last).then_some(l);
+        Some((f, l))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::dispatch_ranges;
+
+    #[test]
+    fn dispatch_ranges_cover_the_range_once_in_order() {
+        let all = |f, l, c| dispatch_ranges(f, l, c).collect::<Vec<_>>();
+        assert_eq!(all(0, 10, 4), vec![(0, 4), (4, 8), (8, 10)]);
+        assert_eq!(all(3, 5, 10), vec![(3, 5)]);
+        assert_eq!(all(7, 7, 4), vec![(7, 7)]);
+        assert_eq!(all(0, 3, 0), vec![(0, 1), (1, 2), (2, 3)]);
+        assert_eq!(all(u32::MAX - 1, u32::MAX, u32::MAX), vec![(u32::MAX - 1, u32::MAX)]);
+    }
+}

@@ -120,25 +120,13 @@ impl Reference {
                     .storage_image(B_GATHER_OUT, ctx.image(&hs))
                     .storage_image(B_REF_SQ, ctx.image(&hq)),
             );
-            let mut first = push.first;
-            loop {
-                let last = first.saturating_add(per_dispatch.max(1)).min(push.last);
-                let p = GatherPush {
-                    first,
-                    last,
-                    accumulate: if first == push.first { push.accumulate } else { 1 },
-                    add_direct: if first == push.first { push.add_direct } else { 0 },
-                    ..push
-                };
+            for (first, last) in super::dispatch_ranges(push.first, push.last, per_dispatch) {
                 if first != push.first {
                     ctx.serialize(&hs);
                     ctx.serialize(&hq);
                 }
+                let p = push.chunk(first, last);
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
-                first = last;
-                if first >= push.last {
-                    break;
-                }
             }
         });
     }

@@ -228,10 +228,7 @@ impl Ris {
             let t = g.temporal_buffer("ris.visibility", desc, &r.key);
             let mut h = t.handle;
             if t.fresh {
-                let hc = h;
-                g.add_pass("ris_visibility_clear").overwrite(&mut h, Access::TransferWrite).record(move |ctx| unsafe {
-                    ctx.gpu.device.cmd_fill_buffer(ctx.cmd, ctx.buffer(&hc).raw, 0, vk::WHOLE_SIZE, 0);
-                });
+                g.add_clear("ris_visibility_clear", &mut [&mut h]);
             }
             h
         } else {
@@ -335,11 +332,7 @@ impl Ris {
                 }
                 (None, _) => (&self.initial[Self::voxel_target(&r.push)], writes),
             };
-            let m = r.push.candidates;
-            let chunk = r.candidates_per_dispatch.max(1);
-            let mut first = 0;
-            while first < m {
-                let last = first.saturating_add(chunk).min(m);
+            for (first, last) in super::dispatch_ranges(0, r.push.candidates, r.candidates_per_dispatch) {
                 if first > 0 {
                     // The next candidates continue the reservoirs the previous dispatch stored.
                     ctx.serialize(&o);
@@ -350,7 +343,6 @@ impl Ris {
                 };
                 let size = [f.width, f.height, r.push.reservoirs];
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
-                first = last;
             }
         });
     }
@@ -417,22 +409,14 @@ impl Ris {
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
             // The gather's visibility variants, chosen and bound as the gather's.
             let (pipeline, writes) = self.shade.pick(&f, writes);
-            let chunk = f.vpls_per_dispatch.max(1);
-            let mut first = 0;
-            while first < ris.reservoirs {
-                let last = first.saturating_add(chunk).min(ris.reservoirs);
+            // All reservoirs of a pixel, accumulated over dispatches as the gather's samples.
+            let whole = GatherPush { first: 0, last: ris.reservoirs, accumulate: 0, ..push };
+            for (first, last) in super::dispatch_ranges(0, ris.reservoirs, f.vpls_per_dispatch) {
                 if first > 0 {
                     // The next reservoirs add to what the previous dispatch stored.
                     ctx.serialize(&o);
                 }
-                let gather = GatherPush {
-                    first,
-                    last,
-                    accumulate: (first > 0) as u32,
-                    add_direct: if first == 0 { push.add_direct } else { 0 },
-                    ..push
-                };
-                let block = RisPushBlock { gather, ris };
+                let block = RisPushBlock { gather: whole.chunk(first, last), ris };
                 pipeline.dispatch(
                     ctx.cmd,
                     &writes,
@@ -440,7 +424,6 @@ impl Ris {
                     [f.width, f.height, 1],
                     [WG_2D, WG_2D, 1],
                 );
-                first = last;
             }
         });
     }

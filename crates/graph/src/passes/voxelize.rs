@@ -38,7 +38,7 @@ use crate::shader_types::VoxelizePush;
 use crate::shaders;
 use anyhow::{bail, Context, Result};
 use bounce_device::sync::Access;
-use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, Gpu};
+use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, Gpu};
 use glam::{UVec3, Vec3};
 
 /// Conservative margin of the voxelization, in cells (2⁻¹³; from `glsl/shared/bindings.glsl`).
@@ -212,10 +212,8 @@ impl Voxelize {
         uniforms: &'a Buffer,
         grid: &mut Handle<Buffer>,
     ) {
+        g.add_clear("voxelize_clear", &mut [&mut *grid]);
         let h = *grid;
-        g.add_pass("voxelize_clear").overwrite(grid, Access::TransferWrite).record(move |ctx| unsafe {
-            ctx.gpu.device.cmd_fill_buffer(ctx.cmd, ctx.buffer(&h).raw, 0, vk::WHOLE_SIZE, 0);
-        });
         g.add_pass("voxelize").write(grid, Access::ComputeWrite).record(move |ctx| {
             let buffer = ctx.buffer(&h);
             let (per_invocation, shares) = shares(ctx.gpu.loop_iteration_limit, buffer.size / 4 * 32);
