@@ -2,6 +2,9 @@
 // dprsm (reflective): like dprsm.frag, the exact hit of each texel's centre ray, plus the VPL it makes:
 // world position, shading normal facing the light, and reflected flux
 //   Φ_v = albedo(v) · I · Δω_v,   Δω_v = 4 / (1 + u² + v²)² · (2 / res)² (paraboloid faces)
+// and the area of the surface patch the texel sees, A_v = Δω_v · d² / cos α (d the distance to the light,
+// α between the triangle's face normal and the ray; cos α ≥ VPL_MIN_COS bounds a grazing patch): the
+// patch kernel of shared/vpl.glsl.
 // (the texel's solid angle seen from the light; the thesis's eqs. 7.1–7.3 leave it out, and without it
 // the VPL sum does not converge to the one-bounce integral). With `--light-map rsm|cube` the faces are
 // perspective and Δω_v is theirs (shared/lightmap.glsl). See crates/graph/src/passes/dprsm.rs.
@@ -17,7 +20,7 @@ layout(location = 2) flat in vec3 i_c;
 layout(location = 3) flat in uint i_tri;
 layout(location = 4) flat in uint i_instance;
 
-layout(location = 0) out vec4 o_position; // xyz world position, w = 1 (0 where empty: cleared)
+layout(location = 0) out vec4 o_position; // xyz world position, w = A_v > 0 (0 where empty: cleared)
 layout(location = 1) out vec4 o_normal;   // xyz unit normal facing the light, w = distance to the light
 layout(location = 2) out vec4 o_flux;     // rgb reflected flux (W), w = Δω (sr)
 
@@ -43,7 +46,10 @@ void main() {
     vec2 tex = w0 * vec2(v0.position_u.w, v0.normal_v.w) + hit.y * vec2(v1.position_u.w, v1.normal_v.w)
              + hit.z * vec2(v2.position_u.w, v2.normal_v.w);
     float d_omega = lm_d_omega(uv, res);
-    o_position = vec4(world, 1.0);
+    // The face normal, not the shading one: the patch is the triangle's. Floored so that the area stays a
+    // positive normal float (w = 0 means "no VPL") at any scene scale.
+    float cos_a = max(abs(dot(normalize(cross(i_b - i_a, i_c - i_a)), dir)), VPL_MIN_COS);
+    o_position = vec4(world, max(d_omega * t * t / cos_a, 1e-30));
     o_normal = vec4(n, t);
     o_flux = vec4(albedo_at(i_tri, tex) * light.intensity.rgb * d_omega, d_omega);
 }

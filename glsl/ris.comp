@@ -2,7 +2,7 @@
 // ris: resampled importance sampling over the VPLs (Talbot et al. 2005), with spatial and temporal reuse
 // (Bitterli et al. 2020; generalized RIS, Lin et al. 2022). crates/graph/src/passes/ris.rs states the
 // estimator and why it is unbiased. The target is the unshadowed contribution's luminance at the pixel,
-//   p̂_x(v) = luminance(albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / max(d², clamp²)),
+//   p̂_x(v) = luminance(albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / k(d²)) (the VPL kernel, shared/vpl.glsl),
 // the source is the gather's mixture (draw_vpl, its exact probability p_v). Stages (one variant each):
 // RIS_INITIAL (dispatch W × H × R): reservoir r streams candidates [first, last) of its M: v ~ p,
 //   w = p̂(v)/p_v, v kept with probability w / Σw; after the M-th, W = Σw / (M p̂(y)), then (RIS_HISTORY)
@@ -106,7 +106,7 @@ float target_at(vec3 x, vec3 n, vec3 a, uint v) {
 // The learned visibility's counts for pixel q and VPL v: (visible, traced) at vis_counts[i], [i + 1] with
 // i = vis_tile_base(q) + 2 · vis_cell_of(v), for q's screen tile (vis_tile pixels per side) and v's
 // light-map cell (vis_cell texels per side). Split so a loop over candidates divides only once per pixel
-// (llvmpipe divides integers lane by lane); the pool stores each entry's cell.
+// for the tile (llvmpipe divides integers lane by lane); only the learned variant computes cells.
 uint vis_side() {
     return (frame.size.w + ris.vis_cell - 1u) / ris.vis_cell;
 }
@@ -141,7 +141,7 @@ void main() {
             Vpl vpl = vpl_fetch(v);
             a = vec4(vpl.position, uintBitsToFloat(v));
             b = vec4(vpl.normal, prob);
-            c = vec4(vpl.flux, uintBitsToFloat(vpl.valid ? vis_cell_of(v) : RIS_NONE));
+            c = vec4(vpl.flux, vpl.area);
         }
     }
     pool_out[3u * e] = a;
@@ -161,8 +161,13 @@ uint candidate(ivec2 q, uint layer, uint i, uint seed, out float prob, out Vpl v
     vec4 b = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 1));
     vec4 c = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 2));
     prob = b.w;
-    cell = floatBitsToUint(c.w);
-    vpl = Vpl(uintBitsToFloat(a.xyz), b.xyz, c.rgb, cell != RIS_NONE);
+    vpl = Vpl(uintBitsToFloat(a.xyz), b.xyz, c.rgb, c.w, c.w != 0.0);
+#ifdef RIS_LEARNED
+    // Integer divisions, lane by lane on llvmpipe: only the learned variant pays them.
+    cell = vis_cell_of(a.w);
+#else
+    cell = 0u;
+#endif
     return a.w;
 #else
     uint v = draw_vpl(layer * ris.candidates + i, seed, prob);

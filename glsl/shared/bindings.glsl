@@ -30,6 +30,9 @@
 #define LIGHT_MAP_DPRSM 0
 #define LIGHT_MAP_RSM 1
 #define LIGHT_MAP_CUBE 2
+// The least cos α of a VPL's patch area A_v = Δω · d² / cos α (dprsm_reflective.frag): a texel that meets
+// its surface at grazing incidence gets at most 20× the area it would facing the light.
+const float VPL_MIN_COS = 0.05;
 
 // ---- direct: inputs and output -------------------------------------------------------------------------
 #define B_DIRECT_GPOSITION 7

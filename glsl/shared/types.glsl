@@ -43,6 +43,8 @@ struct FrameUniforms {
                              // y faces per light, z tan(fov/2) of a perspective face (float bits), w unused
     uvec4 cells;             // `--visibility hybrid`'s list grid (shared/hybrid.glsl): xyz cells per axis over the
                              // voxel grid's box, w voxel cells per list cell (crates/graph/src/bvh/cells.rs)
+    vec4 vpl;                // x: the weight s of a VPL's patch area in its kernel 1/√(d⁴ + (s·A_v)²)
+                             // (shared/vpl.glsl; 0: point VPLs, 1/d²), yzw unused
 };
 
 // gather push constants.

@@ -8,6 +8,7 @@ struct Vpl {
     vec3 position;
     vec3 normal;
     vec3 flux;
+    float area; // A_v, the surface patch its texel sees (dprsm_reflective.frag); 0: no VPL
     bool valid;
 };
 
@@ -17,14 +18,21 @@ Vpl vpl_fetch(uint v) {
     Vpl o;
     vec4 p = texelFetch(vpl_position, t, 0);
     o.position = p.xyz;
+    o.area = p.w;
     o.valid = p.w != 0.0;
     o.normal = texelFetch(vpl_normal, t, 0).xyz;
     o.flux = texelFetch(vpl_flux, t, 0).rgb;
     return o;
 }
 
-// albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / max(d², min_d2), without visibility; writes the unit
-// direction x → v (for the march) and returns 0 for a VPL behind x or facing away.
+// albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x · k(d²), without visibility; 0 for a VPL behind x or facing
+// away. The kernel (--vpl-kernel; crates/graph/src/passes/gather.rs says why):
+//   point (frame.vpl.x = 0, the thesis's): k = 1 / max(d², min_d2), unbounded next to x;
+//   patch (frame.vpl.x = s = 1/π): k = 1 / max(√(d⁴ + (s·A_v)²), min_d2), A_v the area of the surface
+//     patch the VPL's texel sees. Next to x it tends to π/A_v, so the VPL gives at most its patch's
+//     radiosity Φ_v/A_v (the irradiance of a disk of area A_v at its centre); where d² ≫ A_v it is the point
+//     kernel to second order (relative difference (s·A_v)²/(2d⁴)), so the sum keeps the point VPLs' energy
+//     and converges to the same one-bounce integral as the map's resolution grows.
 vec3 vpl_unshadowed(vec3 x, vec3 nx, vec3 ax, Vpl vpl, float min_d2) {
     if (!vpl.valid) return vec3(0.0);
     vec3 w = vpl.position - x;
@@ -34,7 +42,10 @@ vec3 vpl_unshadowed(vec3 x, vec3 nx, vec3 ax, Vpl vpl, float min_d2) {
     float cos_x = dot(nx, w);
     float cos_v = -dot(vpl.normal, w);
     if (cos_x <= 0.0 || cos_v <= 0.0) return vec3(0.0);
-    return ax / PI * vpl.flux * (cos_v / PI) * cos_x / max(d2, min_d2);
+    // √(d⁴ + a²) as m·√(1 + (n/m)²), m = max(d², a), n = min(d², a): no overflow or underflow at any scale.
+    float a = frame.vpl.x * vpl.area, m = max(d2, a), n = min(d2, a) / m;
+    float den = a > 0.0 ? m * sqrt(1.0 + n * n) : d2;
+    return ax / PI * vpl.flux * (cos_v / PI) * cos_x / max(den, min_d2);
 }
 
 #endif

@@ -3,6 +3,7 @@
 //! intersects per texel, so depths must agree to float rounding everywhere but at texels whose centre
 //! ray grazes a triangle edge (there the two sides may legitimately pick different triangles).
 
+use bounce_graph::bindings::VPL_MIN_COS;
 use bounce_graph::camera::Camera;
 use bounce_graph::frame::{FrameSettings, Renderer};
 use bounce_graph::scene::{point_light, Scene};
@@ -111,7 +112,8 @@ fn dprsm_depth_matches_a_cpu_ray_cast_in_the_cornell_box() {
 }
 
 /// The reflective DPRSM: every texel's VPL against a CPU ray cast through the texel centre: position,
-/// light-facing normal, solid angle Δω = 4/(1+u²+v²)² (2/res)² and flux albedo · I · Δω; and the solid
+/// light-facing normal, solid angle Δω = 4/(1+u²+v²)² (2/res)², flux albedo · I · Δω and the patch area
+/// A_v = Δω · t² / max(|cos α|, VPL_MIN_COS) (t the hit distance, α between the ray and the face); and the solid
 /// angles of all texels inside the unit disk add up to 4π (minus the ring the disk's texels miss).
 #[test]
 fn reflective_dprsm_texels_match_a_cpu_ray_cast() {
@@ -185,7 +187,7 @@ fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
                     };
                     let p = lp + paraboloid_dir((u, v), face) * h.t;
                     let g = DVec3::new(pos[k][0] as f64, pos[k][1] as f64, pos[k][2] as f64);
-                    if pos[k][3] != 1.0 || (g - p).length() > 1e-4 * h.t.max(1.0) {
+                    if (g - p).length() > 1e-4 * h.t.max(1.0) {
                         bad.push(format!("texel {k}: position {g:?} vs {p:?}"));
                         continue;
                     }
@@ -194,6 +196,11 @@ fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
                     let (a, b, c) =
                         (tv[0].position().as_dvec3(), tv[1].position().as_dvec3(), tv[2].position().as_dvec3());
                     let mut fnorm = (b - a).cross(c - a).normalize();
+                    let cos_a = fnorm.dot(paraboloid_dir((u, v), face)).abs().max(VPL_MIN_COS as f64);
+                    let area = d_omega * h.t * h.t / cos_a;
+                    if ((pos[k][3] as f64) - area).abs() > 1e-4 * area {
+                        bad.push(format!("texel {k}: patch area {} vs {area}", pos[k][3]));
+                    }
                     if fnorm.dot(lp - p) < 0.0 {
                         fnorm = -fnorm;
                     }

@@ -12,7 +12,7 @@
 use bounce_device::GpuOptions;
 use bounce_graph::frame::{
     Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, ReferenceEstimator, RisSettings, RisSource,
-    Visibility,
+    Visibility, VplKernel,
 };
 use bounce_graph::scene::Scene;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -143,6 +143,15 @@ pub const LIGHT_MAPS: Choices<LightMap> = Choices(&[
     ("cube", LightMap::Cube, "Cube-map RSM: six 90° faces"),
 ]);
 
+pub const VPL_KERNELS: Choices<VplKernel> = Choices(&[
+    (
+        "patch",
+        VplKernel::Patch,
+        "Default. 1/√(d⁴ + (A/π)²), A the VPL's patch area: 1/d² far away, bounded next to the receiver",
+    ),
+    ("point", VplKernel::Point, "The thesis's point VPL: 1/d², unbounded next to the receiver"),
+]);
+
 pub const MIS_WEIGHTS: Choices<MisWeights> = Choices(&[
     ("consistent", MisWeights::Consistent, "Both densities in solid angle (unbiased)"),
     ("thesis", MisWeights::Thesis, "The thesis's literal weights (mixed measures; for comparison)"),
@@ -209,6 +218,9 @@ pub struct FrameArgs {
     /// Clamp 1/d² below this distance, as a fraction of the scene diagonal (0: off, unbiased).
     #[arg(long, default_value_t = 0.0)]
     pub clamp: f32,
+    /// A VPL's falloff with distance.
+    #[arg(long, value_parser = VPL_KERNELS, default_value = "patch")]
+    pub vpl_kernel: VplKernel,
     /// Gather points per CDF (global, stratified, local).
     #[arg(long, default_value_t = 64)]
     pub cdf_samples: u32,
@@ -315,6 +327,7 @@ impl FrameArgs {
             shadow_res: self.shadow_res,
             voxels: self.voxels,
             clamp: self.clamp,
+            vpl_kernel: self.vpl_kernel,
             ris: RisSettings {
                 source: self.source,
                 candidates: self.candidates,

@@ -82,8 +82,12 @@ pub struct FrameUniforms {
     pub light_map: [u32; 4],
     /// `--visibility hybrid`'s list grid: cells per axis, voxel cells per list cell.
     pub cells: [u32; 4],
+    /// x: the weight s of a VPL's patch area in its kernel 1/√(d⁴ + (s·A_v)²) (`--vpl-kernel`; 0: 1/d²),
+    /// yzw unused.
+    pub vpl: [f32; 4],
 }
-const _: () = assert!(size_of::<FrameUniforms>() == 224);
+const _: () = assert!(size_of::<FrameUniforms>() == 240);
+const _: () = assert!(offset_of!(FrameUniforms, vpl) == 224);
 const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 160);
 const _: () = assert!(offset_of!(FrameUniforms, eye) == 64);
 const _: () = assert!(offset_of!(FrameUniforms, size) == 112);

@@ -28,7 +28,7 @@ use anyhow::{Context, Result};
 use bounce_device::Gpu;
 use bounce_graph::frame::progressive::render_for;
 use bounce_graph::frame::settings::ReferenceEstimator;
-use bounce_graph::frame::{Component, FrameOutput, FrameSettings, LightMap, Method, Renderer, Visibility};
+use bounce_graph::frame::{Component, FrameOutput, FrameSettings, LightMap, Method, Renderer, Visibility, VplKernel};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
@@ -171,8 +171,9 @@ impl Reference {
     }
 
     /// Its cache file's name: keyed by the scene and every setting the reference image depends on.
-    /// The exhaustive sum also depends on the VPL map and the visibility; they appear in the name only
-    /// when not the defaults, so the caches of earlier runs keep their names.
+    /// The exhaustive sum also depends on the VPL map, the visibility and the VPL kernel; they appear in
+    /// the name only when not the defaults of the runs that made the first caches (dprsm, voxel, point),
+    /// so those caches keep their names and are never taken for another kernel.
     fn file_name(self, base: &FrameSettings, scene: &Path) -> String {
         let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let parent =
@@ -189,6 +190,9 @@ impl Reference {
             }
             if base.visibility != Visibility::Voxel {
                 kind += &format!("-{:?}", base.visibility).to_lowercase();
+            }
+            if base.vpl_kernel != VplKernel::Point {
+                kind += &format!("-{:?}", base.vpl_kernel).to_lowercase();
             }
         }
         let b = base;
@@ -377,13 +381,14 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
     let b = &plan.base;
     let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
     let mut md = format!(
-        "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {} repeat(s) \
+        "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {:?} VPLs, {} repeat(s) \
          (seeds 1..={}); medians over repeats. Reference: {}. {}\n\n## {} and mean FLIP against the reference\n\n| method |",
         b.width,
         b.height,
         b.dprsm_res,
         b.voxels,
         b.clamp,
+        b.vpl_kernel,
         plan.repeats,
         plan.repeats,
         match plan.reference {

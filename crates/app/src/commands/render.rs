@@ -164,6 +164,7 @@ fn metadata(
         ("vpls", s.vpls.to_string()),
         ("voxels", s.voxels.to_string()),
         ("clamp", s.clamp.to_string()),
+        ("vpl_kernel", format!("{:?}", s.vpl_kernel).to_lowercase()),
         ("visibility", format!("{:?}", s.visibility).to_lowercase()),
         ("spp", s.spp.to_string()),
         ("seed", s.seed.to_string()),

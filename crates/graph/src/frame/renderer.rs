@@ -502,6 +502,7 @@ impl RenderContext {
             voxel_origin,
             voxel_dims,
             cells: self.cells.as_ref().filter(|c| c.spec == self.voxel_spec(s)).map_or([0; 4], |c| c.grid),
+            vpl: [s.vpl_kernel.area_weight(), 0.0, 0.0, 0.0],
         }
     }
 

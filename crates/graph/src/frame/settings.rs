@@ -178,6 +178,29 @@ impl Visibility {
     }
 }
 
+/// What a VPL's contribution to a point at distance d falls off with (`glsl/shared/vpl.glsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VplKernel {
+    /// The thesis's point VPL: 1/d², unbounded next to the receiver (corners), so the VPL sum overshoots
+    /// there and every sampled method's error is a few pixels' heavy tail.
+    Point,
+    /// The default: 1/√(d⁴ + (A_v/π)²), A_v the area of the surface patch the VPL's texel sees. Bounded
+    /// next to the receiver by the patch's radiosity, the point kernel to second order where d² ≫ A_v, and
+    /// converging to the same integral as the map's resolution grows (BENCHMARKS.md measures both, and the
+    /// disk kernel 1/(d² + A_v/π) it was chosen over, against the exact one-bounce image).
+    Patch,
+}
+
+impl VplKernel {
+    /// The weight s of A_v in the kernel 1/√(d⁴ + (s·A_v)²) (`FrameUniforms::vpl[0]`; 0: 1/d²).
+    pub fn area_weight(self) -> f32 {
+        match self {
+            VplKernel::Point => 0.0,
+            VplKernel::Patch => std::f32::consts::FRAC_1_PI,
+        }
+    }
+}
+
 /// The VPL map at each light (thesis §6.3; `glsl/shared/lightmap.glsl`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightMap {
@@ -307,6 +330,8 @@ pub struct FrameSettings {
     pub voxels: u32,
     /// 1/d² clamp: minimum distance, as a fraction of the scene diagonal (0: off).
     pub clamp: f32,
+    /// A VPL's falloff with distance (`--vpl-kernel`).
+    pub vpl_kernel: VplKernel,
     /// VPLs per tile of the exhaustive (`all`) gather: one submission each.
     pub all_tile: u32,
     /// Gather points per CDF (global, stratified, local).
@@ -354,6 +379,7 @@ impl Default for FrameSettings {
             dprsm_res: 512,
             voxels: 128,
             clamp: 0.0,
+            vpl_kernel: VplKernel::Patch,
             all_tile: 4096,
             cdf_samples: 64,
             regions: 4,
