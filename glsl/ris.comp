@@ -92,7 +92,7 @@ float ris_rand(ivec2 q, uint stream, uint i) {
 // sees as hidden are drawn δ times as often, which is what an unshadowed target gets wrong behind walls.
 // Deterministic per pixel, so the spatial weights evaluate the same p̂ at each neighbour.
 float target_of(vec3 x, vec3 n, vec3 a, Vpl vpl) {
-    float t = luminance(vpl_unshadowed(x, n, a, vpl, pc.clamp_d2));
+    float t = vpl_unshadowed_luminance(x, n, vpl_luminance_albedo(a), vpl, pc.clamp_d2);
 #ifdef RIS_VOXEL_TARGET
     if (t > 0.0) t *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
 #endif
@@ -151,12 +151,20 @@ void main() {
 #endif
 
 #ifdef RIS_INITIAL
-// Candidate i of reservoir `layer` at pixel q and its probability: a draw of the source either way.
-uint candidate(ivec2 q, uint layer, uint i, uint seed, out float prob, out Vpl vpl, out uint cell) {
-#ifdef RIS_POOL
+// Where reservoir `layer` of pixel q reads the pool: the first entry of its tile (chosen by a hash of
+// (pixel, layer, frame)) and its start in the tile. Once per reservoir, not per candidate: llvmpipe divides
+// integers lane by lane, and the tile index is a remainder by a push constant.
+uvec2 pool_window(ivec2 q, uint layer) {
     uint tile = uint(ris_rand(q, 3u, layer) * float(ris.pool_tiles)) % ris.pool_tiles;
     uint start = uint(ris_rand(q, 4u, layer) * float(RIS_POOL_TILE)) % uint(RIS_POOL_TILE);
-    int e = int(tile * uint(RIS_POOL_TILE) + (start + i) % uint(RIS_POOL_TILE));
+    return uvec2(tile * uint(RIS_POOL_TILE), start);
+}
+
+// Candidate i of reservoir `layer` at pixel q and its probability: a draw of the source either way.
+// `window` is pool_window(q, layer) (unused without the pool).
+uint candidate(ivec2 q, uint layer, uint i, uint seed, uvec2 window, out float prob, out Vpl vpl, out uint cell) {
+#ifdef RIS_POOL
+    int e = int(window.x + (window.y + i) % uint(RIS_POOL_TILE));
     uvec4 a = texelFetch(pool_texels, 3 * e);
     vec4 b = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 1));
     vec4 c = uintBitsToFloat(texelFetch(pool_texels, 3 * e + 2));
@@ -196,12 +204,17 @@ void main() {
 #ifdef RIS_LEARNED
         uint tile_base = vis_tile_base(px);
 #endif
+#ifdef RIS_POOL
+        uvec2 window = pool_window(px, layer);
+#else
+        uvec2 window = uvec2(0u);
+#endif
         for (uint i = pc.first; i < pc.last; i++) {
             uint k = layer * ris.candidates + i;
             float prob;
             Vpl vpl;
             uint cell;
-            uint v = candidate(px, layer, i, seed, prob, vpl, cell);
+            uint v = candidate(px, layer, i, seed, window, prob, vpl, cell);
             if (!(prob > 0.0)) continue;
             float t = target_of(x, nx, ax, vpl);
 #ifdef RIS_LEARNED
@@ -310,7 +323,7 @@ void main() {
         Vpl vpl = vpl_fetch(in_i.vpl);
         float num = 0.0, den = 0.0, here = 0.0;
         for (uint j = 0u; j < n; j++) {
-            float t = luminance(vpl_unshadowed(xs[j], ns[j], albs[j], vpl, pc.clamp_d2));
+            float t = vpl_unshadowed_luminance(xs[j], ns[j], vpl_luminance_albedo(albs[j]), vpl, pc.clamp_d2);
             den += inputs[j].confidence * t;
             if (j == i) num = inputs[j].confidence * t;
             if (j == 0u) here = t;

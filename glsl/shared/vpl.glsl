@@ -48,4 +48,22 @@ vec3 vpl_unshadowed(vec3 x, vec3 nx, vec3 ax, Vpl vpl, float min_d2) {
     return ax / PI * vpl.flux * (cos_v / PI) * cos_x / max(den, min_d2);
 }
 
+// luminance(vpl_unshadowed(x, nx, ax, vpl, min_d2)) with axl = ax · the luminance weights (vpl_luminance_albedo):
+// the same value up to rounding, for ris's candidate loops, where it is most of the time. The cosines stay
+// unnormalized (cos θ_x cos θ_v = (n_x·w)(−n_v·w)/d², w = v − x), so there is no inverse square root, and
+// the albedo's colour folds into one dot product with the flux.
+float vpl_unshadowed_luminance(vec3 x, vec3 nx, vec3 axl, Vpl vpl, float min_d2) {
+    vec3 w = vpl.position - x;
+    float d2 = dot(w, w);
+    float cx = dot(nx, w), cv = -dot(vpl.normal, w);
+    float a = frame.vpl.x * vpl.area, m = max(d2, a), n = min(d2, a) / m;
+    float den = a > 0.0 ? m * sqrt(1.0 + n * n) : d2;
+    float t = dot(axl, vpl.flux) * (cx * cv) / (PI * PI * d2 * max(den, min_d2));
+    return vpl.valid && d2 > 0.0 && cx > 0.0 && cv > 0.0 ? t : 0.0;
+}
+
+vec3 vpl_luminance_albedo(vec3 ax) {
+    return ax * vec3(0.299, 0.587, 0.114);
+}
+
 #endif
