@@ -2,12 +2,12 @@
 // dprsm (reflective): like dprsm.frag, the exact hit of each texel's centre ray, plus the VPL it makes:
 // world position, shading normal facing the light, and reflected flux
 //   Φ_v = albedo(v) · I · Δω_v,   Δω_v = 4 / (1 + u² + v²)² · (2 / res)² (paraboloid faces)
-// and the area of the surface patch the texel sees, A_v = Δω_v · d² / cos α (d the distance to the light,
-// α between the triangle's face normal and the ray; cos α ≥ VPL_MIN_COS bounds a grazing patch): the
-// patch kernel of shared/vpl.glsl.
 // (the texel's solid angle seen from the light; the thesis's eqs. 7.1–7.3 leave it out, and without it
 // the VPL sum does not converge to the one-bounce integral). With `--light-map rsm|cube` the faces are
-// perspective and Δω_v is theirs (shared/lightmap.glsl). See crates/graph/src/passes/dprsm.rs.
+// perspective and Δω_v is theirs (shared/lightmap.glsl). See crates/graph/src/passes/dprsm.rs. And the
+// area of the surface patch the texel sees, A_v = Δω_v · d² / cos α (d the distance to the light, α
+// between the triangle's face normal and the ray; cos α ≥ VPL_MIN_COS bounds a grazing patch), for the
+// patch kernel of shared/vpl.glsl.
 #include "shared/scene.glsl"
 #include "shared/watertight.glsl"
 

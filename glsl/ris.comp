@@ -2,7 +2,7 @@
 // ris: resampled importance sampling over the VPLs (Talbot et al. 2005), with spatial and temporal reuse
 // (Bitterli et al. 2020; generalized RIS, Lin et al. 2022). crates/graph/src/passes/ris.rs states the
 // estimator and why it is unbiased. The target is the unshadowed contribution's luminance at the pixel,
-//   p̂_x(v) = luminance(albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / k(d²)) (the VPL kernel, shared/vpl.glsl),
+//   p̂_x(v) = luminance(albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x · k(d²)) (k: the VPL kernel, shared/vpl.glsl),
 // the source is the gather's mixture (draw_vpl, its exact probability p_v). Stages (one variant each):
 // RIS_INITIAL (dispatch W × H × R): reservoir r streams candidates [first, last) of its M: v ~ p,
 //   w = p̂(v)/p_v, v kept with probability w / Σw; after the M-th, W = Σw / (M p̂(y)), then (RIS_HISTORY)
@@ -62,8 +62,8 @@ layout(set = 0, binding = B_RIS_POOL) uniform usamplerBuffer pool_texels;
 layout(set = 0, binding = B_RIS_VIS) uniform usamplerBuffer vis_texels;
 #endif
 #ifdef RIS_PRESAMPLE
-// Entry e: texels 3e (position, v), 3e + 1 (normal, p_v; 0: no draw), 3e + 2 (flux, the VPL's learned-
-// visibility cell, or RIS_NONE for an empty texel).
+// Entry e: texels 3e (position, v), 3e + 1 (normal, p_v; 0: no draw), 3e + 2 (flux, the VPL's patch area
+// A_v; 0 for an empty texel).
 layout(std430, set = 0, binding = B_RIS_POOL) writeonly buffer RisPool { vec4 pool_out[]; };
 #endif
 #endif
