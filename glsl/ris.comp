@@ -7,7 +7,8 @@
 // RIS_INITIAL (dispatch W × H × R): reservoir r streams candidates [first, last) of its M: v ~ p,
 //   w = p̂(v)/p_v, v kept with probability w / Σw; after the M-th, W = Σw / (M p̂(y)), then (RIS_HISTORY)
 //   combined with last frame's reservoir at the same pixel and layer.
-// RIS_PRESAMPLE (RIS_POOL_TILE × T, --pool-tiles T > 0): the candidate pool, T tiles of RIS_POOL_TILE VPLs; tile
+// RIS_PRESAMPLE (RIS_POOL_TILE × T, --pool-tiles T > 0; RIS_UNIFORM_SOURCE: the uniform source's shortcut): the
+//   candidate pool, T tiles of RIS_POOL_TILE VPLs; tile
 //   j's entries are points 0 .. RIS_POOL_TILE − 1 of one stratified set of the source (draw_vpl, seeded by j
 //   and the frame), stored with their data and p_v, so a candidate costs three texel fetches and its target.
 // RIS_INITIAL with RIS_POOL: reservoir r's candidates are consecutive entries of one tile, from a start, both
@@ -136,7 +137,18 @@ void main() {
     vec4 a = vec4(0.0), b = vec4(0.0), c = vec4(0.0);
     if (cdf_total_at(0u) > 0.0) {
         float prob;
-        uint v = draw_vpl(k, pcg_hash(tile ^ 0x6A09E667u) ^ pc.seed, prob);
+        uint seed = pcg_hash(tile ^ 0x6A09E667u) ^ pc.seed;
+#ifdef RIS_UNIFORM_SOURCE
+        // The uniform source with faces by Russian roulette: its section and the defensive one are the same
+        // CDF (importance = validity), so draw_vpl's mixture is that CDF's distribution. One search and one
+        // probability instead of draw_vpl's two of each, with draw_vpl's stratified points.
+        uint all_rows = faces() * face_rows();
+        vec3 u = vec3(owen_sobol2(k, seed ^ 0xA54FF53Au), owen_sobol1(k, seed ^ 0x510E527Fu));
+        uint v = cdf_sample_rows3(0u, 0u, u, 0u, all_rows);
+        prob = cdf_prob_rows(0u, v, 0u, all_rows);
+#else
+        uint v = draw_vpl(k, seed, prob);
+#endif
         if (prob > 0.0) {
             Vpl vpl = vpl_fetch(v);
             a = vec4(vpl.position, uintBitsToFloat(v));

@@ -73,6 +73,7 @@ const SHADERS: &[Shader] = &[
     // ris: its three stages, the shade with the gather's visibility variants (voxel, exact, hybrid).
     variant("ris.initial.comp", "ris.comp", &["RIS_INITIAL"]),
     variant("ris.presample.comp", "ris.comp", &["RIS_PRESAMPLE"]),
+    variant("ris.presample_uniform.comp", "ris.comp", &["RIS_PRESAMPLE", "RIS_UNIFORM_SOURCE"]),
     variant("ris.initial_pool.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL"]),
     variant("ris.initial_pool_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_VOXEL_TARGET"]),
     variant("ris.initial_pool_learned.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED"]),

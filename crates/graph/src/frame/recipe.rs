@@ -16,7 +16,7 @@
 //! of one frame (the tiles of `all`, the sample batches of `reference`) add into the same image.
 
 use super::keys::Keys;
-use super::settings::{Component, FaceMode, FrameSettings, Method, MisWeights};
+use super::settings::{Component, FaceMode, FrameSettings, Method, MisWeights, RisSource};
 use crate::bindings::*;
 use crate::graph::{Graph, Handle};
 use crate::passes::cdf_reduce::CdfReduce;
@@ -221,7 +221,8 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
     ));
     let candidates_per_dispatch =
         ris.candidates_chunk.map_or(i.ris_candidates_per_dispatch, |c| c.get().min(i.ris_candidates_per_dispatch));
-    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key }
+    let uniform_source = ris.source == RisSource::Uniform && s.face == FaceMode::RussianRoulette;
+    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key, uniform_source }
 }
 
 /// The reference's push constants for the sample range `chunk` of `--spp`.

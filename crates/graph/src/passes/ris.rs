@@ -74,8 +74,10 @@ pub struct Ris {
     /// `--target-floor` < 1: only these read the voxel grid).
     initial: [ComputePipeline; 2],
     spatial: [ComputePipeline; 2],
-    /// The pool's presampling and the initial stage that draws from it (`--pool-tiles` > 0).
+    /// The pool's presampling (any source, and the uniform source with faces by Russian roulette, whose
+    /// mixture is one CDF) and the initial stage that draws from it (`--pool-tiles` > 0).
     presample: ComputePipeline,
+    presample_uniform: ComputePipeline,
     initial_pool: [ComputePipeline; 2],
     /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
     initial_pool_learned: ComputePipeline,
@@ -93,6 +95,9 @@ pub struct RisFrame {
     pub spatial_passes: u32,
     /// Candidates one initial dispatch may stream per reservoir under the loop limit.
     pub candidates_per_dispatch: u32,
+    /// The source is `uniform` with faces by Russian roulette: its mixture is the validity CDF alone, which
+    /// the pool draws from directly.
+    pub uniform_source: bool,
     /// What the history depends on (camera, CDF, every setting but the seed): reservoirs are carried to
     /// the next frame only while it is unchanged.
     pub key: u64,
@@ -153,6 +158,8 @@ impl Ris {
         let mut b = base();
         b.push(Binding::storage_buffer(B_RIS_POOL));
         let presample = ComputePipeline::new(gpu, "ris_presample", &crate::spirv(RIS_PRESAMPLE_COMP), &b, push, &[])?;
+        let presample_uniform =
+            ComputePipeline::new(gpu, "ris_presample", &crate::spirv(RIS_PRESAMPLE_UNIFORM_COMP), &b, push, &[])?;
         let mut b = base();
         b.extend([
             Binding::storage_buffer(B_RIS_OUT),
@@ -185,6 +192,7 @@ impl Ris {
             initial,
             spatial,
             presample,
+            presample_uniform,
             initial_pool,
             initial_pool_learned,
             shade,
@@ -218,7 +226,7 @@ impl Ris {
         let mut current = history.current;
         let mut scratch = (r.spatial_passes > 0).then(|| g.create_buffer(desc("ris.scratch")));
         let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
-        let pool = (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push));
+        let pool = (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push, r.uniform_source));
         // The learned visibility's counts: kept across the frames of one view (the history's key), zeroed
         // when new; a stand-in the shade never writes when off.
         let mut vis = if r.push.learned > 0.0 {
@@ -282,6 +290,7 @@ impl Ris {
         i: &GatherInputs,
         push: GatherPush,
         ris: RisPush,
+        uniform_source: bool,
     ) -> Handle<Buffer> {
         let i = *i;
         let mut desc = BufferDesc::storage("ris.pool", 48 * RIS_POOL_TILE as u64 * ris.pool_tiles as u64);
@@ -292,7 +301,8 @@ impl Ris {
             let writes = self.base_writes(f, ctx, &i).storage_buffer(B_RIS_POOL, ctx.buffer(&o));
             let block = RisPushBlock { gather: push, ris };
             let size = [RIS_POOL_TILE, ris.pool_tiles, 1];
-            self.presample.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
+            let pipeline = if uniform_source { &self.presample_uniform } else { &self.presample };
+            pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
         });
         pool
     }
