@@ -162,6 +162,11 @@ pub const FACES: Choices<FaceMode> = Choices(&[
     ("uniform", FaceMode::Uniform, "Every face with importance equally likely (thesis alg. 4)"),
 ]);
 
+/// `--vpls` when not given.
+pub const DEFAULT_VPLS: u32 = 64;
+/// `--vpls` when not given, for ris under `render --time-limit`: reservoirs per progressive frame.
+pub const RIS_VPLS_PER_FRAME: u32 = 4;
+
 /// What one picture is: its size, component, method, VPL count and seed (`render` and `view`; `bench`
 /// sweeps method, VPLs and seed itself).
 #[derive(Args, Debug)]
@@ -179,9 +184,11 @@ pub struct PictureArgs {
     /// scene measured (BENCHMARKS.md).
     #[arg(long, value_parser = METHODS, default_value = "ris")]
     pub method: Method,
-    /// VPLs per pixel (sampled methods).
-    #[arg(long, default_value_t = 64)]
-    pub vpls: u32,
+    /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray each). Default 64; `render
+    /// --time-limit` with ris takes 4 per frame, many cheap frames (at equal time half the error of 64
+    /// per frame on the Cornell box: BENCHMARKS.md).
+    #[arg(long)]
+    pub vpls: Option<u32>,
     /// Random seed (same seed, same image).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -196,7 +203,7 @@ impl PictureArgs {
         FrameSettings {
             component: self.component,
             method: self.method,
-            vpls: self.vpls,
+            vpls: self.vpls.unwrap_or(DEFAULT_VPLS),
             seed: self.seed,
             ..frame.settings(width, height)
         }
@@ -569,9 +576,9 @@ mod tests {
     #[test]
     fn each_command_keeps_its_own_defaults() {
         let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
-        assert_eq!((r.picture.vpls, r.frame.dprsm_res, r.frame.shadow_res), (64, 512, 2048));
+        assert_eq!((r.picture.vpls, r.frame.dprsm_res, r.frame.shadow_res), (None, 512, 2048));
         let Command::View(v) = parse(&["view", "s.toml"]) else { panic!() };
-        assert_eq!((v.picture.vpls, v.frame.dprsm_res, v.frame.shadow_res), (16, 256, 1024));
+        assert_eq!((v.picture.vpls, v.frame.dprsm_res, v.frame.shadow_res), (Some(16), 256, 1024));
         let Command::Bench(b) = parse(&["bench", "s.toml", "--out", "o"]) else { panic!() };
         assert_eq!((b.width, b.height, b.frame.dprsm_res, b.frame.shadow_res), (128, 128, 128, 2048));
     }

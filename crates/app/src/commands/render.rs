@@ -10,7 +10,7 @@ use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
 use bounce_graph::frame::progressive::{render_for, Progressive};
-use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Renderer};
+use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer};
 use bounce_graph::passes::psm::{Psm, MAX_PSM_BYTES};
 use std::io::Write;
 use std::time::{Duration, Instant};
@@ -19,7 +19,10 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     check_animation_flags(a)?;
     let scene = super::load_scene(&a.scene, err)?;
     let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
-    let settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
+    let mut settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
+    if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
+        settings.vpls = crate::cli::RIS_VPLS_PER_FRAME;
+    }
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;

@@ -65,8 +65,9 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
     if a.frames.is_some() != a.screenshot.is_some() {
         return Err(bad(anyhow::anyhow!("--frames and --screenshot go together")));
     }
-    if !(1..=4096).contains(&a.picture.vpls) {
-        return Err(bad(anyhow::anyhow!("--vpls must be between 1 and 4096 (got {})", a.picture.vpls)));
+    let vpls = a.picture.vpls.unwrap_or(crate::cli::DEFAULT_VPLS);
+    if !(1..=4096).contains(&vpls) {
+        return Err(bad(anyhow::anyhow!("--vpls must be between 1 and 4096 (got {vpls})")));
     }
     let scene = super::load_scene(&a.scene, err)?;
     // Without a display winit cannot start; say what to do instead of its own message alone.
