@@ -71,8 +71,9 @@ vec3 ray_triangle_bary(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
 
 // The thesis's luminance (eq. 7.6): the scalar importance of an RGB contribution (also the
 // reference's light-strategy weights).
+const vec3 LUMINANCE_WEIGHTS = vec3(0.299, 0.587, 0.114);
 float luminance(vec3 c) {
-    return 0.299 * c.r + 0.587 * c.g + 0.114 * c.b;
+    return LUMINANCE_WEIGHTS.r * c.r + LUMINANCE_WEIGHTS.g * c.g + LUMINANCE_WEIGHTS.b * c.b;
 }
 
 // PCG hash (Jarzynski & Olano 2020): a good 32-bit hash for per-pixel, per-sample random streams.

@@ -33,6 +33,13 @@ Vpl vpl_fetch(uint v) {
 //     radiosity Φ_v/A_v (the irradiance of a disk of area A_v at its centre); where d² ≫ A_v it is the point
 //     kernel to second order (relative difference (s·A_v)²/(2d⁴)), so the sum keeps the point VPLs' energy
 //     and converges to the same one-bounce integral as the map's resolution grows.
+// The kernel's denominator 1/k for squared distance d2 (> 0): d2, or √(d⁴ + a²) with a = s·A_v, written
+// as m·√(1 + (n/m)²), m = max(d², a), n = min(d², a), so that nothing overflows or underflows at any scale.
+float vpl_kernel_den(float d2, Vpl vpl, float min_d2) {
+    float a = frame.vpl.x * vpl.area, m = max(d2, a), n = min(d2, a) / m;
+    return max(a > 0.0 ? m * sqrt(1.0 + n * n) : d2, min_d2);
+}
+
 vec3 vpl_unshadowed(vec3 x, vec3 nx, vec3 ax, Vpl vpl, float min_d2) {
     if (!vpl.valid) return vec3(0.0);
     vec3 w = vpl.position - x;
@@ -42,10 +49,7 @@ vec3 vpl_unshadowed(vec3 x, vec3 nx, vec3 ax, Vpl vpl, float min_d2) {
     float cos_x = dot(nx, w);
     float cos_v = -dot(vpl.normal, w);
     if (cos_x <= 0.0 || cos_v <= 0.0) return vec3(0.0);
-    // √(d⁴ + a²) as m·√(1 + (n/m)²), m = max(d², a), n = min(d², a): no overflow or underflow at any scale.
-    float a = frame.vpl.x * vpl.area, m = max(d2, a), n = min(d2, a) / m;
-    float den = a > 0.0 ? m * sqrt(1.0 + n * n) : d2;
-    return ax / PI * vpl.flux * (cos_v / PI) * cos_x / max(den, min_d2);
+    return ax / PI * vpl.flux * (cos_v / PI) * cos_x / vpl_kernel_den(d2, vpl, min_d2);
 }
 
 // luminance(vpl_unshadowed(x, nx, ax, vpl, min_d2)) with axl = ax · the luminance weights (vpl_luminance_albedo):
@@ -56,14 +60,12 @@ float vpl_unshadowed_luminance(vec3 x, vec3 nx, vec3 axl, Vpl vpl, float min_d2)
     vec3 w = vpl.position - x;
     float d2 = dot(w, w);
     float cx = dot(nx, w), cv = -dot(vpl.normal, w);
-    float a = frame.vpl.x * vpl.area, m = max(d2, a), n = min(d2, a) / m;
-    float den = a > 0.0 ? m * sqrt(1.0 + n * n) : d2;
-    float t = dot(axl, vpl.flux) * (cx * cv) / (PI * PI * d2 * max(den, min_d2));
+    float t = dot(axl, vpl.flux) * (cx * cv) / (PI * PI * d2 * vpl_kernel_den(d2, vpl, min_d2));
     return vpl.valid && d2 > 0.0 && cx > 0.0 && cv > 0.0 ? t : 0.0;
 }
 
 vec3 vpl_luminance_albedo(vec3 ax) {
-    return ax * vec3(0.299, 0.587, 0.114);
+    return ax * LUMINANCE_WEIGHTS;
 }
 
 #endif
