@@ -260,11 +260,12 @@ float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint t
 
 
 // Any-hit traversal for occlusion, stackless over the threaded records (FlatBvh::threaded in bvh/gpu.rs):
-// the tree's nodes and triangles in depth-first preorder, a box's link skipping its subtree. Each step reads
-// one record and tests it, a box or a triangle; a missed box jumps past its subtree. Same answer as
-// bvh_trace's any-hit mode: whether a triangle of the tree crosses the ray with t ∈ (tmin, tmax) (only which
-// triangle stops it may differ). The walk only moves forward, so it reads at most records = nodes + triangles
-// of them; at BVH_MAX_STEPS it gives up (not occluded, bvh_exhausted).
+// the tree's triangles and the boxes worth testing in depth-first preorder, a box's link skipping its subtree
+// (a box that would cost more steps than it saves on average is left out, its subtree walked unconditionally:
+// FlatBvh::box_records). Each step reads one record and tests it, a box or a triangle; a missed box jumps past
+// its subtree. Same answer as bvh_trace's any-hit mode: whether a triangle of the tree crosses the ray with
+// t ∈ (tmin, tmax) (only which triangle stops it may differ). The walk only moves forward, so it reads at most
+// records ≤ nodes + triangles of them; at BVH_MAX_STEPS it gives up (not occluded, bvh_exhausted).
 //
 // Why this shape (measured in BENCHMARKS.md, "Exact shadow rays"): llvmpipe runs every branch of a loop body
 // for all lanes of a SIMD vector under masks, and reads a storage buffer lane by lane when the index differs

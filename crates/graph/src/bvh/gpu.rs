@@ -28,8 +28,9 @@
 //!   reads. Zero-area triangles are absent (never hit, as in the CPU reference). A scene without
 //!   triangles becomes one leaf holding one degenerate triangle that nothing hits.
 //! * threaded: [`GpuThreadRec`], 48 bytes, [`FlatBvh::threaded`]: the same tree in depth-first preorder,
-//!   one record per node (its box and the index past its subtree) and per triangle (its positions), for
-//!   the stackless any-hit walk of the shadow rays (`bvh_any_hit`).
+//!   one record per triangle (its positions) and per node whose box is worth testing
+//!   ([`FlatBvh::box_records`]: its box and the index past its subtree), for the stackless any-hit walk
+//!   of the shadow rays (`bvh_any_hit`).
 //!
 //! **Depth and stack.** The traversal keeps a stack of [`STACK_SIZE`] = 64 entries, and a tree of
 //! height h (levels below the root) needs at most h. The SAH builder may go deeper on pathological
@@ -222,13 +223,17 @@ impl FlatBvh {
         FlatBvh { nodes, tris, triangle_count, height, rebuilt_subtrees: f.rebuilt }
     }
 
-    /// The tree threaded for stackless any-hit traversal (`bvh_any_hit`): its nodes and triangles in
-    /// depth-first preorder, one record each. A node is a box record followed by its subtree (a leaf's
-    /// triangles, or its two children's subtrees, the child of larger surface area first: a random ray
-    /// meets it more often, so an occluded ray tends to stop sooner); a box's link skips its subtree.
-    /// The walk only moves forward (to the next record, or past a missed box's subtree), so it visits
-    /// each record at most once: nodes + triangles iterations, the bound of the stack traversal.
+    /// The tree threaded for stackless any-hit traversal (`bvh_any_hit`): its triangles, and the boxes
+    /// worth testing ([`FlatBvh::box_records`]), in depth-first preorder, one record each. A node's
+    /// subtree follows its box record if it has one (a leaf's triangles, or its two children's subtrees,
+    /// the child of larger surface area first: a random ray meets it more often, so an occluded ray tends
+    /// to stop sooner); a box's link skips its subtree. A node without a box record is walked
+    /// unconditionally: its box only filtered, so leaving it out changes the records read, never the
+    /// answer. The walk only moves forward (to the next record, or past a missed box's subtree), so it
+    /// visits each record at most once: at most nodes + triangles iterations, the bound of the stack
+    /// traversal.
     pub fn threaded(&self) -> Vec<GpuThreadRec> {
+        let keep = self.box_records();
         let mut out: Vec<GpuThreadRec> = Vec::with_capacity(self.nodes.len() + self.tris.len());
         // (node, index of its box record once placed): patched with the subtree's end when it is done.
         let mut stack: Vec<(u32, Option<usize>)> = vec![(0, None)];
@@ -238,26 +243,121 @@ impl FlatBvh {
                 continue;
             }
             let n = self.nodes[i as usize];
-            let at = out.len();
-            out.push(GpuThreadRec { a: n.lo, b: n.hi, ..Default::default() });
-            stack.push((i, Some(at)));
+            if keep[i as usize] {
+                let at = out.len();
+                out.push(GpuThreadRec { a: n.lo, b: n.hi, ..Default::default() });
+                stack.push((i, Some(at)));
+            }
             if n.is_leaf() {
                 for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
                     out.push(GpuThreadRec { a: t.v0, link: THREAD_TRI, b: t.v1, pad1: 0, c: t.v2, pad2: 0 });
                 }
             } else {
-                let area = |k: u32| {
-                    let c = self.nodes[k as usize];
-                    let d = (Vec3::from(c.hi) - Vec3::from(c.lo)).max(Vec3::ZERO);
-                    d.x * d.y + d.y * d.z + d.z * d.x
-                };
                 let (l, r) = (n.first, n.first + 1);
-                let (first, second) = if area(r) > area(l) { (r, l) } else { (l, r) };
+                let (first, second) = if self.area(r) > self.area(l) { (r, l) } else { (l, r) };
                 stack.push((second, None));
                 stack.push((first, None));
             }
         }
         out
+    }
+
+    /// Surface area (half of it: only ratios are used) of node `i`'s box.
+    fn area(&self, i: u32) -> f64 {
+        let c = self.nodes[i as usize];
+        let d = (Vec3::from(c.hi) - Vec3::from(c.lo)).max(Vec3::ZERO).as_dvec3();
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
+    /// Which nodes' boxes are records of the threaded walk: those whose test is expected to save more
+    /// records than it reads. A box record costs one step and, when missed, saves its subtree's records;
+    /// without it the subtree is walked whenever the walk gets there. On llvmpipe a box step and a
+    /// triangle step cost the same (a SIMD vector runs both kinds of code under masks), so the cost is
+    /// records read. The chance that a ray which met the box of the nearest tested ancestor A also
+    /// meets node N's box is taken as area(N) / area(A) (the surface-area rule for random lines), and the
+    /// expected records of each subtree are minimized over keep/drop by dynamic programming: for each
+    /// node N at depth d and each depth k < d of its nearest tested ancestor,
+    ///   f(N, k) = min(1 + p(N | k) · g(N, d), g(N, k)),   g(N, k) = count(N) for a leaf, else
+    ///   f(left, k) + f(right, k),
+    /// and the decisions are read off top-down. Depth 0 is the scene's box (every shadow ray lies
+    /// inside it); the root's box is kept anyway (one step), and a one-triangle leaf's never is
+    /// (1 + p ≥ 1).
+    /// Measured with the CPU twin (`march-length`, records per ray) and the GPU (BENCHMARKS.md).
+    pub fn box_records(&self) -> Vec<bool> {
+        let n = self.nodes.len();
+        // Parents and depths (children come after their parent); the root has depth 1.
+        let mut parent = vec![u32::MAX; n];
+        let mut depth = vec![1usize; n];
+        for i in 0..n {
+            let nd = self.nodes[i];
+            if !nd.is_leaf() {
+                for c in [nd.first, nd.first + 1] {
+                    parent[c as usize] = i as u32;
+                    depth[c as usize] = depth[i] + 1;
+                }
+            }
+        }
+        let areas: Vec<f64> = (0..n as u32).map(|i| self.area(i)).collect();
+        // The areas of node i's ancestors by depth (index 0: the scene's box, the root's own).
+        let ancestors = |i: usize| {
+            let mut a = vec![0.0f64; depth[i]];
+            let mut j = parent[i];
+            let mut k = depth[i] - 1;
+            while j != u32::MAX {
+                a[k] = areas[j as usize];
+                j = parent[j as usize];
+                k -= 1;
+            }
+            a[0] = areas[0];
+            a
+        };
+        let p = |area: f64, of: f64| if of > 0.0 { (area / of).min(1.0) } else { 1.0 };
+        // g[i][k], k = 0 ..= depth(i): the expected records of i's subtree below its own box, the nearest
+        // tested ancestor at depth k (k = depth(i): i's own box, tested and met).
+        let mut g: Vec<Vec<f64>> = vec![Vec::new(); n];
+        for i in (0..n).rev() {
+            let nd = self.nodes[i];
+            let d = depth[i];
+            g[i] = if nd.is_leaf() {
+                vec![nd.count as f64; d + 1]
+            } else {
+                let mut sum = vec![0.0f64; d + 1];
+                for c in [nd.first as usize, nd.first as usize + 1] {
+                    let anc = ancestors(c);
+                    let own = g[c][depth[c]];
+                    for (k, s) in sum.iter_mut().enumerate() {
+                        *s += (1.0 + p(areas[c], anc[k]) * own).min(g[c][k]);
+                    }
+                }
+                sum
+            };
+        }
+        // Top-down: keep a box where testing it is the cheaper choice, given the nearest tested ancestor.
+        let mut keep = vec![false; n];
+        let mut stack = vec![(0usize, 0usize)];
+        while let Some((i, k)) = stack.pop() {
+            let d = depth[i];
+            let of = if k == 0 { areas[0] } else { areas[self.ancestor_at(&parent, &depth, i, k)] };
+            // The root's box stays: it costs one step, and a segment outside the scene's box (which the
+            // renderer never casts, but a caller may) then reads nothing more.
+            keep[i] = i == 0 || 1.0 + p(areas[i], of) * g[i][d] < g[i][k];
+            let nd = self.nodes[i];
+            if !nd.is_leaf() {
+                let next = if keep[i] { d } else { k };
+                stack.push((nd.first as usize, next));
+                stack.push((nd.first as usize + 1, next));
+            }
+        }
+        keep
+    }
+
+    /// Node `i`'s ancestor at depth `k` (1 ≤ k < depth(i)).
+    fn ancestor_at(&self, parent: &[u32], depth: &[usize], i: usize, k: usize) -> usize {
+        let mut j = i;
+        while depth[j] > k {
+            j = parent[j] as usize;
+        }
+        j
     }
 
     /// An upper bound of the loop iterations of one trace (see the module doc).
@@ -581,10 +681,11 @@ mod tests {
         assert_eq!(max_depth, flat.height);
         assert!(flat.height <= max_height.min(STACK_SIZE), "height {} > {max_height}", flat.height);
         assert_eq!(flat.triangle_count as usize, hittable.len());
-        // The threaded layout: one record per node and triangle; a box's link closes its subtree, which
+        // The threaded layout: one record per triangle and kept box; a box's link closes its subtree, which
         // lies inside the box and nests in the subtrees around it; every triangle once.
         let th = flat.threaded();
-        assert_eq!(th.len(), flat.nodes.len() + flat.tris.len());
+        let boxes = flat.box_records().iter().filter(|&&k| k).count();
+        assert_eq!(th.len(), boxes + flat.tris.len());
         let mut ends = vec![th.len()];
         let mut tri_records = Vec::new();
         for (k, r) in th.iter().enumerate() {
