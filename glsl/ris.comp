@@ -13,6 +13,12 @@
 //   and the frame), stored with their data and p_v, so a candidate costs three texel fetches and its target.
 // RIS_INITIAL with RIS_POOL: reservoir r's candidates are consecutive entries of one tile, from a start, both
 //   chosen by a hash of (pixel, layer, frame); each is a draw of the source (its marginal law is p: ris.rs).
+// RIS_NEAR (with RIS_POOL; ris.near_candidates > 0): the last ris.near_candidates of the M candidates come
+//   from a (2r + 1)² window of light-map texels around where x projects into one light's map (the light
+//   chosen per reservoir), drawn uniformly: the VPLs next to x, whose kernel makes the target's tail and
+//   which the pool almost never holds. Every candidate, of either strategy, is weighed with the balance
+//   mixture q(v) = (M_pool p_source(v) + M_near p_near(v)) / M (multiple-importance RIS): unbiased, since
+//   the pool's strategy reaches every VPL (ris.rs).
 // RIS_SPATIAL (W × H × R): the reservoir combined with k neighbours' of the same layer, generalized
 //   balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
 // The target may weigh in the voxel march's visibility (RIS_VOXEL_TARGET variants, ris.target_floor < 1:
@@ -197,6 +203,79 @@ uint candidate(ivec2 q, uint layer, uint i, uint seed, uvec2 window, out float p
 #endif
 }
 
+// Streams candidate k (VPL v, its data, its probability under the candidates' law) into r: the target,
+// w = p̂ / prob, and the reservoir's choice.
+void add_candidate(inout Reservoir r, ivec2 px, uint k, uint v, Vpl vpl, float prob, uint cell, vec3 x, vec3 nx,
+                   vec3 ax, uint tile_base) {
+    float t = target_of(x, nx, ax, vpl);
+#ifdef RIS_LEARNED
+    // V̂ = (visible + 1) / (traced + 2) from earlier frames only (this frame's shade adds after every
+    // initial dispatch), floored at δ_L > 0: a target that depends on the past, positive wherever
+    // the unshadowed one is, so each frame stays unbiased (passes/ris.rs).
+    uint vi = tile_base + 2u * cell;
+    uint seen = texelFetch(vis_texels, int(vi)).r, traced = texelFetch(vis_texels, int(vi + 1u)).r;
+    t *= max(float(seen + 1u) / float(traced + 2u), ris.learned);
+#endif
+    float w = t / prob;
+    if (!(w > 0.0)) return;
+    r.weight += w;
+    if (ris_rand(px, 1u, k) * r.weight < w) {
+        r.vpl = v;
+        r.target = t;
+    }
+}
+
+#ifdef RIS_NEAR
+// The near strategy: a K × K window of light-map texels around where the pixel's point x projects into
+// the map of one light (chosen per reservoir), drawn uniformly. The VPLs next to x, whose kernel makes the
+// target's tail, are found there when the light sees x's surroundings.
+struct NearWindow {
+    bool open;
+    uint base;  // the first VPL index of the window's face
+    ivec2 lo;   // its lowest texel
+    float p;    // 1 / K²
+};
+
+NearWindow near_window(ivec2 q, uint layer, vec3 x) {
+    NearWindow w;
+    uint lights_n = frame.size.z;
+    uint l = min(uint(ris_rand(q, 5u, layer) * float(lights_n)), lights_n - 1u);
+    uint face;
+    vec2 uv;
+    int res = int(frame.size.w);
+    int kk = min(2 * int(ris.near_radius) + 1, res);
+    w.open = lm_locate(x - lights[l].position.xyz, l, face, uv) && all(lessThan(abs(uv), vec2(2.0)));
+    ivec2 c = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(res - 1));
+    w.lo = clamp(c - ivec2(kk / 2), ivec2(0), ivec2(res - kk));
+    w.base = (l * lm_faces() + face) * uint(res * res);
+    w.p = 1.0 / float(kk * kk);
+    return w;
+}
+
+uint near_candidate(NearWindow w, ivec2 q, uint k) {
+    int res = int(frame.size.w);
+    int kk = min(2 * int(ris.near_radius) + 1, res);
+    ivec2 o = min(ivec2(vec2(ris_rand(q, 6u, k), ris_rand(q, 7u, k)) * float(kk)), ivec2(kk - 1));
+    ivec2 t = w.lo + o;
+    return w.base + uint(t.y * res + t.x);
+}
+
+// The near strategy's probability of VPL v: 1/K² inside the window, else 0.
+float near_prob(NearWindow w, uint v) {
+    if (!w.open || v < w.base) return 0.0;
+    uint res = frame.size.w;
+    uint r = v - w.base;
+    if (r >= res * res) return 0.0;
+    // r = ty · res + tx without a per-lane integer division: float is exact below 2^24.
+    uint ty = uint(float(r) / float(res));
+    if (ty * res > r) ty--;
+    else if ((ty + 1u) * res <= r) ty++;
+    ivec2 t = ivec2(int(r - ty * res), int(ty)) - w.lo;
+    int kk = min(2 * int(ris.near_radius) + 1, int(res));
+    return all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, ivec2(kk))) ? w.p : 0.0;
+}
+#endif
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     uint layer = gl_GlobalInvocationID.z;
@@ -215,36 +294,58 @@ void main() {
         uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
 #ifdef RIS_LEARNED
         uint tile_base = vis_tile_base(px);
+#else
+        uint tile_base = 0u;
 #endif
 #ifdef RIS_POOL
         uvec2 window = pool_window(px, layer);
 #else
         uvec2 window = uvec2(0u);
 #endif
-        for (uint i = pc.first; i < pc.last; i++) {
-            uint k = layer * ris.candidates + i;
+#ifdef RIS_NEAR
+        NearWindow near = near_window(px, layer, x);
+        float m_all = float(ris.candidates), m_near = near.open ? float(ris.near_candidates) : 0.0;
+        float m_pool = float(ris.candidates - ris.near_candidates);
+#endif
+#ifdef RIS_NEAR
+        // The pool's candidates, then the window's (two loops: llvmpipe would run both bodies for each).
+        uint split = ris.candidates - ris.near_candidates;
+        for (uint i = pc.first; i < min(pc.last, split); i++) {
             float prob;
             Vpl vpl;
             uint cell;
             uint v = candidate(px, layer, i, seed, window, prob, vpl, cell);
             if (!(prob > 0.0)) continue;
-            float t = target_of(x, nx, ax, vpl);
+            // The balance mixture of the two strategies (multiple-importance RIS): each candidate weighed
+            // by m_all / (m_pool p_source + m_near p_near).
+            prob = (m_pool * prob + m_near * near_prob(near, v)) / m_all;
+            add_candidate(r, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
+        }
+        if (near.open) {
+            for (uint i = max(pc.first, split); i < pc.last; i++) {
+                uint k = layer * ris.candidates + i;
+                uint v = near_candidate(near, px, k);
+                Vpl vpl = vpl_fetch(v);
+                if (!vpl.valid) continue;
+                float prob = (m_pool * source_prob(v) + m_near * near.p) / m_all;
 #ifdef RIS_LEARNED
-            // V̂ = (visible + 1) / (traced + 2) from earlier frames only (this frame's shade adds after every
-            // initial dispatch), floored at δ_L > 0: a target that depends on the past, positive wherever
-            // the unshadowed one is, so each frame stays unbiased (passes/ris.rs).
-            uint vi = tile_base + 2u * cell;
-            uint seen = texelFetch(vis_texels, int(vi)).r, traced = texelFetch(vis_texels, int(vi + 1u)).r;
-            t *= max(float(seen + 1u) / float(traced + 2u), ris.learned);
+                uint cell = vis_cell_of(v);
+#else
+                uint cell = 0u;
 #endif
-            float w = t / prob;
-            if (!(w > 0.0)) continue;
-            r.weight += w;
-            if (ris_rand(px, 1u, k) * r.weight < w) {
-                r.vpl = v;
-                r.target = t;
+                add_candidate(r, px, k, v, vpl, prob, cell, x, nx, ax, tile_base);
             }
         }
+#else
+        for (uint i = pc.first; i < pc.last; i++) {
+            float prob;
+            Vpl vpl;
+            uint cell;
+            uint v = candidate(px, layer, i, seed, window, prob, vpl, cell);
+            if (!(prob > 0.0)) continue;
+            add_candidate(r, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
+        }
+#endif
     }
     if (pc.last < ris.candidates) {
         res_out[idx] = r;

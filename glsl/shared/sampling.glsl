@@ -27,6 +27,27 @@ float section_prob(uint cb, uint v, uint nlive) {
     return cdf_prob_rows(cb, v, f * face_rows(), (f + 1u) * face_rows()) / float(nlive);
 }
 
+// The mixture probability of VPL v (draw_vpl's p_v), given `live` method sections with weight and the
+// effective defensive share eps.
+float mixture_prob(uint v, uint live, float eps) {
+    uint len = pc.cdf_len;
+    float method = 0.0;
+    for (uint s = 1u; s <= pc.sections; s++) {
+        uint cb = s * len;
+        if (!(cdf_total_at(cb) > 0.0)) continue;
+        method += section_prob(cb, v, pc.face_mode == FACE_UNIFORM ? live_faces(cb) : 0u);
+    }
+    float uniform_p = cdf_prob_rows(0u, v, 0u, faces() * face_rows());
+    return eps * uniform_p + (live > 0u ? (1.0 - eps) * method / float(live) : 0.0);
+}
+
+// draw_vpl's p_v of any VPL v: the probability that the sampling mixture draws it.
+float source_prob(uint v) {
+    uint live = 0u;
+    for (uint s = 1u; s <= pc.sections; s++) live += cdf_total_at(s * pc.cdf_len) > 0.0 ? 1u : 0u;
+    return mixture_prob(v, live, live == 0u ? 1.0 : pc.defensive);
+}
+
 // The sampling mixture: with probability ε (or when no method section has weight) uniformly among the
 // VPLs (section 0); otherwise a method section s chosen uniformly (local: the regions; else the one),
 // whose face is chosen by its weight (Russian roulette, thesis alg. 9) or uniformly among the faces
@@ -80,15 +101,7 @@ uint draw_vpl(uint k, uint seed, out float prob) {
             v = cdf_sample_rows3(cb, s * n, u.yzx, f * face_rows(), (f + 1u) * face_rows());
         }
     }
-    // The mixture probability of v.
-    float method = 0.0;
-    for (uint s = 1u; s <= sections; s++) {
-        uint cb = s * len;
-        if (!(cdf_total_at(cb) > 0.0)) continue;
-        method += section_prob(cb, v, pc.face_mode == FACE_UNIFORM ? live_faces(cb) : 0u);
-    }
-    float uniform_p = cdf_prob_rows(0u, v, 0u, faces() * face_rows());
-    prob = eps * uniform_p + (live > 0u ? (1.0 - eps) * method / float(live) : 0.0);
+    prob = mixture_prob(v, live, eps);
     return v;
 }
 

@@ -82,6 +82,8 @@ struct RisPush {
     float learned;    // δ_L: the target weighs a VPL by max(V̂, δ_L), V̂ learned from earlier frames (0: off)
     uint vis_tile;    // the learned visibility's screen tiles, pixels per side
     uint vis_cell;    // its light-map cells, texels per side
+    uint near_candidates; // the last this many of the M candidates come from the near window (0: none)
+    uint near_radius; // the near window's half-width, texels (2r + 1 wide)
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

@@ -114,9 +114,20 @@ fn ris_from_a_presampled_pool_is_unbiased() {
         s.ris.target_floor = 0.3;
         indirect_with(&mut r, s, w, h, res, vox)
     });
+    // The near window (on by default in the runs above, where it covers the small map's whole face) as a
+    // strict part of a face: 5 × 5 texels, half of the candidates.
+    converges_to("ris (pool of 3 tiles, near window 5 × 5 for half the candidates, exact)", &all, |seed| {
+        let mut s = settings(seed, 0, RisSource::Uniform, 3);
+        s.ris.near_radius = 2;
+        s.ris.near_candidates = s.ris.candidates / 2;
+        indirect_with(&mut r, s, w, h, res, vox)
+    });
     let pooled = indirect_with(&mut r, settings(5, 0, RisSource::Uniform, 3), w, h, res, vox);
     let drawn = indirect_with(&mut r, settings(5, 0, RisSource::Uniform, 0), w, h, res, vox);
     assert_ne!(pooled, drawn, "the pool changed nothing");
+    let mut far = settings(5, 0, RisSource::Uniform, 3);
+    far.ris.near_candidates = 0;
+    assert_ne!(pooled, indirect_with(&mut r, far, w, h, res, vox), "the near window changed nothing");
 }
 
 /// The learned visibility (`--learn-visibility`): frame k's target is weighed by the visibility counted

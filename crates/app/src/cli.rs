@@ -296,6 +296,13 @@ pub struct FrameArgs {
     /// per frame (0: each pixel draws its own).
     #[arg(long, default_value_t = RisSettings::default().pool_tiles)]
     pub pool_tiles: u32,
+    /// --method ris draws this many of each reservoir's candidates from the near window: light-map
+    /// texels around where the pixel projects into a light's map (0: none; needs the pool).
+    #[arg(long, default_value_t = RisSettings::default().near_candidates)]
+    pub near_candidates: u32,
+    /// Half-width of --near-candidates' window, texels.
+    #[arg(long, default_value_t = RisSettings::default().near_radius)]
+    pub near_radius: u32,
     /// --method ris weighs its target by the visibility learned from earlier progressive frames' shadow
     /// rays, floored at this (in (0, 1]; 0: off).
     #[arg(long, default_value_t = RisSettings::default().learn_visibility)]
@@ -344,6 +351,8 @@ impl FrameArgs {
                 temporal_cap: self.temporal_cap,
                 target_floor: self.target_floor,
                 pool_tiles: self.pool_tiles,
+                near_candidates: self.near_candidates,
+                near_radius: self.near_radius,
                 learn_visibility: self.learn_visibility,
                 candidates_chunk: None,
             },

@@ -151,8 +151,13 @@ pub struct RisPush {
     /// The learned visibility's screen tiles (pixels per side) and light-map cells (texels per side).
     pub vis_tile: u32,
     pub vis_cell: u32,
+    /// Candidates of each reservoir from the near window (the last of its M; 0: none): light-map texels
+    /// around where the pixel projects into a light's map.
+    pub near_candidates: u32,
+    /// The near window's half-width, texels (the window is 2r + 1 texels wide).
+    pub near_radius: u32,
 }
-const _: () = assert!(size_of::<RisPush>() == 48);
+const _: () = assert!(size_of::<RisPush>() == 56);
 
 /// ris's push constant block: the gather's sampling fields, then ris's own.
 #[repr(C)]
@@ -161,7 +166,7 @@ pub struct RisPushBlock {
     pub gather: GatherPush,
     pub ris: RisPush,
 }
-const _: () = assert!(size_of::<RisPushBlock>() == 112);
+const _: () = assert!(size_of::<RisPushBlock>() == 120);
 const _: () = assert!(offset_of!(RisPushBlock, ris) == 64);
 
 /// One reservoir of ris (`Reservoir` in `glsl/shared/types.glsl`).

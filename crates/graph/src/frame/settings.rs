@@ -111,6 +111,15 @@ pub struct RisSettings {
     /// frames' shadow rays from the pixel's screen tile to the VPL's light-map cell that were unoccluded
     /// (progressive frames of one view; needs the pool, no reuse and the unshadowed target).
     pub learn_visibility: f32,
+    /// The last this many of each reservoir's M candidates come from the near window (0: none): texels of
+    /// a light's map within `near_radius` of where the pixel projects into it, drawn uniformly, combined
+    /// with the pool's by balance weights (multiple-importance RIS, unbiased). It proposes the VPLs next
+    /// to the pixel, whose kernel makes the target's tail, which a pool of source draws almost never
+    /// holds. At most M − 1 are used (the pool's candidates keep every VPL drawable). Only with the pool,
+    /// the unshadowed target and no learned visibility (off otherwise).
+    pub near_candidates: u32,
+    /// The near window's half-width, texels.
+    pub near_radius: u32,
     /// Candidates per initial dispatch (`None`: as many as the device's loop limit allows). The image
     /// does not depend on it (the reservoirs' streaming state is carried between dispatches).
     pub candidates_chunk: Option<std::num::NonZeroU32>,
@@ -135,6 +144,10 @@ impl Default for RisSettings {
             target_floor: 1.0,
             pool_tiles: 16,
             learn_visibility: 0.0,
+            // 8 of 32 from a 17 × 17 window (2026-11-30, third session): 3–10× lower error at equal time
+            // on Sibenik and Conference (BENCHMARKS.md, "ris: the near window").
+            near_candidates: 8,
+            near_radius: 8,
             candidates_chunk: None,
         }
     }
@@ -448,6 +461,9 @@ impl FrameSettings {
             && (r.pool_tiles == 0 || r.spatial_passes > 0 || r.temporal_cap > 0.0 || r.target_floor < 1.0)
         {
             reject!("--learn-visibility needs the pool (--pool-tiles ≥ 1), no reuse (--spatial-passes 0, --temporal-cap 0) and --target-floor 1");
+        }
+        if r.near_radius > 1024 {
+            reject!("--near-radius must be at most 1024 texels (got {})", r.near_radius);
         }
         if r.pool_tiles > 4096 {
             reject!("--pool-tiles must be at most 4096 (got {})", r.pool_tiles);

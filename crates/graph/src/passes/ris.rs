@@ -21,6 +21,13 @@
 //!   target depends on earlier frames only, so given them it is a fixed function, positive wherever p̂
 //!   is (δ_L > 0), and RIS is unbiased for any such target; the progressive mean of unbiased frames is
 //!   unbiased. It is what makes a VPL behind a wall rare once the rays have seen the wall.
+//! - With `--near-candidates N` > 0 (the default, 8 of 32; the pool, the unshadowed target): the last N
+//!   candidates are texels of a (2r + 1)² window (`--near-radius r`) around where x projects into one
+//!   light's map, the light chosen per reservoir: the VPLs next to x, which hold the target's tail. Every
+//!   candidate's weight is p̂(v) / q(v) with the balance mixture q = ((M − N) p(v) + N p_near(v)) / M
+//!   (Talbot's multiple-importance RIS), p_near = 1/(2r + 1)² inside the window and 0 outside. Unbiased
+//!   given the light's choice (so also overall): Σ_s M_s p_s(v) / (Σ_s M_s p_s(v)) = 1 for every v the
+//!   pool can draw, which is every VPL with p(v) > 0.
 //!
 //! - `ris_initial` (W × H × R invocations): each of a pixel's R reservoirs streams M candidates
 //!   v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
@@ -81,6 +88,7 @@ pub struct Ris {
     initial_pool: [ComputePipeline; 2],
     /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
     initial_pool_learned: ComputePipeline,
+    initial_pool_near: ComputePipeline,
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -170,6 +178,8 @@ impl Ris {
         bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
         let initial_pool_learned =
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
+        let initial_pool_near =
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_COMP), &b, push, &[])?;
         let initial_pool = [
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?,
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_VOXEL_TARGET_COMP), &b, push, &[])?,
@@ -195,6 +205,7 @@ impl Ris {
             presample_uniform,
             initial_pool,
             initial_pool_learned,
+            initial_pool_near,
             shade,
             sampler: Sampler::nearest(gpu)?,
         })
@@ -337,6 +348,9 @@ impl Ris {
                     &self.initial_pool_learned,
                     writes.texel_view4(B_RIS_POOL, ctx.buffer(p)).texel_view(B_RIS_VIS, ctx.buffer(v)),
                 ),
+                (Some(p), None) if r.push.near_candidates > 0 && Self::voxel_target(&r.push) == 0 => {
+                    (&self.initial_pool_near, writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
+                }
                 (Some(p), None) => {
                     (&self.initial_pool[Self::voxel_target(&r.push)], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
                 }
