@@ -228,10 +228,14 @@ void add_candidate(inout Reservoir r, ivec2 px, uint k, uint v, Vpl vpl, float p
 #ifdef RIS_NEAR
 // The near strategy: a K × K window of light-map texels around where the pixel's point x projects into
 // the map of one light (chosen per reservoir), drawn uniformly. The VPLs next to x, whose kernel makes the
-// target's tail, are found there when the light sees x's surroundings.
+// target's tail, are found there when the light sees x's surroundings: the window opens only when the
+// texel x projects to sees a point within the window's reach of x, r·√A (A its patch area). Behind an
+// occluder the window would hold the occluder's lit side, which gives x nothing; there all M candidates
+// come from the pool. A choice made per reservoir before any candidate, so the estimate stays unbiased
+// either way.
 struct NearWindow {
     bool open;
-    uint base;  // the first VPL index of the window's face
+    uint layer; // the window's light-map layer (light · faces + face)
     ivec2 lo;   // its lowest texel
     float p;    // 1 / K²
 };
@@ -247,24 +251,28 @@ NearWindow near_window(ivec2 q, uint layer, vec3 x) {
     w.open = lm_locate(x - lights[l].position.xyz, l, face, uv) && all(lessThan(abs(uv), vec2(2.0)));
     ivec2 c = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(res - 1));
     w.lo = clamp(c - ivec2(kk / 2), ivec2(0), ivec2(res - kk));
-    w.base = (l * lm_faces() + face) * uint(res * res);
+    w.layer = l * lm_faces() + face;
     w.p = 1.0 / float(kk * kk);
+    vec4 seen = texelFetch(vpl_position, ivec3(c, int(w.layer)), 0);
+    vec3 dx = seen.xyz - x;
+    float reach2 = float(ris.near_radius * ris.near_radius) * seen.w;
+    w.open = w.open && seen.w > 0.0 && dot(dx, dx) <= reach2;
     return w;
 }
 
-uint near_candidate(NearWindow w, ivec2 q, uint k) {
-    int res = int(frame.size.w);
-    int kk = min(2 * int(ris.near_radius) + 1, res);
+// The texel of near candidate k.
+ivec3 near_texel(NearWindow w, ivec2 q, uint k) {
+    int kk = min(2 * int(ris.near_radius) + 1, int(frame.size.w));
     ivec2 o = min(ivec2(vec2(ris_rand(q, 6u, k), ris_rand(q, 7u, k)) * float(kk)), ivec2(kk - 1));
-    ivec2 t = w.lo + o;
-    return w.base + uint(t.y * res + t.x);
+    return ivec3(w.lo + o, int(w.layer));
 }
 
 // The near strategy's probability of VPL v: 1/K² inside the window, else 0.
 float near_prob(NearWindow w, uint v) {
-    if (!w.open || v < w.base) return 0.0;
     uint res = frame.size.w;
-    uint r = v - w.base;
+    uint base = w.layer * res * res;
+    if (!w.open || v < base) return 0.0;
+    uint r = v - base;
     if (r >= res * res) return 0.0;
     // r = ty · res + tx without a per-lane integer division: float is exact below 2^24.
     uint ty = uint(float(r) / float(res));
@@ -304,12 +312,12 @@ void main() {
 #endif
 #ifdef RIS_NEAR
         NearWindow near = near_window(px, layer, x);
-        float m_all = float(ris.candidates), m_near = near.open ? float(ris.near_candidates) : 0.0;
-        float m_pool = float(ris.candidates - ris.near_candidates);
+        // A closed window gives its candidates to the pool.
+        uint split = near.open ? ris.candidates - ris.near_candidates : ris.candidates;
+        float m_all = float(ris.candidates), m_pool = float(split), m_near = m_all - m_pool;
 #endif
 #ifdef RIS_NEAR
         // The pool's candidates, then the window's (two loops: llvmpipe would run both bodies for each).
-        uint split = ris.candidates - ris.near_candidates;
         for (uint i = pc.first; i < min(pc.last, split); i++) {
             float prob;
             Vpl vpl;
@@ -324,10 +332,20 @@ void main() {
         if (near.open) {
             for (uint i = max(pc.first, split); i < pc.last; i++) {
                 uint k = layer * ris.candidates + i;
-                uint v = near_candidate(near, px, k);
-                Vpl vpl = vpl_fetch(v);
+                ivec3 t = near_texel(near, px, k);
+                uint res = frame.size.w;
+                uint v = (uint(t.z) * res + uint(t.y)) * res + uint(t.x);
+                Vpl vpl = vpl_fetch_texel(t);
                 if (!vpl.valid) continue;
-                float prob = (m_pool * source_prob(v) + m_near * near.p) / m_all;
+#ifdef RIS_UNIFORM_SOURCE
+                // The uniform source with faces by Russian roulette draws a face by its count of VPLs, then
+                // a VPL of it uniformly: 1 / (all VPLs) for each. Its CDF's prefixes are integers, exact in
+                // f32, so this is the pool's cdf_prob_rows to rounding, without its divisions and loop.
+                float p_source = 1.0 / cdf_total_at(0u);
+#else
+                float p_source = source_prob(v);
+#endif
+                float prob = (m_pool * p_source + m_near * near.p) / m_all;
 #ifdef RIS_LEARNED
                 uint cell = vis_cell_of(v);
 #else

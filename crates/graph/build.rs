@@ -78,6 +78,11 @@ const SHADERS: &[Shader] = &[
     variant("ris.initial_pool_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_VOXEL_TARGET"]),
     variant("ris.initial_pool_learned.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED"]),
     variant("ris.initial_pool_near.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR"]),
+    variant(
+        "ris.initial_pool_near_uniform.comp",
+        "ris.comp",
+        &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR", "RIS_UNIFORM_SOURCE"],
+    ),
     variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
     // `--target-floor` < 1: the target marches the voxel grid (so only these bind it).
     variant("ris.initial_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_VOXEL_TARGET"]),

@@ -12,9 +12,7 @@ struct Vpl {
     bool valid;
 };
 
-Vpl vpl_fetch(uint v) {
-    uint res = frame.size.w;
-    ivec3 t = ivec3(v % res, (v / res) % res, v / (res * res));
+Vpl vpl_fetch_texel(ivec3 t) {
     Vpl o;
     vec4 p = texelFetch(vpl_position, t, 0);
     o.position = p.xyz;
@@ -23,6 +21,11 @@ Vpl vpl_fetch(uint v) {
     o.normal = texelFetch(vpl_normal, t, 0).xyz;
     o.flux = texelFetch(vpl_flux, t, 0).rgb;
     return o;
+}
+
+Vpl vpl_fetch(uint v) {
+    uint res = frame.size.w;
+    return vpl_fetch_texel(ivec3(v % res, (v / res) % res, v / (res * res)));
 }
 
 // albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x · k(d²), without visibility; 0 for a VPL behind x or facing

@@ -88,7 +88,8 @@ pub struct Ris {
     initial_pool: [ComputePipeline; 2],
     /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
     initial_pool_learned: ComputePipeline,
-    initial_pool_near: ComputePipeline,
+    /// The near window's variants: any source, and the uniform source's shortcut (`RisFrame::uniform_source`).
+    initial_pool_near: [ComputePipeline; 2],
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -178,8 +179,10 @@ impl Ris {
         bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
         let initial_pool_learned =
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
-        let initial_pool_near =
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_COMP), &b, push, &[])?;
+        let initial_pool_near = [
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_COMP), &b, push, &[])?,
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_UNIFORM_COMP), &b, push, &[])?,
+        ];
         let initial_pool = [
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?,
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_VOXEL_TARGET_COMP), &b, push, &[])?,
@@ -349,7 +352,7 @@ impl Ris {
                     writes.texel_view4(B_RIS_POOL, ctx.buffer(p)).texel_view(B_RIS_VIS, ctx.buffer(v)),
                 ),
                 (Some(p), None) if r.push.near_candidates > 0 && Self::voxel_target(&r.push) == 0 => {
-                    (&self.initial_pool_near, writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
+                    (&self.initial_pool_near[r.uniform_source as usize], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
                 }
                 (Some(p), None) => {
                     (&self.initial_pool[Self::voxel_target(&r.push)], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
