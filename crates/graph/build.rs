@@ -83,6 +83,12 @@ const SHADERS: &[Shader] = &[
         "ris.comp",
         &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR", "RIS_UNIFORM_SOURCE"],
     ),
+    variant("ris.initial_pool_learned_near.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR"]),
+    variant(
+        "ris.initial_pool_learned_near_uniform.comp",
+        "ris.comp",
+        &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_UNIFORM_SOURCE"],
+    ),
     variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
     // `--target-floor` < 1: the target marches the voxel grid (so only these bind it).
     variant("ris.initial_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_VOXEL_TARGET"]),

@@ -209,8 +209,8 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
         learned: ris.learn_visibility,
         vis_tile: crate::passes::ris::vis_tile(s.width, s.height),
         vis_cell: crate::passes::ris::vis_cell(s.dprsm_res),
-        // The near window needs the pool and the unshadowed target without learned weights: off otherwise.
-        near_candidates: if ris.pool_tiles > 0 && ris.learn_visibility == 0.0 && ris.target_floor >= 1.0 {
+        // The near window needs the pool and a target without the voxel march: off otherwise.
+        near_candidates: if ris.pool_tiles > 0 && ris.target_floor >= 1.0 {
             ris.near_candidates.min(ris.candidates.saturating_sub(1))
         } else {
             0

@@ -115,8 +115,8 @@ pub struct RisSettings {
     /// a light's map within `near_radius` of where the pixel projects into it, drawn uniformly, combined
     /// with the pool's by balance weights (multiple-importance RIS, unbiased). It proposes the VPLs next
     /// to the pixel, whose kernel makes the target's tail, which a pool of source draws almost never
-    /// holds. At most M − 1 are used (the pool's candidates keep every VPL drawable). Only with the pool,
-    /// the unshadowed target and no learned visibility (off otherwise).
+    /// holds. At most M − 1 are used (the pool's candidates keep every VPL drawable). Only with the pool
+    /// and without the voxel target (`target_floor` 1; off otherwise).
     pub near_candidates: u32,
     /// The near window's half-width, texels.
     pub near_radius: u32,

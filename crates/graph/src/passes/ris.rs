@@ -21,7 +21,7 @@
 //!   target depends on earlier frames only, so given them it is a fixed function, positive wherever p̂
 //!   is (δ_L > 0), and RIS is unbiased for any such target; the progressive mean of unbiased frames is
 //!   unbiased. It is what makes a VPL behind a wall rare once the rays have seen the wall.
-//! - With `--near-candidates N` > 0 (the default, 8 of 32; the pool, the unshadowed target): the last N
+//! - With `--near-candidates N` > 0 (the default, 8 of 32; the pool, not the voxel target): the last N
 //!   candidates are texels of a (2r + 1)² window (`--near-radius r`) around where x projects into one
 //!   light's map, the light chosen per reservoir: the VPLs next to x, which hold the target's tail. Every
 //!   candidate's weight is p̂(v) / q(v) with the balance mixture q = ((M − N) p(v) + N p_near(v)) / M
@@ -90,6 +90,8 @@ pub struct Ris {
     initial_pool_learned: ComputePipeline,
     /// The near window's variants: any source, and the uniform source's shortcut (`RisFrame::uniform_source`).
     initial_pool_near: [ComputePipeline; 2],
+    /// The same with the learned visibility.
+    initial_pool_learned_near: [ComputePipeline; 2],
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -179,6 +181,11 @@ impl Ris {
         bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
         let initial_pool_learned =
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
+        let learned_near = [RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP];
+        let initial_pool_learned_near = [
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(learned_near[0]), &bl, push, &[])?,
+            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(learned_near[1]), &bl, push, &[])?,
+        ];
         let initial_pool_near = [
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_COMP), &b, push, &[])?,
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_UNIFORM_COMP), &b, push, &[])?,
@@ -209,6 +216,7 @@ impl Ris {
             initial_pool,
             initial_pool_learned,
             initial_pool_near,
+            initial_pool_learned_near,
             shade,
             sampler: Sampler::nearest(gpu)?,
         })
@@ -348,7 +356,11 @@ impl Ris {
                 .storage_buffer(B_RIS_HISTORY, history);
             let (pipeline, writes) = match (&pool, &learned) {
                 (Some(p), Some(v)) => (
-                    &self.initial_pool_learned,
+                    if r.push.near_candidates > 0 {
+                        &self.initial_pool_learned_near[r.uniform_source as usize]
+                    } else {
+                        &self.initial_pool_learned
+                    },
                     writes.texel_view4(B_RIS_POOL, ctx.buffer(p)).texel_view(B_RIS_VIS, ctx.buffer(v)),
                 ),
                 (Some(p), None) if r.push.near_candidates > 0 && Self::voxel_target(&r.push) == 0 => {
