@@ -2,7 +2,8 @@
 //! judges: unbiased with respect to `all` (the same test as every method, `vpl::converges_to`) without
 //! reuse, with spatial reuse and with temporal reuse over progressive frames, for the voxel and the exact
 //! visibility, and with a CDF source and the voxel-visibility-aware target; its mean within 1 % of the exact one-bounce reference with exact visibility; with one
-//! candidate and no reuse it is its source method; candidates from the presampled pool are unbiased too; the candidates' split over dispatches (lavapipe's
+//! candidate and no reuse it is its source method; candidates from the presampled pool are unbiased too, with the near window as well
+//! (two lights, every light map); the candidates' split over dispatches (lavapipe's
 //! loop limit) does not change the image; bad flag combinations are a `SettingsError`.
 
 use crate::vpl::{converges_to, indirect_with};
@@ -128,6 +129,41 @@ fn ris_from_a_presampled_pool_is_unbiased() {
     let mut far = settings(5, 0, RisSource::Uniform, 3);
     far.ris.near_candidates = 0;
     assert_ne!(pooled, indirect_with(&mut r, far, w, h, res, vox), "the near window changed nothing");
+}
+
+/// The near window (`--near-candidates`) in a scene the default one does not cover: two lights (the window's
+/// light is chosen per reservoir) and every light map (the paraboloid pair, the cube's six faces, and
+/// the one perspective face, whose map leaves some pixels outside: their window stays closed). A 5 × 5
+/// window for half the candidates, so it is a strict part of each face; unbiased against `all` with
+/// the same light map.
+#[test]
+fn ris_near_window_is_unbiased_with_two_lights_and_every_light_map() {
+    use bounce_graph::frame::LightMap;
+    let path = bounce_tests::workspace().join("assets/clutter/scene.toml");
+    let scene = Scene::load(&path).unwrap();
+    assert_eq!(scene.lights.len(), 2);
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    for light_map in [LightMap::Dprsm, LightMap::Cube, LightMap::Rsm { fov_deg: 60.0 }] {
+        let reference = FrameSettings {
+            method: Method::All,
+            clamp: 0.01,
+            visibility: Visibility::Exact,
+            light_map,
+            ..FrameSettings::default()
+        };
+        let all = indirect_with(&mut r, reference, w, h, res, vox);
+        let name = format!("ris (near window 5 × 5 for 4 of 8 candidates, two lights, {light_map:?})");
+        converges_to(&name, &all, |seed| {
+            let mut s = ris(Visibility::Exact, seed, 0, 0.0);
+            s.light_map = light_map;
+            s.ris.pool_tiles = 3;
+            s.ris.near_radius = 2;
+            s.ris.near_candidates = 4;
+            indirect_with(&mut r, s, w, h, res, vox)
+        });
+    }
 }
 
 /// The learned visibility (`--learn-visibility`): frame k's target is weighed by the visibility counted
