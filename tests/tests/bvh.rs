@@ -692,3 +692,35 @@ fn an_empty_scene_and_bad_rays_give_no_hit() {
     assert_eq!((res[0].t, res[0].tri), (1.0, 1), "{:?}", res[0]);
     assert_eq!(SHADOW_EPS, cpu_ref::SHADOW_EPS as f32);
 }
+
+/// The host's ray queries (`bvh::query`, for ris's automatic learned visibility) against the f64
+/// reference on the default scene: closest hits at the same t, and occlusion between random points
+/// (inside the room and on its surfaces) with the same answer, up to a few grazing or end-window cases.
+#[test]
+fn the_host_ray_queries_agree_with_the_reference() {
+    use bounce_graph::bvh::query::BvhView;
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let cpu = Bvh::from_vertices(&scene.vertices);
+    let flat = FlatBvh::new(&cpu, &scene.vertices);
+    let view = BvhView { nodes: &flat.nodes, tris: &flat.tris };
+    let (lo, hi) = (scene.bounds_min, scene.bounds_max);
+    let mut rng = Rng(11);
+    let (mut hits, mut occluded, mut off) = (0, 0, 0);
+    const N: usize = 4000;
+    for _ in 0..N {
+        let (o, d) = (rng.vec(lo, hi), rng.unit());
+        let want = cpu.intersect(o.as_dvec3(), d.as_dvec3()).map(|h| h.t);
+        let got = view.closest(o, d, 0.0, f32::INFINITY).map(|(t, _)| t as f64);
+        match (want, got) {
+            (Some(w), Some(g)) if (w - g).abs() <= 1e-4 * w.max(1.0) => hits += 1,
+            (None, None) => {}
+            _ => off += 1,
+        }
+        let b = rng.vec(lo, hi);
+        let want = cpu.occluded(o.as_dvec3(), b.as_dvec3());
+        occluded += want as usize;
+        off += (view.occluded(o, b, SHADOW_EPS) != want) as usize;
+    }
+    assert!(hits > N / 2 && occluded > N / 10 && occluded < N * 9 / 10, "{hits} hits, {occluded} occluded");
+    assert!(off <= N / 500, "{off} of {} answers differ from the reference", 2 * N);
+}

@@ -370,6 +370,12 @@ fn bad_inputs_give_one_line_and_exit_2() {
             "m.obj",
         ),
         ("garbage toml", vec![("s.toml", "\u{0}\u{1}[[[ = =".into())], vec![], "s.toml"),
+        (
+            "learn visibility neither auto, off nor a number",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--method", "ris", "--learn-visibility", "sometimes"],
+            "--learn-visibility",
+        ),
     ];
     for (name, files, args, must) in cases {
         let dir = d.join(name.replace(' ', "-"));

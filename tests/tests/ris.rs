@@ -204,6 +204,36 @@ fn ris_with_learned_visibility_converges_over_progressive_frames() {
     assert_ne!(last.0, last.1, "the learned visibility changed nothing");
 }
 
+/// `--learn-visibility auto` (the default): learning turns on for a view where visibility blocks most of
+/// the unshadowed transport (the two rooms: the light in the next room), and not on the Cornell box, whose
+/// progressive frames are then those of `--learn-visibility off`, bit for bit. (The learned estimator's
+/// unbiasedness is the test above.)
+#[test]
+fn auto_learned_visibility_turns_on_where_visibility_blocks_most_of_the_transport() {
+    use bounce_graph::passes::ris::AUTO_LEARN_BLOCKED;
+    let gpu = TestGpu::new();
+    let (w, h, res, vox) = SIZE;
+    let settings = |seed, auto| {
+        let mut s = FrameSettings { cdf_seed: Some(1), ..ris(Visibility::Exact, seed, 0, 0.0) };
+        (s.ris.pool_tiles, s.ris.learn_auto) = (3, auto);
+        s
+    };
+    let last_of_three = |r: &mut Renderer, auto| {
+        r.clear_frame_cache();
+        (0..3).map(|k| indirect_with(r, settings(k, auto), w, h, res, vox)).last().unwrap()
+    };
+    let cornell = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let mut r = Renderer::new(&gpu, &cornell).unwrap();
+    let b = r.blocked_share(w, h).unwrap().expect("the view is lit");
+    assert!(b < 0.5, "Cornell box: blocked share {b}");
+    assert_eq!(last_of_three(&mut r, true), last_of_three(&mut r, false), "auto learned on the Cornell box");
+    let rooms = Scene::load(&bounce_tests::workspace().join("assets/two-rooms/scene.toml")).unwrap();
+    let mut r = Renderer::new(&gpu, &rooms).unwrap();
+    let b = r.blocked_share(w, h).unwrap().expect("the view is lit");
+    assert!(b >= AUTO_LEARN_BLOCKED.max(0.9), "two rooms: blocked share {b}");
+    assert_ne!(last_of_three(&mut r, true), last_of_three(&mut r, false), "auto did not learn in the two rooms");
+}
+
 /// Progressive frames of one view (seeds s, s + 1, …, one CDF) with temporal and spatial reuse: each run
 /// starts from an empty history and its mean over `FRAMES` frames converges to `all`; and the history
 /// is used: the last frame alone has a lower error than the first.

@@ -304,9 +304,10 @@ pub struct FrameArgs {
     #[arg(long, default_value_t = RisSettings::default().near_radius)]
     pub near_radius: u32,
     /// --method ris weighs its target by the visibility learned from earlier progressive frames' shadow
-    /// rays, floored at this (in (0, 1]; 0: off).
-    #[arg(long, default_value_t = RisSettings::default().learn_visibility)]
-    pub learn_visibility: f32,
+    /// rays, floored at δ: `auto` (learn at δ = 0.1 where the view's estimated blocked share of the
+    /// unshadowed transport is at least 0.8), `off`, or δ in (0, 1].
+    #[arg(long, default_value = "auto", value_parser = parse_learn)]
+    pub learn_visibility: Learn,
     /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
     #[arg(long)]
     pub device: Option<String>,
@@ -353,7 +354,8 @@ impl FrameArgs {
                 pool_tiles: self.pool_tiles,
                 near_candidates: self.near_candidates,
                 near_radius: self.near_radius,
-                learn_visibility: self.learn_visibility,
+                learn_visibility: self.learn_visibility.floor(),
+                learn_auto: self.learn_visibility == Learn::Auto,
                 candidates_chunk: None,
             },
             ..FrameSettings::default()
@@ -613,5 +615,30 @@ mod tests {
         let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
         let (ours, graph) = (r.frame.settings(256, 256), FrameSettings::default());
         assert_eq!(format!("{ours:?}"), format!("{graph:?}"));
+    }
+}
+
+/// `--learn-visibility`: `auto`, `off`, or a floor δ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Learn {
+    Auto,
+    Floor(f32),
+}
+
+impl Learn {
+    /// The floor δ_L the settings carry (0: off, or left to `auto`).
+    pub fn floor(self) -> f32 {
+        match self {
+            Learn::Auto => 0.0,
+            Learn::Floor(d) => d,
+        }
+    }
+}
+
+fn parse_learn(s: &str) -> Result<Learn, String> {
+    match s {
+        "auto" => Ok(Learn::Auto),
+        "off" => Ok(Learn::Floor(0.0)),
+        _ => s.parse::<f32>().map(Learn::Floor).map_err(|_| format!("expected auto, off or a number, got {s:?}")),
     }
 }

@@ -11,7 +11,7 @@
 use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
 use super::recipe::{build_frame, seed32, RecipeInputs};
-use super::settings::{reject, Component, FrameSettings, LightMap, Method, SettingsError, Visibility};
+use super::settings::{reject, Component, FrameSettings, LightMap, Method, RisSettings, SettingsError, Visibility};
 use crate::bindings::HYBRID_MAX_TESTS;
 use crate::bvh::cells::{CellLists, GpuCells};
 use crate::bvh::GpuBvh;
@@ -44,6 +44,10 @@ pub struct RenderContext {
     bvh: Option<GpuBvh>,
     /// The BVH's triangles in its leaf order, kept for the cell lists (which index them).
     bvh_tris: Vec<crate::bvh::GpuBvhTri>,
+    /// Its nodes, kept for the host's ray queries ([`crate::bvh::query`]).
+    bvh_nodes: Vec<crate::bvh::GpuBvhNode>,
+    /// `--learn-visibility auto`'s blocked share for the last view asked about: (view key, share).
+    blocked: Option<(u64, Option<f32>)>,
     /// `--visibility hybrid`'s per-cell triangle lists, for the last grid asked for.
     cells: Option<GpuCells>,
 }
@@ -103,6 +107,8 @@ impl Renderer {
             vertices: scene.vertices.clone(),
             bvh: None,
             bvh_tris: Vec::new(),
+            bvh_nodes: Vec::new(),
+            blocked: None,
             cells: None,
         };
         let state = FrameState { camera: scene.camera, lights: scene.lights.clone(), retained: Retained::default() };
@@ -148,6 +154,7 @@ impl Renderer {
             let flat = crate::bvh::FlatBvh::new(&cpu, &self.ctx.vertices);
             self.ctx.bvh = Some(GpuBvh::upload(&self.ctx.gpu, &flat).context("uploading the BVH")?);
             self.ctx.bvh_tris = flat.tris;
+            self.ctx.bvh_nodes = flat.nodes;
         }
         Ok(self.ctx.bvh.as_ref().expect("set above"))
     }
@@ -193,6 +200,42 @@ impl Renderer {
         self.frame(s, &mut |_, _| {}, Some(PresentTo { ldr, params, read_mean }))
     }
 
+    /// `--learn-visibility auto`'s share of the unshadowed transport into the current view that visibility
+    /// blocks ([`crate::passes::ris::blocked_share`]), computed once per view and size.
+    pub fn blocked_share(&mut self, width: u32, height: u32) -> Result<Option<f32>> {
+        self.bvh()?;
+        let c = &self.state.camera;
+        let lights: Vec<[u32; 8]> = self.state.lights.iter().map(|l| bytemuck::cast(*l)).collect();
+        let view: Vec<u32> =
+            [c.eye, c.target, c.up].iter().flat_map(|v| v.to_array()).chain([c.fov_y_deg]).map(f32::to_bits).collect();
+        let key = crate::graph::fingerprint(&(view, lights, width, height));
+        if let Some((k, share)) = self.ctx.blocked {
+            if k == key {
+                return Ok(share);
+            }
+        }
+        let bvh = crate::bvh::query::BvhView { nodes: &self.ctx.bvh_nodes, tris: &self.ctx.bvh_tris };
+        let diagonal = (self.ctx.scene.bounds_max - self.ctx.scene.bounds_min).length();
+        let share = crate::passes::ris::blocked_share(bvh, c, &self.state.lights, (width, height), diagonal);
+        self.ctx.blocked = Some((key, share));
+        Ok(share)
+    }
+
+    /// `s` with `--learn-visibility auto` decided for the current view (None: `s` as it is).
+    fn auto_learn(&mut self, s: &FrameSettings) -> Result<Option<FrameSettings>> {
+        let r = &s.ris;
+        let allowed = r.pool_tiles > 0 && r.spatial_passes == 0 && r.temporal_cap == 0.0 && r.target_floor >= 1.0;
+        if s.method != Method::Ris || !r.learn_auto || r.learn_visibility > 0.0 || !allowed {
+            return Ok(None);
+        }
+        let blocked = self.blocked_share(s.width, s.height)?;
+        if !blocked.is_some_and(|b| b >= crate::passes::ris::AUTO_LEARN_BLOCKED) {
+            return Ok(None);
+        }
+        let ris = RisSettings { learn_visibility: crate::passes::ris::AUTO_LEARN_FLOOR, ..s.ris };
+        Ok(Some(FrameSettings { ris, ..s.clone() }))
+    }
+
     fn frame(
         &mut self,
         s: &FrameSettings,
@@ -200,6 +243,8 @@ impl Renderer {
         present: Option<PresentTo>,
     ) -> Result<FrameOutput> {
         self.check(s)?;
+        let auto = self.auto_learn(s)?;
+        let s = auto.as_ref().unwrap_or(s);
         self.ctx.scene.write_lights(&self.state.lights)?;
         self.ctx.max_intensity = max_intensity(&self.state.lights);
         let reference = s.method == Method::Reference && s.component != Component::Direct;

@@ -111,6 +111,11 @@ pub struct RisSettings {
     /// frames' shadow rays from the pixel's screen tile to the VPL's light-map cell that were unoccluded
     /// (progressive frames of one view; needs the pool, no reuse and the unshadowed target).
     pub learn_visibility: f32,
+    /// `--learn-visibility auto` (the default): with `learn_visibility` 0, the renderer turns learning on
+    /// (δ_L = `passes::ris::AUTO_LEARN_FLOOR`) for a view where visibility blocks most of the unshadowed
+    /// transport (`passes::ris::blocked_share` ≥ `AUTO_LEARN_BLOCKED`, estimated once per view on the
+    /// CPU), when the other settings allow it (the pool, no reuse, the unshadowed target).
+    pub learn_auto: bool,
     /// The last this many of each reservoir's M candidates come from the near window (0: none): texels of
     /// a light's map within `near_radius` of where the pixel projects into it, drawn uniformly, combined
     /// with the pool's by balance weights (multiple-importance RIS, unbiased). It proposes the VPLs next
@@ -144,6 +149,7 @@ impl Default for RisSettings {
             target_floor: 1.0,
             pool_tiles: 16,
             learn_visibility: 0.0,
+            learn_auto: true,
             // 8 of 32 from a 17 × 17 window (2026-11-30, third session): 3–10× lower error at equal time
             // on Sibenik and Conference (BENCHMARKS.md, "ris: the near window").
             near_candidates: 8,

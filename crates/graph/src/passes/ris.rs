@@ -114,6 +114,88 @@ pub struct RisFrame {
     pub key: u64,
 }
 
+/// `--learn-visibility auto` turns the learned visibility on (at this floor) for a view where visibility
+/// blocks at least [`AUTO_LEARN_BLOCKED`] of the unshadowed transport ([`blocked_share`]).
+pub const AUTO_LEARN_FLOOR: f32 = 0.1;
+/// The blocked share from which `auto` learns. Measured (BENCHMARKS.md, "ris: the near window"): 0.99 in
+/// the two rooms, where learning halves the error at equal time; 0.08–0.29 on the Cornell box,
+/// box-on-floor, clutter, Sibenik and Conference, where it costs frames for no gain; 0.52 in the doorway.
+pub const AUTO_LEARN_BLOCKED: f32 = 0.8;
+
+/// The share 1 − T/U of the unshadowed one-bounce transport into the view that visibility blocks,
+/// estimated on the CPU from the scene's BVH: U sums, over pairs of an 8 × 8 grid of pixel points x (the
+/// camera rays' first hits) and 64 points y per light (the first hits of a spherical Fibonacci set of
+/// directions: each stands for the VPLs of an equal solid angle, whose flux is the light's intensity
+/// times it), the point-to-point transport I_l · cos θ_x · cos θ_y / max(d², (diag/100)²); T sums the
+/// same over the pairs that see each other. None when nothing is lit in view (U = 0). Near 1 where most
+/// VPLs the unshadowed target favours are hidden (the light in the next room), which is where ris's
+/// learned visibility pays for its counting. Deterministic: the same view gives the same share.
+pub fn blocked_share(
+    bvh: crate::bvh::query::BvhView,
+    camera: &crate::camera::Camera,
+    lights: &[crate::shader_types::Light],
+    (width, height): (u32, u32),
+    diagonal: f32,
+) -> Option<f32> {
+    use glam::Vec3;
+    let normal = |k: usize, towards: Vec3| {
+        let t = &bvh.tris[k];
+        let n = (Vec3::from(t.v1) - Vec3::from(t.v0)).cross(Vec3::from(t.v2) - Vec3::from(t.v0)).normalize_or_zero();
+        if n.dot(towards) < 0.0 {
+            -n
+        } else {
+            n
+        }
+    };
+    let lift = diagonal * 1e-4;
+    let hit = |o: Vec3, d: Vec3| {
+        bvh.closest(o, d, 0.0, f32::INFINITY).map(|(t, k)| {
+            let n = normal(k, -d);
+            (o + d * t + n * lift, n)
+        })
+    };
+    const SIDE: u32 = 8;
+    let pixels: Vec<(Vec3, Vec3)> = (0..SIDE * SIDE)
+        .filter_map(|k| {
+            let (i, j) = ((k % SIDE) as f32 + 0.5, (k / SIDE) as f32 + 0.5);
+            let d = camera.ray_dir_f(i * width as f32 / SIDE as f32, j * height as f32 / SIDE as f32, width, height);
+            hit(camera.eye, d)
+        })
+        .collect();
+    const PER_LIGHT: u32 = 64;
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    let mut lit: Vec<(Vec3, Vec3, f32)> = Vec::new();
+    for l in lights {
+        let p = Vec3::from_slice(&l.position[..3]);
+        let flux = Vec3::from_slice(&l.intensity[..3]).dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        for k in 0..PER_LIGHT {
+            let z = 1.0 - 2.0 * (k as f32 + 0.5) / PER_LIGHT as f32;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = golden * k as f32;
+            if let Some((y, n)) = hit(p, Vec3::new(r * a.cos(), r * a.sin(), z)) {
+                lit.push((y, n, flux));
+            }
+        }
+    }
+    let min_d2 = (diagonal / 100.0).powi(2);
+    let (mut unshadowed, mut visible) = (0.0f64, 0.0f64);
+    for &(x, nx) in &pixels {
+        for &(y, ny, flux) in &lit {
+            let d = y - x;
+            let d2 = d.length_squared();
+            let g = flux * nx.dot(d).max(0.0) * ny.dot(-d).max(0.0) / (d2 * d2.max(min_d2));
+            if !(g > 0.0 && g.is_finite()) {
+                continue;
+            }
+            unshadowed += g as f64;
+            if !bvh.occluded(x, y, 1e-4) {
+                visible += g as f64;
+            }
+        }
+    }
+    (unshadowed > 0.0).then(|| (1.0 - visible / unshadowed) as f32)
+}
+
 /// The learned visibility's screen tiles, pixels per side: at least 8, and at most 64 tiles a side.
 pub fn vis_tile(width: u32, height: u32) -> u32 {
     width.max(height).div_ceil(64).max(8)
