@@ -118,10 +118,17 @@ uint vis_side() {
     return (frame.size.w + ris.vis_cell - 1u) / ris.vis_cell;
 }
 
+// The cell of texel (tx, ty) of light-map layer `layer`.
+uint vis_cell_at(uint layer, uint tx, uint ty) {
+    uint side = vis_side();
+    return (layer * side + udiv(ty, ris.vis_cell)) * side + udiv(tx, ris.vis_cell);
+}
+
+// The quotients (a layer, a row) are far below 2^21, so udiv is exact.
 uint vis_cell_of(uint v) {
-    uint res = frame.size.w, side = vis_side();
-    uint layer = v / (res * res), tx = (v % res) / ris.vis_cell, ty = ((v / res) % res) / ris.vis_cell;
-    return (layer * side + ty) * side + tx;
+    uint res = frame.size.w, face = res * res;
+    uint layer = udiv(v, face), r = v - layer * face, ty = udiv(r, res);
+    return vis_cell_at(layer, r - ty * res, ty);
 }
 
 uint vis_tile_base(ivec2 q) {
@@ -347,7 +354,7 @@ void main() {
 #endif
                 float prob = (m_pool * p_source + m_near * near.p) / m_all;
 #ifdef RIS_LEARNED
-                uint cell = vis_cell_of(v);
+                uint cell = vis_cell_at(uint(t.z), uint(t.x), uint(t.y));
 #else
                 uint cell = 0u;
 #endif

@@ -76,6 +76,16 @@ float luminance(vec3 c) {
     return LUMINANCE_WEIGHTS.r * c.r + LUMINANCE_WEIGHTS.g * c.g + LUMINANCE_WEIGHTS.b * c.b;
 }
 
+// a / b (b > 0) in f32 with one correction either way: llvmpipe divides integers lane by lane, floats
+// for the whole vector. Exact while a / b < 2^21 and a + b < 2^32: the f32 quotient's relative error is
+// a few ulps (the conversions' and GLSL's 2.5-ulp division), so it is within 1 of the true one.
+uint udiv(uint a, uint b) {
+    uint q = uint(float(a) / float(b));
+    if (q * b > a) q--;
+    else if (a - q * b >= b) q++;
+    return q;
+}
+
 // PCG hash (Jarzynski & Olano 2020): a good 32-bit hash for per-pixel, per-sample random streams.
 uint pcg_hash(uint v) {
     uint state = v * 747796405u + 2891336453u;
