@@ -44,10 +44,11 @@ import tomllib
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = ["cornell-box", "two-rooms", "sibenik", "conference"]
 METHODS = ["uniform", "global", "stratified", "local", "gbg", "mis", "reference", "ris"]
-# Per-frame settings of a method where the render default does not fit a progressive frame: ris's --vpls is
-# its reservoirs per pixel, each worth --candidates VPL candidates (4 × 32 candidates per pixel and frame).
-# `ris-learned` is ris with the visibility learned over the progressive frames (--learn-visibility).
-METHOD_ARGS = {"ris": ["--vpls", "4"], "ris-learned": ["--vpls", "4", "--learn-visibility", "0.1"]}
+# Per-frame settings of a method where the render default does not fit a progressive frame. ris runs as
+# `bounce render --time-limit T` does by default: without --vpls it picks its reservoirs and candidates per
+# frame for the view itself. `ris-learned` forces the learned visibility (--learn-visibility 0.1) at
+# 4 reservoirs of 32 candidates per frame.
+METHOD_ARGS = {"ris-learned": ["--vpls", "4", "--candidates", "32", "--learn-visibility", "0.1"]}
 # Labels that run another bounce method with their METHOD_ARGS.
 METHOD_OF = {"ris-learned": "ris"}
 DEFAULT_ALBEDO = 0.5

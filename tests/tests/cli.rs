@@ -673,6 +673,20 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
     assert!(wall <= 1.5 * 1.5, "the budget was overrun: {wall} s");
     assert_eq!(get("time_limit_s").as_deref(), Some("1.5"));
 
+    // ris without --vpls picks its budget per frame from the view: candidates on the Cornell box, where
+    // visibility blocks little; shadow rays in the two rooms, where it blocks nearly everything.
+    for (scene, budget) in [
+        (scene.clone(), "2 reservoirs × 64"),
+        (bounce_tests::workspace().join("assets/two-rooms/scene.toml"), "4 reservoirs × 32"),
+    ] {
+        let mut args = vec!["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--method", "ris"];
+        args.extend(small);
+        args.extend(["--time-limit", "0.5"]);
+        let r = bounce(&args);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        assert!(r.stderr.contains(&format!("ris per frame: {budget} candidates")), "{}", r.stderr);
+    }
+
     let all_out = d.join("all.exr");
     let mut all = vec!["render", s, "--out", all_out.to_str().unwrap(), "--method", "all"];
     all.extend(small);

@@ -164,8 +164,16 @@ pub const FACES: Choices<FaceMode> = Choices(&[
 
 /// `--vpls` when not given.
 pub const DEFAULT_VPLS: u32 = 64;
-/// `--vpls` when not given, for ris under `render --time-limit`: reservoirs per progressive frame.
-pub const RIS_VPLS_PER_FRAME: u32 = 4;
+/// ris's budget per progressive frame under `render --time-limit` when neither --vpls nor --candidates
+/// is given: (reservoirs, candidates, near-window candidates), chosen per view by the share of the
+/// unshadowed transport that visibility blocks (`Renderer::blocked_share`, the threshold of
+/// `--learn-visibility auto`). Where visibility blocks most of it, each shadow ray is the scarce
+/// resource: 4 reservoirs of 32 candidates. Elsewhere the candidates are: 2 reservoirs of 64.
+/// Measured at equal time (BENCHMARKS.md, "ris: learned visibility where the view needs it"): 2 × 64
+/// gives 1.27× lower error on the Cornell box and the same on Sibenik and Conference, and 1.34× higher
+/// in the two rooms, where 4 × 32 is kept.
+pub const RIS_FRAME_BLOCKED: (u32, u32, u32) = (4, 32, 8);
+pub const RIS_FRAME_OPEN: (u32, u32, u32) = (2, 64, 16);
 
 /// What one picture is: its size, component, method, VPL count and seed (`render` and `view`; `bench`
 /// sweeps method, VPLs and seed itself).
@@ -272,9 +280,10 @@ pub struct FrameArgs {
     /// Candidate distribution of --method ris (the CDF methods' mixtures, --defensive included).
     #[arg(long, value_parser = RIS_SOURCES, default_value = "uniform")]
     pub source: RisSource,
-    /// Candidates per reservoir of --method ris (M).
-    #[arg(long, default_value_t = RisSettings::default().candidates)]
-    pub candidates: u32,
+    /// Candidates per reservoir of --method ris (M; default 32, or chosen per view under `render
+    /// --time-limit` without --vpls).
+    #[arg(long)]
+    pub candidates: Option<u32>,
     /// Spatial reuse passes of --method ris (0: none).
     #[arg(long, default_value_t = RisSettings::default().spatial_passes)]
     pub spatial_passes: u32,
@@ -297,9 +306,10 @@ pub struct FrameArgs {
     #[arg(long, default_value_t = RisSettings::default().pool_tiles)]
     pub pool_tiles: u32,
     /// --method ris draws this many of each reservoir's candidates from the near window: light-map
-    /// texels around where the pixel projects into a light's map (0: none; needs the pool).
-    #[arg(long, default_value_t = RisSettings::default().near_candidates)]
-    pub near_candidates: u32,
+    /// texels around where the pixel projects into a light's map (0: none; needs the pool; default 8,
+    /// or chosen per view with --candidates).
+    #[arg(long)]
+    pub near_candidates: Option<u32>,
     /// Half-width of --near-candidates' window, texels.
     #[arg(long, default_value_t = RisSettings::default().near_radius)]
     pub near_radius: u32,
@@ -345,14 +355,14 @@ impl FrameArgs {
             vpl_kernel: self.vpl_kernel,
             ris: RisSettings {
                 source: self.source,
-                candidates: self.candidates,
+                candidates: self.candidates.unwrap_or(RisSettings::default().candidates),
                 spatial_passes: self.spatial_passes,
                 spatial_neighbors: self.spatial_neighbors,
                 spatial_radius: self.spatial_radius,
                 temporal_cap: self.temporal_cap,
                 target_floor: self.target_floor,
                 pool_tiles: self.pool_tiles,
-                near_candidates: self.near_candidates,
+                near_candidates: self.near_candidates.unwrap_or(RisSettings::default().near_candidates),
                 near_radius: self.near_radius,
                 learn_visibility: self.learn_visibility.floor(),
                 learn_auto: self.learn_visibility == Learn::Auto,

@@ -20,12 +20,12 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     let scene = super::load_scene(&a.scene, err)?;
     let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
     let mut settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
-    if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
-        settings.vpls = crate::cli::RIS_VPLS_PER_FRAME;
-    }
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
-    settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
+    if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
+        ris_frame_budget(a, &mut renderer, &mut settings, err)?;
+    }
+    settings.validate(&gpu)?;
     renderer.check(&settings)?;
     if let Some(frames) = a.frames {
         animate(a, &mut renderer, &settings, path.as_ref(), frames, err)?;
@@ -204,5 +204,33 @@ fn timings(out: &mut dyn Write, s: &FrameSettings, frame: &FrameOutput, wall: f6
         )?;
     }
     writeln!(out, "wall {wall:.3} s on {device}")?;
+    Ok(())
+}
+
+/// ris's reservoirs and candidates per progressive frame when `--vpls` is not given
+/// ([`crate::cli::RIS_FRAME_BLOCKED`], [`crate::cli::RIS_FRAME_OPEN`]), said on `err`.
+fn ris_frame_budget(
+    a: &RenderArgs,
+    renderer: &mut Renderer,
+    settings: &mut FrameSettings,
+    err: &mut dyn Write,
+) -> Result<()> {
+    let blocked = renderer.blocked_share(settings.width, settings.height)?;
+    let (r, m, n) = if a.frame.candidates.is_none() && a.frame.near_candidates.is_none() {
+        if blocked.is_some_and(|b| b < bounce_graph::passes::ris::AUTO_LEARN_BLOCKED) {
+            crate::cli::RIS_FRAME_OPEN
+        } else {
+            crate::cli::RIS_FRAME_BLOCKED
+        }
+    } else {
+        (crate::cli::RIS_FRAME_BLOCKED.0, settings.ris.candidates, settings.ris.near_candidates)
+    };
+    (settings.vpls, settings.ris.candidates, settings.ris.near_candidates) = (r, m, n);
+    let share = blocked.map_or("nothing lit in view".into(), |b| format!("{:.0} %", 100.0 * b));
+    writeln!(
+        err,
+        "ris per frame: {r} reservoirs × {m} candidates ({} from the near window); visibility blocks {share} of the view's unshadowed transport",
+        n.min(m.saturating_sub(1))
+    )?;
     Ok(())
 }
