@@ -251,8 +251,9 @@ NearWindow near_window(ivec2 q, uint layer, vec3 x) {
     NearWindow w;
     uint lights_n = frame.size.z;
     uint l = min(uint(ris_rand(q, 5u, layer) * float(lights_n)), lights_n - 1u);
-    uint face;
-    vec2 uv;
+    // Defined even where lm_locate finds no face (the window then stays closed).
+    uint face = 0u;
+    vec2 uv = vec2(0.0);
     int res = int(frame.size.w);
     int kk = min(2 * int(ris.near_radius) + 1, res);
     w.open = lm_locate(x - lights[l].position.xyz, l, face, uv) && all(lessThan(abs(uv), vec2(2.0)));
