@@ -244,6 +244,7 @@ struct NearWindow {
     bool open;
     uint layer; // the window's light-map layer (light · faces + face)
     ivec2 lo;   // its lowest texel
+    int size;   // K = min(2r + 1, res) texels a side
     float p;    // 1 / K²
 };
 
@@ -255,12 +256,12 @@ NearWindow near_window(ivec2 q, uint layer, vec3 x) {
     uint face = 0u;
     vec2 uv = vec2(0.0);
     int res = int(frame.size.w);
-    int kk = min(2 * int(ris.near_radius) + 1, res);
+    w.size = min(2 * int(ris.near_radius) + 1, res);
     w.open = lm_locate(x - lights[l].position.xyz, l, face, uv) && all(lessThan(abs(uv), vec2(2.0)));
     ivec2 c = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(res - 1));
-    w.lo = clamp(c - ivec2(kk / 2), ivec2(0), ivec2(res - kk));
+    w.lo = clamp(c - ivec2(w.size / 2), ivec2(0), ivec2(res - w.size));
     w.layer = l * lm_faces() + face;
-    w.p = 1.0 / float(kk * kk);
+    w.p = 1.0 / float(w.size * w.size);
     vec4 seen = texelFetch(vpl_position, ivec3(c, int(w.layer)), 0);
     vec3 dx = seen.xyz - x;
     float reach2 = float(ris.near_radius * ris.near_radius) * seen.w;
@@ -270,8 +271,7 @@ NearWindow near_window(ivec2 q, uint layer, vec3 x) {
 
 // The texel of near candidate k.
 ivec3 near_texel(NearWindow w, ivec2 q, uint k) {
-    int kk = min(2 * int(ris.near_radius) + 1, int(frame.size.w));
-    ivec2 o = min(ivec2(vec2(ris_rand(q, 6u, k), ris_rand(q, 7u, k)) * float(kk)), ivec2(kk - 1));
+    ivec2 o = min(ivec2(vec2(ris_rand(q, 6u, k), ris_rand(q, 7u, k)) * float(w.size)), ivec2(w.size - 1));
     return ivec3(w.lo + o, int(w.layer));
 }
 
@@ -282,13 +282,9 @@ float near_prob(NearWindow w, uint v) {
     if (!w.open || v < base) return 0.0;
     uint r = v - base;
     if (r >= res * res) return 0.0;
-    // r = ty · res + tx without a per-lane integer division: float is exact below 2^24.
-    uint ty = uint(float(r) / float(res));
-    if (ty * res > r) ty--;
-    else if ((ty + 1u) * res <= r) ty++;
+    uint ty = udiv(r, res); // a row: far below udiv's exact range
     ivec2 t = ivec2(int(r - ty * res), int(ty)) - w.lo;
-    int kk = min(2 * int(ris.near_radius) + 1, int(res));
-    return all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, ivec2(kk))) ? w.p : 0.0;
+    return all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, ivec2(w.size))) ? w.p : 0.0;
 }
 #endif
 
@@ -323,8 +319,6 @@ void main() {
         // A closed window gives its candidates to the pool.
         uint split = near.open ? ris.candidates - ris.near_candidates : ris.candidates;
         float m_all = float(ris.candidates), m_pool = float(split), m_near = m_all - m_pool;
-#endif
-#ifdef RIS_NEAR
         // The pool's candidates, then the window's (two loops: llvmpipe would run both bodies for each).
         for (uint i = pc.first; i < min(pc.last, split); i++) {
             float prob;

@@ -13,6 +13,11 @@
 #define WG_2D 8
 #define WG_1D 64
 #define MAX_LIGHTS 16
+// The thesis's luminance (eq. 7.6): RGB weights of a contribution's scalar importance (common.glsl's
+// luminance; ris's host-side estimate of the blocked transport).
+const float LUMINANCE_R = 0.299;
+const float LUMINANCE_G = 0.587;
+const float LUMINANCE_B = 0.114;
 // Specialisation constant ids. SPEC_TEXTURED: the scene has textures (false: albedo_at reads no
 // texture, so an untextured scene runs the shader variant without texture fetches).
 #define SPEC_TEXTURED 0

@@ -71,7 +71,7 @@ vec3 ray_triangle_bary(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
 
 // The thesis's luminance (eq. 7.6): the scalar importance of an RGB contribution (also the
 // reference's light-strategy weights).
-const vec3 LUMINANCE_WEIGHTS = vec3(0.299, 0.587, 0.114);
+const vec3 LUMINANCE_WEIGHTS = vec3(LUMINANCE_R, LUMINANCE_G, LUMINANCE_B);
 float luminance(vec3 c) {
     return LUMINANCE_WEIGHTS.r * c.r + LUMINANCE_WEIGHTS.g * c.g + LUMINANCE_WEIGHTS.b * c.b;
 }

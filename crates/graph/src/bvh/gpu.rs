@@ -334,30 +334,21 @@ impl FlatBvh {
         }
         // Top-down: keep a box where testing it is the cheaper choice, given the nearest tested ancestor.
         let mut keep = vec![false; n];
-        let mut stack = vec![(0usize, 0usize)];
-        while let Some((i, k)) = stack.pop() {
+        // (node, depth of the nearest tested ancestor, that ancestor's area).
+        let mut stack = vec![(0usize, 0usize, areas[0])];
+        while let Some((i, k, of)) = stack.pop() {
             let d = depth[i];
-            let of = if k == 0 { areas[0] } else { areas[self.ancestor_at(&parent, &depth, i, k)] };
             // The root's box stays: it costs one step, and a segment outside the scene's box (which the
             // renderer never casts, but a caller may) then reads nothing more.
             keep[i] = i == 0 || 1.0 + p(areas[i], of) * g[i][d] < g[i][k];
             let nd = self.nodes[i];
             if !nd.is_leaf() {
-                let next = if keep[i] { d } else { k };
-                stack.push((nd.first as usize, next));
-                stack.push((nd.first as usize + 1, next));
+                let next = if keep[i] { (d, areas[i]) } else { (k, of) };
+                stack.push((nd.first as usize, next.0, next.1));
+                stack.push((nd.first as usize + 1, next.0, next.1));
             }
         }
         keep
-    }
-
-    /// Node `i`'s ancestor at depth `k` (1 ≤ k < depth(i)).
-    fn ancestor_at(&self, parent: &[u32], depth: &[usize], i: usize, k: usize) -> usize {
-        let mut j = i;
-        while depth[j] > k {
-            j = parent[j] as usize;
-        }
-        j
     }
 
     /// An upper bound of the loop iterations of one trace (see the module doc).

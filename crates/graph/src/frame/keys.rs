@@ -45,12 +45,8 @@ impl Keys {
         spec: &VoxelGridSpec,
         p: &ImportanceParams,
     ) -> Keys {
-        let c = camera;
-        let cam =
-            bits(&[c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fov_y_deg]);
-        let gbuffer = fingerprint(&(cam, s.width, s.height));
-        let positions: Vec<u32> = lights.iter().flat_map(|l| bits(&l.position)).collect();
-        let intensities: Vec<u32> = lights.iter().flat_map(|l| bits(&l.intensity)).collect();
+        let gbuffer = view_key(camera, s.width, s.height);
+        let (positions, intensities) = light_bits(lights);
         let vpls = fingerprint(&(
             (s.dprsm_res, s.light_map.name(), s.light_map.tan_half_fov().to_bits()),
             &positions,
@@ -75,4 +71,18 @@ impl Keys {
             cdf: fingerprint(&(vpls, voxels, params, per_pixel, traced)),
         }
     }
+}
+
+/// What sees the scene: the camera and the image size (the G-buffer's key, and that of the host's
+/// per-view decisions, `Renderer::blocked_share`).
+pub fn view_key(camera: &Camera, width: u32, height: u32) -> u64 {
+    let c = camera;
+    let cam =
+        bits(&[c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fov_y_deg]);
+    fingerprint(&(cam, width, height))
+}
+
+/// The lights' positions and intensities as bits.
+pub fn light_bits(lights: &[Light]) -> (Vec<u32>, Vec<u32>) {
+    (lights.iter().flat_map(|l| bits(&l.position)).collect(), lights.iter().flat_map(|l| bits(&l.intensity)).collect())
 }

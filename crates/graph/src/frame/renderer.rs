@@ -205,10 +205,10 @@ impl Renderer {
     pub fn blocked_share(&mut self, width: u32, height: u32) -> Result<Option<f32>> {
         self.bvh()?;
         let c = &self.state.camera;
-        let lights: Vec<[u32; 8]> = self.state.lights.iter().map(|l| bytemuck::cast(*l)).collect();
-        let view: Vec<u32> =
-            [c.eye, c.target, c.up].iter().flat_map(|v| v.to_array()).chain([c.fov_y_deg]).map(f32::to_bits).collect();
-        let key = crate::graph::fingerprint(&(view, lights, width, height));
+        let key = crate::graph::fingerprint(&(
+            super::keys::view_key(c, width, height),
+            super::keys::light_bits(&self.state.lights),
+        ));
         if let Some((k, share)) = self.ctx.blocked {
             if k == key {
                 return Ok(share);

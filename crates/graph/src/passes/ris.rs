@@ -167,7 +167,9 @@ pub fn blocked_share(
     let mut lit: Vec<(Vec3, Vec3, f32)> = Vec::new();
     for l in lights {
         let p = Vec3::from_slice(&l.position[..3]);
-        let flux = Vec3::from_slice(&l.intensity[..3]).dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        let weights =
+            Vec3::new(crate::bindings::LUMINANCE_R, crate::bindings::LUMINANCE_G, crate::bindings::LUMINANCE_B);
+        let flux = Vec3::from_slice(&l.intensity[..3]).dot(weights);
         for k in 0..PER_LIGHT {
             let z = 1.0 - 2.0 * (k as f32 + 0.5) / PER_LIGHT as f32;
             let r = (1.0 - z * z).max(0.0).sqrt();
@@ -263,15 +265,16 @@ impl Ris {
         bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
         let initial_pool_learned =
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
-        let learned_near = [RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP];
-        let initial_pool_learned_near = [
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(learned_near[0]), &bl, push, &[])?,
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(learned_near[1]), &bl, push, &[])?,
-        ];
-        let initial_pool_near = [
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_COMP), &b, push, &[])?,
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_NEAR_UNIFORM_COMP), &b, push, &[])?,
-        ];
+        // The near window's pairs: any source, the uniform source's shortcut.
+        let pair = |spirv: [&[u8]; 2], b: &[Binding]| -> Result<[ComputePipeline; 2]> {
+            Ok([
+                ComputePipeline::new(gpu, "ris_initial", &crate::spirv(spirv[0]), b, push, &[])?,
+                ComputePipeline::new(gpu, "ris_initial", &crate::spirv(spirv[1]), b, push, &[])?,
+            ])
+        };
+        let initial_pool_learned_near =
+            pair([RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP], &bl)?;
+        let initial_pool_near = pair([RIS_INITIAL_POOL_NEAR_COMP, RIS_INITIAL_POOL_NEAR_UNIFORM_COMP], &b)?;
         let initial_pool = [
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?,
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_VOXEL_TARGET_COMP), &b, push, &[])?,
