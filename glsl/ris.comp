@@ -53,6 +53,8 @@ layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
 layout(std430, set = 0, binding = B_RIS_VIS) buffer RisVis { uint vis_counts[]; };
+layout(std430, set = 0, binding = B_RIS_UNSHADOWED) readonly buffer RisUnshadowed { vec4 unshadowed[]; };
+layout(std430, set = 0, binding = B_RIS_CV) buffer RisCv { uvec2 cv_counts[]; };
 #else
 #ifdef RIS_SPATIAL
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
@@ -60,6 +62,9 @@ layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir re
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 #ifdef RIS_INITIAL
 layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Reservoir res_history[]; };
+// The control variate's state (add_candidate): xyz the candidates' estimate U_g of the reservoir (while
+// streaming, its sum before the albedo and 1/M), w the kept VPL's ratio s / (p̂ / luminance(f)).
+layout(std430, set = 0, binding = B_RIS_UNSHADOWED) buffer RisUnshadowed { vec4 unshadowed[]; };
 #endif
 #ifdef RIS_POOL
 layout(set = 0, binding = B_RIS_POOL) uniform usamplerBuffer pool_texels;
@@ -98,12 +103,18 @@ float ris_rand(ivec2 q, uint stream, uint i) {
 // is, so the estimate stays unbiased (the shade tests the frame's real visibility), and VPLs the march
 // sees as hidden are drawn δ times as often, which is what an unshadowed target gets wrong behind walls.
 // Deterministic per pixel, so the spatial weights evaluate the same p̂ at each neighbour.
-float target_of(vec3 x, vec3 n, vec3 a, Vpl vpl) {
-    float t = vpl_unshadowed_luminance(x, n, vpl_luminance_albedo(a), vpl, pc.clamp_d2);
+// Split as p̂ = luminance(a ⊙ Φ_v) · target_geometry: the candidates' loop needs the geometric factor for
+// the control variate's U_g too.
+float target_geometry(vec3 x, vec3 n, Vpl vpl) {
+    float g = vpl_unshadowed_geometry(x, n, vpl, pc.clamp_d2);
 #ifdef RIS_VOXEL_TARGET
-    if (t > 0.0) t *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
+    if (g > 0.0) g *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
 #endif
-    return t;
+    return g;
+}
+
+float target_of(vec3 x, vec3 n, vec3 a, Vpl vpl) {
+    return dot(vpl_luminance_albedo(a), vpl.flux) * target_geometry(x, n, vpl);
 }
 
 float target_at(vec3 x, vec3 n, vec3 a, uint v) {
@@ -211,24 +222,35 @@ uint candidate(ivec2 q, uint layer, uint i, uint seed, uvec2 window, out float p
 }
 
 // Streams candidate k (VPL v, its data, its probability under the candidates' law) into r: the target,
-// w = p̂ / prob, and the reservoir's choice.
-void add_candidate(inout Reservoir r, ivec2 px, uint k, uint v, Vpl vpl, float prob, uint cell, vec3 x, vec3 nx,
-                   vec3 ax, uint tile_base) {
-    float t = target_of(x, nx, ax, vpl);
+// w = p̂ / prob, and the reservoir's choice; and into u the control variate's g = f · s, s the control's
+// visibility guess: u.xyz sums Φ_v · p̂(v) s(v) / (prob · luminance(a ⊙ Φ_v)), which the albedo and 1/M
+// make U_g = 1/M Σ g(v)/prob; u.w is the kept VPL's s / (p̂ / luminance(f)), so that the shade's g(y) W is
+// f(y)/luminance(f(y)) · p̂(y) W · u.w. s is 1 (the shade's β scales it), or with the learned
+// visibility the tile's and cell's visible fraction so far, visible / (traced + 1).
+void add_candidate(inout Reservoir r, inout vec4 u, ivec2 px, uint k, uint v, Vpl vpl, float prob, uint cell,
+                   vec3 x, vec3 nx, vec3 ax, uint tile_base) {
+    float g = target_geometry(x, nx, vpl);
+    float ratio = 1.0;
 #ifdef RIS_LEARNED
     // V̂ = (visible + 1) / (traced + 2) from earlier frames only (this frame's shade adds after every
     // initial dispatch), floored at δ_L > 0: a target that depends on the past, positive wherever
     // the unshadowed one is, so each frame stays unbiased (passes/ris.rs).
     uint vi = tile_base + 2u * cell;
     uint seen = texelFetch(vis_texels, int(vi)).r, traced = texelFetch(vis_texels, int(vi + 1u)).r;
-    t *= max(float(seen + 1u) / float(traced + 2u), ris.learned);
+    float learned = max(float(seen + 1u) / float(traced + 2u), ris.learned);
+    g *= learned;
+    ratio = float(seen) / (float(traced + 1u) * learned);
 #endif
-    float w = t / prob;
+    float t = dot(vpl_luminance_albedo(ax), vpl.flux) * g;
+    float inv = 1.0 / prob;
+    float w = t * inv;
     if (!(w > 0.0)) return;
     r.weight += w;
+    u.xyz += vpl.flux * (g * inv * ratio);
     if (ris_rand(px, 1u, k) * r.weight < w) {
         r.vpl = v;
         r.target = t;
+        u.w = ratio;
     }
 }
 
@@ -296,11 +318,13 @@ void main() {
     vec4 gp = texelFetch(g_position, px, 0);
     if (gp.w == 0.0) {
         res_out[idx] = empty_reservoir(0.0);
+        unshadowed[idx] = vec4(0.0);
         return;
     }
     vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
     // The streaming state: (y, Σw, p̂(y)), carried in the output between dispatches.
     Reservoir r = pc.first == 0u ? empty_reservoir(0.0) : res_out[idx];
+    vec4 u = pc.first == 0u ? vec4(0.0) : unshadowed[idx];
     if (cdf_total_at(0u) > 0.0) {
         // Candidate i of layer r is point r·M + i of the pixel's stratified set, the gather's seed.
         uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
@@ -329,7 +353,7 @@ void main() {
             // The balance mixture of the two strategies (multiple-importance RIS): each candidate weighed
             // by m_all / (m_pool p_source + m_near p_near).
             prob = (m_pool * prob + m_near * near_prob(near, v)) / m_all;
-            add_candidate(r, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
+            add_candidate(r, u, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
         }
         if (near.open) {
             for (uint i = max(pc.first, split); i < pc.last; i++) {
@@ -353,7 +377,7 @@ void main() {
 #else
                 uint cell = 0u;
 #endif
-                add_candidate(r, px, k, v, vpl, prob, cell, x, nx, ax, tile_base);
+                add_candidate(r, u, px, k, v, vpl, prob, cell, x, nx, ax, tile_base);
             }
         }
 #else
@@ -363,15 +387,17 @@ void main() {
             uint cell;
             uint v = candidate(px, layer, i, seed, window, prob, vpl, cell);
             if (!(prob > 0.0)) continue;
-            add_candidate(r, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
+            add_candidate(r, u, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
         }
 #endif
     }
     if (pc.last < ris.candidates) {
         res_out[idx] = r;
+        unshadowed[idx] = u;
         return;
     }
     float m = float(ris.candidates);
+    unshadowed[idx] = vec4(ax * u.xyz / m, u.w);
     r.weight = r.target > 0.0 ? r.weight / (m * r.target) : 0.0;
     r.confidence = m;
     if (ris.history != 0u) {
@@ -483,11 +509,29 @@ void main() {
     vec3 sum = vec3(0.0);
     if (gp.w != 0.0) {
         vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
+        uint pixel = uint(px.y) * frame.size.x + uint(px.x);
+        uvec2 counts = ris.control != 0u ? cv_counts[pixel] : uvec2(0u);
         for (uint layer = pc.first; layer < pc.last; layer++) {
-            Reservoir r = res_in[res_index(px, layer)];
+            uint idx = res_index(px, layer);
+            Reservoir r = res_in[idx];
+            // An empty reservoir had no candidate with w > 0, so its U_g is 0 too: it adds nothing.
             if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
             vec3 c = contribution(x, nx, ax, r.vpl);
             sum += c * r.weight;
+            if (ris.control != 0u) {
+                // The control variate: + β (U_g − g(y) W), g = f p̂ / luminance(f), whose g(y) W is the
+                // kept VPL's colour ratio f / luminance(f) times p̂(y) W = Σw / M. Given the candidates,
+                // E[g(y) W] = U_g exactly, so the term has mean 0 for any β fixed without this
+                // reservoir's choice: here from this pixel's earlier shadow rays (earlier frames and
+                // earlier layers of this frame), β = (visible + 1) / (traced + 2).
+                Vpl vpl = vpl_fetch(r.vpl);
+                vec4 ug = unshadowed[idx];
+                float lum = dot(vpl_luminance_albedo(ax), vpl.flux);
+                vec3 gw = lum > 0.0 ? ax * vpl.flux * (r.target * r.weight * ug.w / lum) : vec3(0.0);
+                float beta = ris.learned > 0.0 ? 1.0 : float(counts.x + 1u) / float(counts.y + 2u);
+                sum += beta * (ug.xyz - gw);
+                counts += uvec2(c != vec3(0.0) ? 1u : 0u, 1u);
+            }
             if (ris.learned > 0.0) {
                 // A kept VPL has an unshadowed contribution (its target is positive): 0 means occluded.
                 uint vi = vis_tile_base(px) + 2u * vis_cell_of(r.vpl);
@@ -496,6 +540,7 @@ void main() {
             }
         }
         sum /= float(ris.reservoirs);
+        if (ris.control != 0u) cv_counts[pixel] = counts;
     }
     if (pc.add_direct != 0u) sum += texelFetch(direct_radiance, px, 0).rgb;
     if (pc.accumulate != 0u) sum += imageLoad(out_radiance, px).rgb;

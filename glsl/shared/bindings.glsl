@@ -138,6 +138,11 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define B_RIS_IN 31
 #define B_RIS_OUT 32
 #define B_RIS_HISTORY 33
+// The control variate (passes/ris.rs): per reservoir, the candidates' unshadowed estimate U_g (written by
+// the initial stage, read by the shade); per pixel, (visible, traced) counts of its earlier shadow rays,
+// the control's coefficient β.
+#define B_RIS_UNSHADOWED 34
+#define B_RIS_CV 35
 // Reservoir.vpl of an empty reservoir.
 #define RIS_NONE 0xFFFFFFFFu
 // ris's presampled candidate pool (--pool-tiles): written by ris.presample, read by ris.initial_pool as a

@@ -84,6 +84,7 @@ struct RisPush {
     uint vis_cell;    // its light-map cells, texels per side
     uint near_candidates; // the last this many of the M candidates come from the near window (0: none)
     uint near_radius; // the near window's half-width, texels (2r + 1 wide)
+    uint control;     // 1: the shade adds β (U_g − g(y) W), the unshadowed control variate (no reuse only)
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

@@ -55,16 +55,22 @@ vec3 vpl_unshadowed(vec3 x, vec3 nx, vec3 ax, Vpl vpl, float min_d2) {
     return ax / PI * vpl.flux * (cos_v / PI) * cos_x / vpl_kernel_den(d2, vpl, min_d2);
 }
 
-// luminance(vpl_unshadowed(x, nx, ax, vpl, min_d2)) with axl = ax · the luminance weights (vpl_luminance_albedo):
-// the same value up to rounding, for ris's candidate loops, where it is most of the time. The cosines stay
-// unnormalized (cos θ_x cos θ_v = (n_x·w)(−n_v·w)/d², w = v − x), so there is no inverse square root, and
-// the albedo's colour folds into one dot product with the flux.
-float vpl_unshadowed_luminance(vec3 x, vec3 nx, vec3 axl, Vpl vpl, float min_d2) {
+// vpl_unshadowed(x, nx, ax, vpl, min_d2) = (ax ⊙ Φ_v) · G with this G (0 for no VPL, or one behind x or
+// facing away): the geometry, kernel and 1/π², everything but the colours. The cosines stay unnormalized
+// (cos θ_x cos θ_v = (n_x·w)(−n_v·w)/d², w = v − x), so there is no inverse square root: ris's candidate
+// loops, where it is most of the time, split the contribution into G and the colours this way.
+float vpl_unshadowed_geometry(vec3 x, vec3 nx, Vpl vpl, float min_d2) {
     vec3 w = vpl.position - x;
     float d2 = dot(w, w);
     float cx = dot(nx, w), cv = -dot(vpl.normal, w);
-    float t = dot(axl, vpl.flux) * (cx * cv) / (PI * PI * d2 * vpl_kernel_den(d2, vpl, min_d2));
-    return vpl.valid && d2 > 0.0 && cx > 0.0 && cv > 0.0 ? t : 0.0;
+    float g = (cx * cv) / (PI * PI * d2 * vpl_kernel_den(d2, vpl, min_d2));
+    return vpl.valid && d2 > 0.0 && cx > 0.0 && cv > 0.0 ? g : 0.0;
+}
+
+// luminance(vpl_unshadowed(x, nx, ax, vpl, min_d2)) with axl = ax · the luminance weights
+// (vpl_luminance_albedo): the same value up to rounding.
+float vpl_unshadowed_luminance(vec3 x, vec3 nx, vec3 axl, Vpl vpl, float min_d2) {
+    return dot(axl, vpl.flux) * vpl_unshadowed_geometry(x, nx, vpl, min_d2);
 }
 
 vec3 vpl_luminance_albedo(vec3 ax) {

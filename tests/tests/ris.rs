@@ -4,7 +4,8 @@
 //! visibility, and with a CDF source and the voxel-visibility-aware target; its mean within 1 % of the exact one-bounce reference with exact visibility; with one
 //! candidate and no reuse it is its source method; candidates from the presampled pool are unbiased too, with the near window as well
 //! (two lights, every light map); the candidates' split over dispatches (lavapipe's
-//! loop limit) does not change the image; bad flag combinations are a `SettingsError`.
+//! loop limit) does not change the image; bad flag combinations are a `SettingsError`. The shade's
+//! unshadowed control variate is unbiased over progressive frames, and applied only without reuse.
 
 use crate::vpl::{converges_to, indirect_with};
 use bounce_graph::frame::{FrameSettings, Method, Renderer, RisSettings, RisSource, SettingsError, Visibility};
@@ -129,6 +130,56 @@ fn ris_from_a_presampled_pool_is_unbiased() {
     let mut far = settings(5, 0, RisSource::Uniform, 3);
     far.ris.near_candidates = 0;
     assert_ne!(pooled, indirect_with(&mut r, far, w, h, res, vox), "the near window changed nothing");
+}
+
+/// The unshadowed control variate (`--control-variate`, on by default; glsl/ris.comp's shade): each
+/// reservoir adds β (U_g − g(y) W), the candidates' unshadowed estimate minus the kept sample's, whose
+/// mean is 0 given the candidates. Over progressive frames of one view (β counts the pixel's earlier
+/// shadow rays, so frames are correlated through it) the mean converges to `all`, with the pool and
+/// the near window, for the voxel and the exact visibility; with one reservoir per frame, where β
+/// comes from earlier frames alone. And it is really applied: a frame differs from the same seed's
+/// with `off`, and `off` with reuse is the same image as `on` with reuse (where it stays off).
+#[test]
+fn ris_control_variate_is_unbiased_over_progressive_frames() {
+    const FRAMES: u64 = 3;
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let settings = |visibility, seed, control, vpls| {
+        let mut s = FrameSettings { cdf_seed: Some(1), vpls, ..ris(visibility, seed, 0, 0.0) };
+        (s.ris.pool_tiles, s.ris.control_variate) = (3, control);
+        s
+    };
+    for (visibility, vpls) in [(Visibility::Exact, 4), (Visibility::Voxel, 1)] {
+        let all = all(&mut r, visibility);
+        let name = format!("ris (control variate, {vpls} reservoirs, pool of 3 tiles, {visibility:?})");
+        converges_to(&name, &all, |run| {
+            r.clear_frame_cache();
+            let mut sum = vec![[0.0f32; 3]; all.len()];
+            for k in 0..FRAMES {
+                let img = indirect_with(&mut r, settings(visibility, run * FRAMES + k, true, vpls), w, h, res, vox);
+                for (a, p) in sum.iter_mut().zip(&img) {
+                    (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
+                }
+            }
+            sum
+        });
+    }
+    r.clear_frame_cache();
+    let on = indirect_with(&mut r, settings(Visibility::Exact, 5, true, 4), w, h, res, vox);
+    r.clear_frame_cache();
+    let off = indirect_with(&mut r, settings(Visibility::Exact, 5, false, 4), w, h, res, vox);
+    assert_ne!(on, off, "the control variate changed nothing");
+    let reused = |control| {
+        let mut s = settings(Visibility::Exact, 5, control, 4);
+        s.ris.spatial_passes = 1;
+        s
+    };
+    r.clear_frame_cache();
+    let a = indirect_with(&mut r, reused(true), w, h, res, vox);
+    r.clear_frame_cache();
+    assert_eq!(a, indirect_with(&mut r, reused(false), w, h, res, vox), "the control variate ran with reuse");
 }
 
 /// The near window (`--near-candidates`) in a scene the default one does not cover: two lights (the window's

@@ -318,6 +318,10 @@ pub struct FrameArgs {
     /// unshadowed transport is at least 0.8), `off`, or δ in (0, 1].
     #[arg(long, default_value = "auto", value_parser = parse_learn)]
     pub learn_visibility: Learn,
+    /// --method ris adds the unshadowed control variate to each reservoir's estimate (its candidates'
+    /// unshadowed sum minus the kept one's, mean 0; without reuse): `on` or `off`.
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub control_variate: bool,
     /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
     #[arg(long)]
     pub device: Option<String>,
@@ -367,6 +371,7 @@ impl FrameArgs {
                 learn_visibility: self.learn_visibility.floor(),
                 learn_auto: self.learn_visibility == Learn::Auto,
                 candidates_chunk: None,
+                control_variate: self.control_variate,
             },
             ..FrameSettings::default()
         }
@@ -650,5 +655,13 @@ fn parse_learn(s: &str) -> Result<Learn, String> {
         "auto" => Ok(Learn::Auto),
         "off" => Ok(Learn::Floor(0.0)),
         _ => s.parse::<f32>().map(Learn::Floor).map_err(|_| format!("expected auto, off or a number, got {s:?}")),
+    }
+}
+
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("expected on or off, got {s:?}")),
     }
 }

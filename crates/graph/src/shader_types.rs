@@ -156,8 +156,10 @@ pub struct RisPush {
     pub near_candidates: u32,
     /// The near window's half-width, texels (the window is 2r + 1 texels wide).
     pub near_radius: u32,
+    /// 1: the shade adds the unshadowed control variate β (U_g − g(y) W) (passes/ris.rs; without reuse).
+    pub control: u32,
 }
-const _: () = assert!(size_of::<RisPush>() == 56);
+const _: () = assert!(size_of::<RisPush>() == 60);
 
 /// ris's push constant block: the gather's sampling fields, then ris's own.
 #[repr(C)]
@@ -166,7 +168,7 @@ pub struct RisPushBlock {
     pub gather: GatherPush,
     pub ris: RisPush,
 }
-const _: () = assert!(size_of::<RisPushBlock>() == 120);
+const _: () = assert!(size_of::<RisPushBlock>() == 124);
 const _: () = assert!(offset_of!(RisPushBlock, ris) == 64);
 
 /// One reservoir of ris (`Reservoir` in `glsl/shared/types.glsl`).

@@ -216,6 +216,10 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
             0
         },
         near_radius: ris.near_radius,
+        // The control variate's mean is 0 given a reservoir's own candidates: without reuse only. With one
+        // candidate it is 0 outright (U_g = g(y) W), so it is not computed.
+        control: (ris.control_variate && ris.candidates > 1 && ris.spatial_passes == 0 && ris.temporal_cap == 0.0)
+            as u32,
         ..RisPush::default()
     };
     let sampling = GatherPush { seed: 0, ..gather };

@@ -128,6 +128,11 @@ pub struct RisSettings {
     /// Candidates per initial dispatch (`None`: as many as the device's loop limit allows). The image
     /// does not depend on it (the reservoirs' streaming state is carried between dispatches).
     pub candidates_chunk: Option<std::num::NonZeroU32>,
+    /// The shade adds the unshadowed control variate β (U_g − g(y) W) to each reservoir's f(y) V(y) W
+    /// (passes/ris.rs): the candidates' unshadowed estimate minus the kept sample's, mean 0. Where the
+    /// kept VPL is visible the reservoir's estimate becomes (1 − β) f W + β U_g, the colour and spread of
+    /// all M candidates instead of one's. Only without reuse (off otherwise).
+    pub control_variate: bool,
 }
 
 impl Default for RisSettings {
@@ -155,6 +160,7 @@ impl Default for RisSettings {
             near_candidates: 8,
             near_radius: 8,
             candidates_chunk: None,
+            control_variate: true,
         }
     }
 }

@@ -232,33 +232,42 @@ impl Ris {
         use shaders::*;
         let base = super::gather::sampling_bindings;
         let push = std::mem::size_of::<RisPushBlock>() as u32;
-        let stage = |name, spirv: [&[u8]; 2], extra: [Binding; 2]| -> Result<[ComputePipeline; 2]> {
-            let mut b = base();
-            b.extend(extra);
+        // Two variants of one stage over the same bindings.
+        let pair = |name, spirv: [&[u8]; 2], b: &[Binding]| -> Result<[ComputePipeline; 2]> {
             Ok([
-                ComputePipeline::new(gpu, name, &crate::spirv(spirv[0]), &b, push, &[])?,
-                ComputePipeline::new(gpu, name, &crate::spirv(spirv[1]), &b, push, &[])?,
+                ComputePipeline::new(gpu, name, &crate::spirv(spirv[0]), b, push, &[])?,
+                ComputePipeline::new(gpu, name, &crate::spirv(spirv[1]), b, push, &[])?,
             ])
+        };
+        let stage = |name, spirv: [&[u8]; 2], extra: &[Binding]| {
+            let mut b = base();
+            b.extend_from_slice(extra);
+            pair(name, spirv, &b)
         };
         let initial = stage(
             "ris_initial",
             [RIS_INITIAL_COMP, RIS_INITIAL_VOXEL_TARGET_COMP],
-            [Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_HISTORY)],
+            &[
+                Binding::storage_buffer(B_RIS_OUT),
+                Binding::storage_buffer(B_RIS_HISTORY),
+                Binding::storage_buffer(B_RIS_UNSHADOWED),
+            ],
         )?;
         let spatial = stage(
             "ris_spatial",
             [RIS_SPATIAL_COMP, RIS_SPATIAL_VOXEL_TARGET_COMP],
-            [Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)],
+            &[Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)],
         )?;
-        let mut b = base();
-        b.push(Binding::storage_buffer(B_RIS_POOL));
-        let presample = ComputePipeline::new(gpu, "ris_presample", &crate::spirv(RIS_PRESAMPLE_COMP), &b, push, &[])?;
-        let presample_uniform =
-            ComputePipeline::new(gpu, "ris_presample", &crate::spirv(RIS_PRESAMPLE_UNIFORM_COMP), &b, push, &[])?;
+        let [presample, presample_uniform] = stage(
+            "ris_presample",
+            [RIS_PRESAMPLE_COMP, RIS_PRESAMPLE_UNIFORM_COMP],
+            &[Binding::storage_buffer(B_RIS_POOL)],
+        )?;
         let mut b = base();
         b.extend([
             Binding::storage_buffer(B_RIS_OUT),
             Binding::storage_buffer(B_RIS_HISTORY),
+            Binding::storage_buffer(B_RIS_UNSHADOWED),
             Binding::uniform_texel_buffer(B_RIS_POOL),
         ]);
         let mut bl = b.clone();
@@ -266,33 +275,16 @@ impl Ris {
         let initial_pool_learned =
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
         // The near window's pairs: any source, the uniform source's shortcut.
-        let pair = |spirv: [&[u8]; 2], b: &[Binding]| -> Result<[ComputePipeline; 2]> {
-            Ok([
-                ComputePipeline::new(gpu, "ris_initial", &crate::spirv(spirv[0]), b, push, &[])?,
-                ComputePipeline::new(gpu, "ris_initial", &crate::spirv(spirv[1]), b, push, &[])?,
-            ])
-        };
-        let initial_pool_learned_near =
-            pair([RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP], &bl)?;
-        let initial_pool_near = pair([RIS_INITIAL_POOL_NEAR_COMP, RIS_INITIAL_POOL_NEAR_UNIFORM_COMP], &b)?;
-        let initial_pool = [
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_COMP), &b, push, &[])?,
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_VOXEL_TARGET_COMP), &b, push, &[])?,
-        ];
+        let near = [RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP];
+        let initial_pool_learned_near = pair("ris_initial", near, &bl)?;
+        let near = [RIS_INITIAL_POOL_NEAR_COMP, RIS_INITIAL_POOL_NEAR_UNIFORM_COMP];
+        let initial_pool_near = pair("ris_initial", near, &b)?;
+        let initial_pool = pair("ris_initial", [RIS_INITIAL_POOL_COMP, RIS_INITIAL_POOL_VOXEL_TARGET_COMP], &b)?;
         let mut b = base();
-        b.extend([
-            Binding::storage_buffer(B_RIS_IN),
-            Binding::sampled_image(B_GATHER_DIRECT),
-            Binding::storage_image(B_GATHER_OUT),
-            Binding::storage_buffer(B_RIS_VIS),
-        ]);
-        let shade = VisibilityVariants::new(
-            gpu,
-            "ris_shade",
-            [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP, RIS_SHADE_HYBRID_COMP],
-            b,
-            push,
-        )?;
+        b.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV].map(Binding::storage_buffer));
+        b.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
+        let variants = [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP, RIS_SHADE_HYBRID_COMP];
+        let shade = VisibilityVariants::new(gpu, "ris_shade", variants, b, push)?;
         Ok(Ris {
             initial,
             spatial,
@@ -349,10 +341,27 @@ impl Ris {
         } else {
             g.create_buffer(BufferDesc::storage("ris.visibility (off)", 16))
         };
+        // The control variate's U_g per reservoir (this frame's), and its per-pixel shadow-ray counts, kept
+        // across the frames of one view like the learned visibility (a stand-in when off).
+        let mut unshadowed = g.create_buffer(desc("ris.unshadowed"));
+        let mut cv = if r.push.control != 0 {
+            let t = g.temporal_buffer(
+                "ris.cv",
+                BufferDesc::storage("ris.cv", 8 * f.width as u64 * f.height as u64),
+                &r.key,
+            );
+            let mut h = t.handle;
+            if t.fresh {
+                g.add_clear("ris_cv_clear", &mut [&mut h]);
+            }
+            h
+        } else {
+            g.create_buffer(BufferDesc::storage("ris.cv (off)", 16))
+        };
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
-            self.add_initial(g, f, i, dst, previous, pool, learned, push, r);
+            self.add_initial(g, f, i, dst, &mut unshadowed, previous, pool, learned, push, r);
         }
         for pass in 0..r.spatial_passes {
             let s = pass + 1;
@@ -363,7 +372,7 @@ impl Ris {
             };
             self.add_spatial(g, f, i, src, dst, push, RisPush { pass, ..r.push });
         }
-        self.add_shade(g, f, i, current, &mut vis, out, push, r.push);
+        self.add_shade(g, f, i, current, unshadowed, &mut vis, &mut cv, out, push, r.push);
     }
 
     /// The descriptor writes every stage shares: scene, G-buffer, VPLs, voxels, importance, CDF.
@@ -421,24 +430,27 @@ impl Ris {
         f: FrameInputs<'a>,
         i: &GatherInputs,
         dst: &mut Handle<Buffer>,
+        unshadowed: &mut Handle<Buffer>,
         previous: Option<Handle<Buffer>>,
         pool: Option<Handle<Buffer>>,
         learned: Option<Handle<Buffer>>,
         push: GatherPush,
         r: RisFrame,
     ) {
-        let (i, o) = (*i, *dst);
+        let (i, o, u) = (*i, *dst, *unshadowed);
         let mut b = Self::reads(g.add_pass("ris_initial"), &i);
         for p in previous.iter().chain(pool.iter()).chain(learned.iter()) {
             b = b.read(p, Access::ComputeRead);
         }
+        b = b.overwrite(unshadowed, Access::ComputeWrite);
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
             // Without a history the (unread) history binding gets the output buffer.
             let history = previous.map_or(ctx.buffer(&o), |p| ctx.buffer(&p));
             let writes = self
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
-                .storage_buffer(B_RIS_HISTORY, history);
+                .storage_buffer(B_RIS_HISTORY, history)
+                .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u));
             let (pipeline, writes) = match (&pool, &learned) {
                 (Some(p), Some(v)) => (
                     if r.push.near_candidates > 0 {
@@ -458,8 +470,9 @@ impl Ris {
             };
             for (first, last) in super::dispatch_ranges(0, r.push.candidates, r.candidates_per_dispatch) {
                 if first > 0 {
-                    // The next candidates continue the reservoirs the previous dispatch stored.
+                    // The next candidates continue the reservoirs (and sums) the previous dispatch stored.
                     ctx.serialize(&o);
+                    ctx.serialize(&u);
                 }
                 let block = RisPushBlock {
                     gather: GatherPush { first, last, ..push },
@@ -508,15 +521,20 @@ impl Ris {
         f: FrameInputs<'a>,
         i: &GatherInputs,
         reservoirs: Handle<Buffer>,
+        unshadowed: Handle<Buffer>,
         vis: &mut Handle<Buffer>,
+        cv: &mut Handle<Buffer>,
         out: &mut Handle<Image>,
         push: GatherPush,
         ris: RisPush,
     ) {
-        let (i, o, hv) = (*i, *out, *vis);
-        let mut b = Self::reads(g.add_pass("ris_shade"), &i).read(&reservoirs, Access::ComputeRead);
-        // The learned visibility's counts are added to (or, off, the stand-in is never touched).
-        b = b.write(vis, Access::ComputeWrite);
+        let (i, o, hv, hc) = (*i, *out, *vis, *cv);
+        let mut b = Self::reads(g.add_pass("ris_shade"), &i)
+            .read(&reservoirs, Access::ComputeRead)
+            .read(&unshadowed, Access::ComputeRead);
+        // The learned visibility's and the control's counts are added to (or, off, the stand-ins are never
+        // touched).
+        b = b.write(vis, Access::ComputeWrite).write(cv, Access::ComputeWrite);
         if let Some(d) = &i.direct {
             b = b.read(d, Access::ComputeRead);
         }
@@ -529,6 +547,8 @@ impl Ris {
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_IN, ctx.buffer(&reservoirs))
                 .storage_buffer(B_RIS_VIS, ctx.buffer(&hv))
+                .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&unshadowed))
+                .storage_buffer(B_RIS_CV, ctx.buffer(&hc))
                 .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
             // The gather's visibility variants, chosen and bound as the gather's.
@@ -537,8 +557,10 @@ impl Ris {
             let whole = GatherPush { first: 0, last: ris.reservoirs, accumulate: 0, ..push };
             for (first, last) in super::dispatch_ranges(0, ris.reservoirs, f.vpls_per_dispatch) {
                 if first > 0 {
-                    // The next reservoirs add to what the previous dispatch stored.
+                    // The next reservoirs add to what the previous dispatch stored (image and counts).
                     ctx.serialize(&o);
+                    ctx.serialize(&hv);
+                    ctx.serialize(&hc);
                 }
                 let block = RisPushBlock { gather: whole.chunk(first, last), ris };
                 pipeline.dispatch(
