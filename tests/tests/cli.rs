@@ -676,7 +676,7 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
     // ris without --vpls picks its budget per frame from the view: candidates on the Cornell box, where
     // visibility blocks little; shadow rays in the two rooms, where it blocks nearly everything.
     for (scene, budget) in [
-        (scene.clone(), "2 reservoirs × 64"),
+        (scene.clone(), "2 reservoirs × 128"),
         (bounce_tests::workspace().join("assets/two-rooms/scene.toml"), "4 reservoirs × 32"),
     ] {
         let mut args = vec!["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--method", "ris"];

@@ -168,12 +168,12 @@ pub const DEFAULT_VPLS: u32 = 64;
 /// is given: (reservoirs, candidates, near-window candidates), chosen per view by the share of the
 /// unshadowed transport that visibility blocks (`Renderer::blocked_share`, the threshold of
 /// `--learn-visibility auto`). Where visibility blocks most of it, each shadow ray is the scarce
-/// resource: 4 reservoirs of 32 candidates. Elsewhere the candidates are: 2 reservoirs of 64.
-/// Measured at equal time (BENCHMARKS.md, "ris: learned visibility where the view needs it"): 2 × 64
-/// gives 1.27× lower error on the Cornell box and the same on Sibenik and Conference, and 1.34× higher
-/// in the two rooms, where 4 × 32 is kept.
+/// resource: 4 reservoirs of 32 candidates. Elsewhere the candidates are: 2 reservoirs of 128.
+/// Measured at equal time (BENCHMARKS.md, "ris: the unshadowed control variate"): with the control
+/// variate, 2 × 128 gives 1.2× lower error than 2 × 64 on the Cornell box, 1.0–1.1× on Sibenik and
+/// Conference, and 1.4–2× higher in the two rooms, where 4 × 32 is kept.
 pub const RIS_FRAME_BLOCKED: (u32, u32, u32) = (4, 32, 8);
-pub const RIS_FRAME_OPEN: (u32, u32, u32) = (2, 64, 16);
+pub const RIS_FRAME_OPEN: (u32, u32, u32) = (2, 128, 16);
 
 /// What one picture is: its size, component, method, VPL count and seed (`render` and `view`; `bench`
 /// sweeps method, VPLs and seed itself).
@@ -193,8 +193,8 @@ pub struct PictureArgs {
     #[arg(long, value_parser = METHODS, default_value = "ris")]
     pub method: Method,
     /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray each). Default 64; `render
-    /// --time-limit` with ris takes 4 per frame, many cheap frames (at equal time half the error of 64
-    /// per frame on the Cornell box: BENCHMARKS.md).
+    /// --time-limit` with ris takes 2 or 4 per frame, chosen per view, many cheap frames (at equal time
+    /// lower error than few costly ones: BENCHMARKS.md).
     #[arg(long)]
     pub vpls: Option<u32>,
     /// Random seed (same seed, same image).
