@@ -523,12 +523,13 @@ void main() {
                 // kept VPL's colour ratio f / luminance(f) times p̂(y) W = Σw / M. Given the candidates,
                 // E[g(y) W] = U_g exactly, so the term has mean 0 for any β fixed without this
                 // reservoir's choice: here from this pixel's earlier shadow rays (earlier frames and
-                // earlier layers of this frame), β = (visible + 1) / (traced + 2).
+                // earlier layers of this frame), β = visible / (traced + 1), 0 until one got through: a
+                // pixel no ray reaches keeps its exact 0 instead of the control's zero-mean noise.
                 Vpl vpl = vpl_fetch(r.vpl);
                 vec4 ug = unshadowed[idx];
                 float lum = dot(vpl_luminance_albedo(ax), vpl.flux);
                 vec3 gw = lum > 0.0 ? ax * vpl.flux * (r.target * r.weight * ug.w / lum) : vec3(0.0);
-                float beta = ris.learned > 0.0 ? 1.0 : float(counts.x + 1u) / float(counts.y + 2u);
+                float beta = ris.learned > 0.0 ? 1.0 : float(counts.x) / float(counts.y + 1u);
                 sum += beta * (ug.xyz - gw);
                 counts += uvec2(c != vec3(0.0) ? 1u : 0u, 1u);
             }
