@@ -276,7 +276,7 @@ fn auto_learned_visibility_turns_on_where_visibility_blocks_most_of_the_transpor
     let cornell = Scene::load(&bounce_tests::default_scene()).unwrap();
     let mut r = Renderer::new(&gpu, &cornell).unwrap();
     let b = r.blocked_share(w, h).unwrap().expect("the view is lit");
-    assert!(b < 0.5, "Cornell box: blocked share {b}");
+    assert!(b < AUTO_LEARN_BLOCKED, "Cornell box: blocked share {b}");
     assert_eq!(last_of_three(&mut r, true), last_of_three(&mut r, false), "auto learned on the Cornell box");
     let rooms = Scene::load(&bounce_tests::workspace().join("assets/two-rooms/scene.toml")).unwrap();
     let mut r = Renderer::new(&gpu, &rooms).unwrap();

@@ -315,7 +315,7 @@ pub struct FrameArgs {
     pub near_radius: u32,
     /// --method ris weighs its target by the visibility learned from earlier progressive frames' shadow
     /// rays, floored at δ: `auto` (learn at δ = 0.1 where the view's estimated blocked share of the
-    /// unshadowed transport is at least 0.8), `off`, or δ in (0, 1].
+    /// unshadowed transport is at least 0.4), `off`, or δ in (0, 1].
     #[arg(long, default_value = "auto", value_parser = parse_learn)]
     pub learn_visibility: Learn,
     /// --method ris adds the unshadowed control variate to each reservoir's estimate (its candidates'

@@ -42,6 +42,25 @@
 //!   texels).
 //! - `ris_shade` (W × H): L(x) = 1/R Σ_r f(y_r) V(y_r) W_r, f the unshadowed RGB contribution and V the
 //!   gather's visibility (`contribution()`: voxel march, exact or hybrid shadow rays).
+//! - With `--control-variate on` (the default; only without reuse, and with M > 1) each reservoir's
+//!   term is f(y) V(y) W + β (U_g − g(y) W), the **unshadowed control variate**. g = f · s for a guess s
+//!   at visibility fixed before the frame, U_g = 1/M Σ_i g(v_i) / p(v_i) over the reservoir's own
+//!   candidates (the initial stage sums it as it streams them, into `ris.unshadowed`). Given the
+//!   candidates, the kept y is v_i with probability w_i / Σw and W = Σw / (M p̂(y)), so
+//!   E[g(y) W | candidates] = 1/M Σ_i w_i g(v_i) / p̂(v_i) = U_g: the added term has mean 0 for any β
+//!   and s that do not depend on this reservoir's choice, and the estimate stays unbiased. What it buys:
+//!   where the kept VPL is visible and s = 1 the term is (1 − β) f W + β U_g, so with β near 1 the
+//!   colour and spread of all M candidates replace one VPL's (the Cornell box's red and green walls
+//!   seen from the white one were most of its error); only occluded choices add the selection's noise.
+//!   Without the learned visibility s = 1 and β = visible / (traced + 1) counts the pixel's earlier
+//!   shadow rays (`ris.cv`, kept across the frames of one view; earlier reservoirs of the same frame
+//!   count too, being independent of this one's choice given the pool): 0 until one got through, so a
+//!   pixel no ray reaches stays exactly black. With it, β = 1 and s(v) = visible / (traced + 1) of the
+//!   pixel's screen tile and the VPL's light-map cell, the counts the target already read: U_g is then
+//!   the estimate with the learned visibility in place of the real one, and the shadow ray only
+//!   corrects it. The term is computed as g(y) W = (f / luminance(f))(y) · p̂(y) W · s(y) / (p̂ /
+//!   luminance(f))(y), the last ratio carried with the reservoir. Reuse would replace the candidates
+//!   the identity is about, so it stays off there; with one candidate it is 0 outright.
 //!
 //! **Why this is unbiased with respect to `all`.** A combination of reservoirs (y_i, W_i, c_i), each with
 //! E[g(y_i) W_i] = Σ_v g(v) for every g vanishing outside {p̂_i > 0} (its target p̂_i, i.e. the pixel it
@@ -117,10 +136,12 @@ pub struct RisFrame {
 /// `--learn-visibility auto` turns the learned visibility on (at this floor) for a view where visibility
 /// blocks at least [`AUTO_LEARN_BLOCKED`] of the unshadowed transport ([`blocked_share`]).
 pub const AUTO_LEARN_FLOOR: f32 = 0.1;
-/// The blocked share from which `auto` learns. Measured (BENCHMARKS.md, "ris: the near window"): 0.99 in
-/// the two rooms, where learning halves the error at equal time; 0.08–0.29 on the Cornell box,
-/// box-on-floor, clutter, Sibenik and Conference, where it costs frames for no gain; 0.52 in the doorway.
-pub const AUTO_LEARN_BLOCKED: f32 = 0.8;
+/// The blocked share from which `auto` learns (and `render --time-limit` gives a frame 4 reservoirs of 32
+/// candidates). Measured with the control variate (BENCHMARKS.md, "ris: the unshadowed control
+/// variate"): 0.99 in the two rooms and 0.52 in the doorway, where learning with 4 × 32 cuts the error
+/// 1.3–2.2× at equal time; 0.08–0.29 on the Cornell box, box-on-floor, clutter, Sibenik and Conference,
+/// where it costs 1.1–1.4×. The threshold sits between the two groups.
+pub const AUTO_LEARN_BLOCKED: f32 = 0.4;
 
 /// The share 1 − T/U of the unshadowed one-bounce transport into the view that visibility blocks,
 /// estimated on the CPU from the scene's BVH: U sums, over pairs of an 8 × 8 grid of pixel points x (the
