@@ -255,7 +255,9 @@ class Tracer:
             d2 = dr.squared_norm(to)
             dist = dr.sqrt(d2)
             ok = active & (d2 > 0)
-            need = ok if chosen is None else ok & (chosen != k)
+            # dr.neq / dr.eq, not != / ==: on Dr.Jit 0.4 arrays those compare whole arrays (one bool),
+            # which made every multi-light scene's light side shoot from the first light.
+            need = ok if chosen is None else ok & dr.neq(chosen, k)
             vis = ok & dr.select(need, self.clear(y, ngy, lp, need), True)
             c = dr.dot(ny, to) / dist
             radiance += dr.select(vis & (c > 0), ay * intensity * (c / (math.pi * d2)), 0.0)
@@ -276,7 +278,7 @@ class Tracer:
         dr, mi = self.dr, self.mi
         lp = self.lights[0][0]
         for k in range(1, len(self.lights)):
-            lp = dr.select(chosen == k, self.lights[k][0], lp)
+            lp = dr.select(dr.eq(chosen, k), self.lights[k][0], lp)
         si = self.scene.ray_intersect(mi.Ray3f(lp, mi.warp.square_to_uniform_sphere(u)))
         y, ngy, ny, ay = self.surface(si, x)
         to = y - x
