@@ -14,8 +14,8 @@
 // RIS_INITIAL with RIS_POOL: reservoir r's candidates are consecutive entries of one tile, from a start, both
 //   chosen by a hash of (pixel, layer, frame); each is a draw of the source (its marginal law is p: ris.rs).
 // RIS_NEAR (with RIS_POOL; ris.near_candidates > 0): the last ris.near_candidates of the M candidates come
-//   from a (2r + 1)² window of light-map texels around where x projects into one light's map (the light
-//   chosen per reservoir), drawn uniformly: the VPLs next to x, whose kernel makes the target's tail and
+//   from (2r + 1)² windows of light-map texels around where x projects into each light's map (a window
+//   picked by its light's radiosity at x, then a texel uniformly; RIS_NEAR_MULTI: every light's): the VPLs next to x, whose kernel makes the target's tail and
 //   which the pool almost never holds. Every candidate, of either strategy, is weighed with the balance
 //   mixture q(v) = (M_pool p_source(v) + M_near p_near(v)) / M (multiple-importance RIS): unbiased, since
 //   the pool's strategy reaches every VPL (ris.rs).
@@ -256,57 +256,144 @@ void add_candidate(inout Reservoir r, inout vec4 u, ivec2 px, uint k, uint v, Vp
 
 #ifdef RIS_NEAR
 // The near strategy: a K × K window of light-map texels around where the pixel's point x projects into
-// the map of one light (chosen per reservoir), drawn uniformly. The VPLs next to x, whose kernel makes the
-// target's tail, are found there when the light sees x's surroundings: the window opens only when the
-// texel x projects to sees a point within the window's reach of x, r·√A (A its patch area). Behind an
-// occluder the window would hold the occluder's lit side, which gives x nothing; there all M candidates
-// come from the pool. A choice made per reservoir before any candidate, so the estimate stays unbiased
-// either way.
+// the map of each light, drawn uniformly: the VPLs next to x, whose kernel makes the target's tail, are
+// found there when the light sees x's surroundings. Light l's window opens only when the texel x
+// projects to sees a point within the window's reach of x, r·√A (A its patch area): behind an occluder
+// it would hold the occluder's lit side, which gives x nothing. A near candidate first picks an open
+// window with probability α_l ∝ luminance(I_l) / d_l², d_l the distance from light l to x (the radiosity
+// of its VPLs next to x), then a texel of it. Every light's map has VPLs next to x, so every light's
+// window is offered: with one window per reservoir, a VPL of the other light's next to x was a rare pool
+// draw with a huge weight (the clutter scene's fireflies). The first RIS_NEAR_LIGHTS lights get
+// windows (the RIS_NEAR_MULTI variants, for scenes with more than one light; the others hold one
+// window, and a one-light scene pays nothing for the mixture); the pool's candidates cover the rest.
+// All of it is fixed before any candidate, so the estimate stays unbiased whichever windows open.
+#ifdef RIS_NEAR_MULTI
+#define NEAR_LIGHTS RIS_NEAR_LIGHTS
+#else
+#define NEAR_LIGHTS 1
+#endif
+
 struct NearWindow {
     bool open;
-    uint layer; // the window's light-map layer (light · faces + face)
-    ivec2 lo;   // its lowest texel
+    uint layer;  // the window's light-map layer (light · faces + face)
+    ivec2 lo;    // its lowest texel
+    float alpha; // the probability a near candidate picks this window (0: closed)
+};
+
+struct Near {
+    NearWindow w[NEAR_LIGHTS];
+    uint n;     // windows computed (min(lights, NEAR_LIGHTS))
+    bool open;  // any window open
     int size;   // K = min(2r + 1, res) texels a side
     float p;    // 1 / K²
 };
 
-NearWindow near_window(ivec2 q, uint layer, vec3 x) {
+NearWindow near_window_of(uint l, vec3 x, int size) {
     NearWindow w;
-    uint lights_n = frame.size.z;
-    uint l = min(uint(ris_rand(q, 5u, layer) * float(lights_n)), lights_n - 1u);
     // Defined even where lm_locate finds no face (the window then stays closed).
     uint face = 0u;
     vec2 uv = vec2(0.0);
     int res = int(frame.size.w);
-    w.size = min(2 * int(ris.near_radius) + 1, res);
-    w.open = lm_locate(x - lights[l].position.xyz, l, face, uv) && all(lessThan(abs(uv), vec2(2.0)));
+    vec3 d = x - lights[l].position.xyz;
+    w.open = lm_locate(d, l, face, uv) && all(lessThan(abs(uv), vec2(2.0)));
     ivec2 c = clamp(ivec2(floor((uv * 0.5 + 0.5) * float(res))), ivec2(0), ivec2(res - 1));
-    w.lo = clamp(c - ivec2(w.size / 2), ivec2(0), ivec2(res - w.size));
+    w.lo = clamp(c - ivec2(size / 2), ivec2(0), ivec2(res - size));
     w.layer = l * lm_faces() + face;
-    w.p = 1.0 / float(w.size * w.size);
     vec4 seen = texelFetch(vpl_position, ivec3(c, int(w.layer)), 0);
     vec3 dx = seen.xyz - x;
     float reach2 = float(ris.near_radius * ris.near_radius) * seen.w;
     w.open = w.open && seen.w > 0.0 && dot(dx, dx) <= reach2;
+    w.alpha = w.open ? luminance(lights[l].intensity.rgb) / max(dot(d, d), 1e-30) : 0.0;
     return w;
 }
 
-// The texel of near candidate k.
-ivec3 near_texel(NearWindow w, ivec2 q, uint k) {
-    ivec2 o = min(ivec2(vec2(ris_rand(q, 6u, k), ris_rand(q, 7u, k)) * float(w.size)), ivec2(w.size - 1));
-    return ivec3(w.lo + o, int(w.layer));
+// Loops run to the constant NEAR_LIGHTS and branch on l < n inside, so that they unroll and every
+// window is read at a constant index (llvmpipe keeps a dynamically indexed array in memory and reads
+// it lane by lane, which halved the frame rate), and the branch, the same for every lane, skips the
+// lights beyond the scene's (a select would evaluate them).
+Near near_windows(vec3 x) {
+    Near nw;
+    int res = int(frame.size.w);
+    nw.size = min(2 * int(ris.near_radius) + 1, res);
+    nw.p = 1.0 / float(nw.size * nw.size);
+    nw.n = min(frame.size.z, uint(NEAR_LIGHTS));
+    float total = 0.0;
+    for (uint l = 0u; l < uint(NEAR_LIGHTS); l++) {
+        nw.w[l] = NearWindow(false, 0u, ivec2(0), 0.0);
+        if (l < nw.n) {
+            nw.w[l] = near_window_of(l, x, nw.size);
+            total += nw.w[l].alpha;
+        }
+    }
+    nw.open = total > 0.0;
+    for (uint l = 0u; l < uint(NEAR_LIGHTS); l++) {
+        if (l < nw.n) nw.w[l].alpha = nw.open ? nw.w[l].alpha / total : 0.0;
+    }
+    return nw;
 }
 
-// The near strategy's probability of VPL v: 1/K² inside the window, else 0.
-float near_prob(NearWindow w, uint v) {
-    uint res = frame.size.w;
-    uint base = w.layer * res * res;
-    if (!w.open || v < base) return 0.0;
-    uint r = v - base;
-    if (r >= res * res) return 0.0;
-    uint ty = udiv(r, res); // a row: far below udiv's exact range
-    ivec2 t = ivec2(int(r - ty * res), int(ty)) - w.lo;
-    return all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, ivec2(w.size))) ? w.p : 0.0;
+// The texel of near candidate k, a window by α then a texel of it uniformly, and its probability under
+// the near strategy, α / K².
+ivec3 near_texel(Near nw, ivec2 q, uint k, out float p_near) {
+    ivec2 lo = nw.w[0].lo;
+    uint layer = nw.w[0].layer;
+    float alpha = nw.w[0].alpha;
+#if NEAR_LIGHTS > 1
+    if (nw.n > 1u) {
+        // (The same for every lane.)
+        float u = ris_rand(q, 5u, k), acc = 0.0;
+        bool picked = false;
+        for (uint j = 0u; j < uint(NEAR_LIGHTS); j++) {
+            // The last open window takes what rounding leaves of u.
+            if (j < nw.n && nw.w[j].alpha > 0.0 && !picked) {
+                lo = nw.w[j].lo;
+                layer = nw.w[j].layer;
+                alpha = nw.w[j].alpha;
+                acc += alpha;
+                picked = u < acc;
+            }
+        }
+    }
+#endif
+    p_near = alpha * nw.p;
+    ivec2 o = min(ivec2(vec2(ris_rand(q, 6u, k), ris_rand(q, 7u, k)) * float(nw.size)), ivec2(nw.size - 1));
+    return ivec3(lo + o, int(layer));
+}
+
+// The near strategy's probability of VPL v: α of its light's window / K² inside that window, else 0.
+// v's layer belongs to one light, so at most one window can hold it: find that window by its layer's
+// index range and keep its corner and α (selects), then divide once and test once.
+float near_prob(Near nw, uint v) {
+    uint res = frame.size.w, face_texels = res * res;
+#if NEAR_LIGHTS > 1
+    if (nw.n == 1u)
+#endif
+    {
+        // One window (in the multi variants, a one-light scene: the same for every lane, so the loop
+        // below is skipped).
+        uint base = nw.w[0].layer * face_texels;
+        if (!nw.w[0].open || v < base || v - base >= face_texels) return 0.0;
+        uint r1 = v - base, ty1 = udiv(r1, res); // a row: far below udiv's exact range
+        ivec2 o1 = ivec2(int(r1 - ty1 * res), int(ty1)) - nw.w[0].lo;
+        return all(greaterThanEqual(o1, ivec2(0))) && all(lessThan(o1, ivec2(nw.size))) ? nw.w[0].alpha * nw.p : 0.0;
+    }
+#if NEAR_LIGHTS > 1
+    uint r = 0u;
+    ivec2 lo = ivec2(0);
+    float alpha = 0.0;
+    for (uint j = 0u; j < uint(NEAR_LIGHTS); j++) {
+        if (j < nw.n) {
+            uint base = nw.w[j].layer * face_texels;
+            bool mine = nw.w[j].open && v >= base && v - base < face_texels;
+            r = mine ? v - base : r;
+            lo = mine ? nw.w[j].lo : lo;
+            alpha = mine ? nw.w[j].alpha : alpha;
+        }
+    }
+    uint ty = udiv(r, res);
+    ivec2 o = ivec2(int(r - ty * res), int(ty)) - lo;
+    return alpha > 0.0 && all(greaterThanEqual(o, ivec2(0))) && all(lessThan(o, ivec2(nw.size))) ? alpha * nw.p : 0.0;
+#endif
 }
 #endif
 
@@ -339,8 +426,8 @@ void main() {
         uvec2 window = uvec2(0u);
 #endif
 #ifdef RIS_NEAR
-        NearWindow near = near_window(px, layer, x);
-        // A closed window gives its candidates to the pool.
+        Near near = near_windows(x);
+        // Closed windows give their candidates to the pool.
         uint split = near.open ? ris.candidates - ris.near_candidates : ris.candidates;
         float m_all = float(ris.candidates), m_pool = float(split), m_near = m_all - m_pool;
         // The pool's candidates, then the window's (two loops: llvmpipe would run both bodies for each).
@@ -358,7 +445,8 @@ void main() {
         if (near.open) {
             for (uint i = max(pc.first, split); i < pc.last; i++) {
                 uint k = layer * ris.candidates + i;
-                ivec3 t = near_texel(near, px, k);
+                float p_near;
+                ivec3 t = near_texel(near, px, k, p_near);
                 uint res = frame.size.w;
                 uint v = (uint(t.z) * res + uint(t.y)) * res + uint(t.x);
                 Vpl vpl = vpl_fetch_texel(t);
@@ -371,7 +459,7 @@ void main() {
 #else
                 float p_source = source_prob(v);
 #endif
-                float prob = (m_pool * p_source + m_near * near.p) / m_all;
+                float prob = (m_pool * p_source + m_near * p_near) / m_all;
 #ifdef RIS_LEARNED
                 uint cell = vis_cell_at(uint(t.z), uint(t.x), uint(t.y));
 #else

@@ -89,6 +89,23 @@ const SHADERS: &[Shader] = &[
         "ris.comp",
         &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_UNIFORM_SOURCE"],
     ),
+    // The near window over every light's map (scenes with more than one light).
+    variant("ris.initial_pool_near_multi.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR", "RIS_NEAR_MULTI"]),
+    variant(
+        "ris.initial_pool_near_multi_uniform.comp",
+        "ris.comp",
+        &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR", "RIS_NEAR_MULTI", "RIS_UNIFORM_SOURCE"],
+    ),
+    variant(
+        "ris.initial_pool_learned_near_multi.comp",
+        "ris.comp",
+        &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_NEAR_MULTI"],
+    ),
+    variant(
+        "ris.initial_pool_learned_near_multi_uniform.comp",
+        "ris.comp",
+        &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_NEAR_MULTI", "RIS_UNIFORM_SOURCE"],
+    ),
     variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
     // `--target-floor` < 1: the target marches the voxel grid (so only these bind it).
     variant("ris.initial_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_VOXEL_TARGET"]),

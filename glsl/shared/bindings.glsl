@@ -152,6 +152,8 @@ const float BVH_SHADOW_EPS = 1e-4;
 // light-map cell, added to by the shade, read by the next frames' initial stage.
 #define B_RIS_VIS 48
 #define RIS_POOL_TILE 1024
+// Lights whose light maps get a near window (ris.comp, near_windows); the pool covers the others.
+#define RIS_NEAR_LIGHTS 4
 // Most neighbours of one spatial pass (its loops are bounded by it).
 #define RIS_MAX_NEIGHBORS 8
 

@@ -107,10 +107,11 @@ pub struct Ris {
     initial_pool: [ComputePipeline; 2],
     /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
     initial_pool_learned: ComputePipeline,
-    /// The near window's variants: any source, and the uniform source's shortcut (`RisFrame::uniform_source`).
-    initial_pool_near: [ComputePipeline; 2],
+    /// The near window's variants, `[multi][uniform]`: one light's window, or every light's (scenes with
+    /// more than one light); any source, or the uniform source's shortcut (`RisFrame::uniform_source`).
+    initial_pool_near: [[ComputePipeline; 2]; 2],
     /// The same with the learned visibility.
-    initial_pool_learned_near: [ComputePipeline; 2],
+    initial_pool_learned_near: [[ComputePipeline; 2]; 2],
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -298,11 +299,20 @@ impl Ris {
         bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
         let initial_pool_learned =
             ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
-        // The near window's pairs: any source, the uniform source's shortcut.
-        let near = [RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP];
-        let initial_pool_learned_near = pair("ris_initial", near, &bl)?;
-        let near = [RIS_INITIAL_POOL_NEAR_COMP, RIS_INITIAL_POOL_NEAR_UNIFORM_COMP];
-        let initial_pool_near = pair("ris_initial", near, &b)?;
+        // The near window's pairs (any source, the uniform source's shortcut), one window or every light's.
+        let near = |one: [&[u8]; 2], multi: [&[u8]; 2], b: &[Binding]| -> Result<[[ComputePipeline; 2]; 2]> {
+            Ok([pair("ris_initial", one, b)?, pair("ris_initial", multi, b)?])
+        };
+        let initial_pool_learned_near = near(
+            [RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP],
+            [RIS_INITIAL_POOL_LEARNED_NEAR_MULTI_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_MULTI_UNIFORM_COMP],
+            &bl,
+        )?;
+        let initial_pool_near = near(
+            [RIS_INITIAL_POOL_NEAR_COMP, RIS_INITIAL_POOL_NEAR_UNIFORM_COMP],
+            [RIS_INITIAL_POOL_NEAR_MULTI_COMP, RIS_INITIAL_POOL_NEAR_MULTI_UNIFORM_COMP],
+            &b,
+        )?;
         let initial_pool = pair("ris_initial", [RIS_INITIAL_POOL_COMP, RIS_INITIAL_POOL_VOXEL_TARGET_COMP], &b)?;
         let mut b = base();
         b.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV].map(Binding::storage_buffer));
@@ -475,17 +485,19 @@ impl Ris {
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_HISTORY, history)
                 .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u));
+            let multi = (f.scene.light_count > 1) as usize;
             let (pipeline, writes) = match (&pool, &learned) {
                 (Some(p), Some(v)) => (
                     if r.push.near_candidates > 0 {
-                        &self.initial_pool_learned_near[r.uniform_source as usize]
+                        &self.initial_pool_learned_near[multi][r.uniform_source as usize]
                     } else {
                         &self.initial_pool_learned
                     },
                     writes.texel_view4(B_RIS_POOL, ctx.buffer(p)).texel_view(B_RIS_VIS, ctx.buffer(v)),
                 ),
                 (Some(p), None) if r.push.near_candidates > 0 && Self::voxel_target(&r.push) == 0 => {
-                    (&self.initial_pool_near[r.uniform_source as usize], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
+                    let pipeline = &self.initial_pool_near[multi][r.uniform_source as usize];
+                    (pipeline, writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
                 }
                 (Some(p), None) => {
                     (&self.initial_pool[Self::voxel_target(&r.push)], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
