@@ -22,12 +22,17 @@
 //!   is (δ_L > 0), and RIS is unbiased for any such target; the progressive mean of unbiased frames is
 //!   unbiased. It is what makes a VPL behind a wall rare once the rays have seen the wall.
 //! - With `--near-candidates N` > 0 (the default, 8 of 32; the pool, not the voxel target): the last N
-//!   candidates are texels of a (2r + 1)² window (`--near-radius r`) around where x projects into one
-//!   light's map, the light chosen per reservoir: the VPLs next to x, which hold the target's tail. Every
-//!   candidate's weight is p̂(v) / q(v) with the balance mixture q = ((M − N) p(v) + N p_near(v)) / M
-//!   (Talbot's multiple-importance RIS), p_near = 1/(2r + 1)² inside the window and 0 outside. Unbiased
-//!   given the light's choice (so also overall): Σ_s M_s p_s(v) / (Σ_s M_s p_s(v)) = 1 for every v the
-//!   pool can draw, which is every VPL with p(v) > 0.
+//!   candidates are texels of (2r + 1)² windows (`--near-radius r`) around where x projects into each
+//!   light's map: the VPLs next to x, which hold the target's tail. A near candidate picks light l's
+//!   window with probability α_l ∝ luminance(I_l) / |x − light_l|² among the open ones (the radiosity
+//!   its VPLs next to x have), then a texel uniformly (the first `RIS_NEAR_LIGHTS` lights; one window
+//!   in a one-light scene). Every candidate's weight is p̂(v) / q(v) with the balance mixture
+//!   q = ((M − N) p(v) + N p_near(v)) / M (Talbot's multiple-importance RIS), p_near(v) = α_l / (2r + 1)²
+//!   inside light l's window and 0 outside. Unbiased given the windows (fixed by x before any
+//!   candidate, so also overall): Σ_s M_s p_s(v) / (Σ_s M_s p_s(v)) = 1 for every v the pool can draw,
+//!   which is every VPL with p(v) > 0. (One window per reservoir, its light chosen at random, left a
+//!   VPL next to x of the other light's to the pool, which drew it rarely and with a huge weight: the
+//!   two-light clutter scene's fireflies, 3× its error at equal time.)
 //!
 //! - `ris_initial` (W × H × R invocations): each of a pixel's R reservoirs streams M candidates
 //!   v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
