@@ -104,7 +104,9 @@ def box_on_floor(root):
     m = Mesh()
     m.room((-2, 0, -2), (2, 2.5, 2), "white")
     m.use("red")
-    m.quad((-2, 0, -2), (-2, 2.5, -2), (-2, 2.5, 2), (-2, 0, 2))  # a coloured skin on the left wall
+    # A coloured skin 1 mm in front of the left wall. (It was in the wall's plane: two coincident faces
+    # of different albedo, which each renderer resolves its own way; the Mitsuba comparison saw 4.5 %.)
+    m.quad((-1.999, 0, -2), (-1.999, 2.5, -2), (-1.999, 2.5, 2), (-1.999, 0, 2))
     m.box((-0.6, 0, -0.8), (0.4, 1.0, 0.2), "green")
     m.box((0.7, 0, 0.3), (1.3, 0.6, 0.9), "white")
     write(root, "box-on-floor", "Two boxes standing on the floor of a closed room: wall junctions and box bases.",
