@@ -376,6 +376,12 @@ fn bad_inputs_give_one_line_and_exit_2() {
             vec!["--method", "ris", "--learn-visibility", "sometimes"],
             "--learn-visibility",
         ),
+        (
+            "control variate neither on nor off",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--method", "ris", "--control-variate", "yes"],
+            "--control-variate",
+        ),
     ];
     for (name, files, args, must) in cases {
         let dir = d.join(name.replace(' ', "-"));
