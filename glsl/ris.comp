@@ -24,7 +24,8 @@
 // The target may weigh in the voxel march's visibility (RIS_VOXEL_TARGET variants, ris.target_floor < 1:
 // see target_at).
 // RIS_SHADE (W × H): L = 1/R Σ_r f(y_r) V(y_r) W_r over the reservoirs [first, last), visibility as the
-//   gather's (voxel, EXACT_VISIBILITY, HYBRID_VISIBILITY).
+//   gather's (voxel, EXACT_VISIBILITY, HYBRID_VISIBILITY); with ris.control each term adds the
+//   unshadowed control variate β (U_g − g(y_r) W_r), mean 0 given the reservoir's candidates (ris.rs).
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
 #if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
