@@ -406,13 +406,16 @@ void main() {
     vec4 gp = texelFetch(g_position, px, 0);
     if (gp.w == 0.0) {
         res_out[idx] = empty_reservoir(0.0);
-        unshadowed[idx] = vec4(0.0);
+        if (ris.control != 0u) unshadowed[idx] = vec4(0.0);
         return;
     }
     vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
     // The streaming state: (y, Σw, p̂(y)), carried in the output between dispatches.
     Reservoir r = pc.first == 0u ? empty_reservoir(0.0) : res_out[idx];
-    vec4 u = pc.first == 0u ? vec4(0.0) : unshadowed[idx];
+    // The control variate's sums, carried between dispatches only when the shade uses them.
+    // (A stand-in of one vec4 is bound when it is off.)
+    vec4 u = vec4(0.0);
+    if (pc.first != 0u && ris.control != 0u) u = unshadowed[idx];
     if (cdf_total_at(0u) > 0.0) {
         // Candidate i of layer r is point r·M + i of the pixel's stratified set, the gather's seed.
         uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
@@ -482,11 +485,11 @@ void main() {
     }
     if (pc.last < ris.candidates) {
         res_out[idx] = r;
-        unshadowed[idx] = u;
+        if (ris.control != 0u) unshadowed[idx] = u;
         return;
     }
     float m = float(ris.candidates);
-    unshadowed[idx] = vec4(ax * u.xyz / m, u.w);
+    if (ris.control != 0u) unshadowed[idx] = vec4(ax * u.xyz / m, u.w);
     r.weight = r.target > 0.0 ? r.weight / (m * r.target) : 0.0;
     r.confidence = m;
     if (ris.history != 0u) {
@@ -599,13 +602,16 @@ void main() {
     if (gp.w != 0.0) {
         vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
         uint pixel = uint(px.y) * frame.size.x + uint(px.x);
-        uvec2 counts = ris.control != 0u ? cv_counts[pixel] : uvec2(0u);
+        // (Read only when on: a stand-in of one uvec2 pair is bound when off.)
+        uvec2 counts = uvec2(0u);
+        if (ris.control != 0u) counts = cv_counts[pixel];
         for (uint layer = pc.first; layer < pc.last; layer++) {
             uint idx = res_index(px, layer);
             Reservoir r = res_in[idx];
             // An empty reservoir had no candidate with w > 0, so its U_g is 0 too: it adds nothing.
             if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
-            vec3 c = contribution(x, nx, ax, r.vpl);
+            Vpl vpl = vpl_fetch(r.vpl);
+            vec3 c = contribution_of(x, nx, ax, r.vpl, vpl);
             sum += c * r.weight;
             if (ris.control != 0u) {
                 // The control variate: + β (U_g − g(y) W), g = f p̂ / luminance(f), whose g(y) W is the
@@ -614,7 +620,6 @@ void main() {
                 // reservoir's choice: here from this pixel's earlier shadow rays (earlier frames and
                 // earlier layers of this frame), β = visible / (traced + 1), 0 until one got through: a
                 // pixel no ray reaches keeps its exact 0 instead of the control's zero-mean noise.
-                Vpl vpl = vpl_fetch(r.vpl);
                 vec4 ug = unshadowed[idx];
                 float lum = dot(vpl_luminance_albedo(ax), vpl.flux);
                 vec3 gw = lum > 0.0 ? ax * vpl.flux * (r.target * r.weight * ug.w / lum) : vec3(0.0);

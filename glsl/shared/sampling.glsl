@@ -114,8 +114,8 @@ uint draw_vpl(uint k, uint seed, out float prob) {
 // Towards the light is always into the free space the light saw it from. With HYBRID_VISIBILITY (the
 // `*.hybrid.comp` variants, `--visibility hybrid`) the same shadow ray, traced only through the grid's
 // occupied cells (shared/hybrid.glsl): the same answer.
-vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
-    Vpl vpl = vpl_fetch(v);
+// contribution_of takes VPL v's data already fetched (ris's shade reads its flux too).
+vec3 contribution_of(vec3 x, vec3 nx, vec3 ax, uint v, Vpl vpl) {
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return c;
 #if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
@@ -130,6 +130,10 @@ vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
 #else
     return c * voxel_visibility(x, nx, vpl.position, vpl.normal);
 #endif
+}
+
+vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {
+    return contribution_of(x, nx, ax, v, vpl_fetch(v));
 }
 
 #endif

@@ -381,8 +381,12 @@ impl Ris {
             g.create_buffer(BufferDesc::storage("ris.visibility (off)", 16))
         };
         // The control variate's U_g per reservoir (this frame's), and its per-pixel shadow-ray counts, kept
-        // across the frames of one view like the learned visibility (a stand-in when off).
-        let mut unshadowed = g.create_buffer(desc("ris.unshadowed"));
+        // across the frames of one view like the learned visibility (stand-ins, never touched, when off).
+        let mut unshadowed = if r.push.control != 0 {
+            g.create_buffer(desc("ris.unshadowed"))
+        } else {
+            g.create_buffer(BufferDesc::storage("ris.unshadowed (off)", 16))
+        };
         let mut cv = if r.push.control != 0 {
             let t = g.temporal_buffer(
                 "ris.cv",
