@@ -4,9 +4,10 @@
 // estimator and why it is unbiased. The target is the unshadowed contribution's luminance at the pixel,
 //   p̂_x(v) = luminance(albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x · k(d²)) (k: the VPL kernel, shared/vpl.glsl),
 // the source is the gather's mixture (draw_vpl, its exact probability p_v). Stages (one variant each):
-// RIS_INITIAL (dispatch W × H × R): reservoir r streams candidates [first, last) of its M: v ~ p,
-//   w = p̂(v)/p_v, v kept with probability w / Σw; after the M-th, W = Σw / (M p̂(y)), then (RIS_HISTORY)
-//   combined with last frame's reservoir at the same pixel and layer.
+// RIS_INITIAL (dispatch W × H × R / K): candidate set s streams candidates [first, last) of its M: v ~ p,
+//   w = p̂(v)/p_v, v kept with probability w / Σw, independently by each of its K = ris.picks picks
+//   (layers s·K + j); after the M-th, each pick's W = Σw / (M p̂(y_j)), then (RIS_HISTORY) combined with
+//   last frame's reservoir at the same pixel and layer.
 // RIS_PRESAMPLE (RIS_POOL_TILE × T, --pool-tiles T > 0; RIS_UNIFORM_SOURCE: the uniform source's shortcut): the
 //   candidate pool, T tiles of RIS_POOL_TILE VPLs; tile
 //   j's entries are points 0 .. RIS_POOL_TILE − 1 of one stratified set of the source (draw_vpl, seeded by j
@@ -92,10 +93,15 @@ uint res_index(ivec2 q, uint layer) {
 
 // A uniform in [0, 1) that depends on (pixel, frame seed, stream, index) only: reservoir choices, apart
 // from the candidates' own stratified numbers.
-float ris_rand(ivec2 q, uint stream, uint i) {
+uint ris_hash(ivec2 q, uint stream, uint i) {
     uint h = pcg_hash(uint(q.x) + 65536u * uint(q.y)) ^ pcg_hash(pc.seed ^ 0x2545F491u);
-    h = pcg_hash(h ^ pcg_hash(stream * 0x9E3779B9u + i));
+    return pcg_hash(h ^ pcg_hash(stream * 0x9E3779B9u + i));
+}
+float unit_float(uint h) {
     return float(h >> 8) * (1.0 / 16777216.0);
+}
+float ris_rand(ivec2 q, uint stream, uint i) {
+    return unit_float(ris_hash(q, stream, i));
 }
 
 // The target p̂ of pixel geometry (x, n, a) for VPL v: the unshadowed contribution's luminance, times
@@ -228,8 +234,17 @@ uint candidate(ivec2 q, uint layer, uint i, uint seed, uvec2 window, out float p
 // make U_g = 1/M Σ g(v)/prob; u.w is the kept VPL's s / (p̂ / luminance(f)), so that the shade's g(y) W is
 // f(y)/luminance(f(y)) · p̂(y) W · u.w. s is 1 (the shade's β scales it), or with the learned
 // visibility the tile's and cell's visible fraction so far, visible / (traced + 1).
-void add_candidate(inout Reservoir r, inout vec4 u, ivec2 px, uint k, uint v, Vpl vpl, float prob, uint cell,
-                   vec3 x, vec3 nx, vec3 ax, uint tile_base) {
+// With ris.picks = K > 1 the candidates feed K picks: pick 0 is the reservoir itself, picks 1 .. K − 1 are
+// held in component j of these (the VPL, its p̂, its control ratio), each with its own random numbers, so
+// each pick is on its own a reservoir of the same M candidates (the same Σw and U_g).
+struct Picks {
+    uvec4 vpl;
+    vec4 target;
+    vec4 ratio;
+};
+
+void add_candidate(inout Reservoir r, inout vec4 u, inout Picks pk, ivec2 px, uint k, uint v, Vpl vpl, float prob,
+                   uint cell, vec3 x, vec3 nx, vec3 ax, uint tile_base) {
     float g = target_geometry(x, nx, vpl);
     float ratio = 1.0;
 #ifdef RIS_LEARNED
@@ -252,6 +267,16 @@ void add_candidate(inout Reservoir r, inout vec4 u, ivec2 px, uint k, uint v, Vp
         r.vpl = v;
         r.target = t;
         u.w = ratio;
+    }
+    if (ris.picks > 1u) {
+        uint h = ris_hash(px, 32u, k);
+        for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
+            if (j < ris.picks && unit_float(pcg_hash(h + j)) * r.weight < w) {
+                pk.vpl[j] = v;
+                pk.target[j] = t;
+                pk.ratio[j] = ratio;
+            }
+        }
     }
 }
 
@@ -398,98 +423,10 @@ float near_prob(Near nw, uint v) {
 }
 #endif
 
-void main() {
-    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-    uint layer = gl_GlobalInvocationID.z;
-    if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
-    uint idx = res_index(px, layer);
-    vec4 gp = texelFetch(g_position, px, 0);
-    if (gp.w == 0.0) {
-        res_out[idx] = empty_reservoir(0.0);
-        if (ris.control != 0u) unshadowed[idx] = vec4(0.0);
-        return;
-    }
-    vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
-    // The streaming state: (y, Σw, p̂(y)), carried in the output between dispatches.
-    Reservoir r = pc.first == 0u ? empty_reservoir(0.0) : res_out[idx];
-    // The control variate's sums, carried between dispatches only when the shade uses them.
-    // (A stand-in of one vec4 is bound when it is off.)
-    vec4 u = vec4(0.0);
-    if (pc.first != 0u && ris.control != 0u) u = unshadowed[idx];
-    if (cdf_total_at(0u) > 0.0) {
-        // Candidate i of layer r is point r·M + i of the pixel's stratified set, the gather's seed.
-        uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
-#ifdef RIS_LEARNED
-        uint tile_base = vis_tile_base(px);
-#else
-        uint tile_base = 0u;
-#endif
-#ifdef RIS_POOL
-        uvec2 window = pool_window(px, layer);
-#else
-        uvec2 window = uvec2(0u);
-#endif
-#ifdef RIS_NEAR
-        Near near = near_windows(x);
-        // Closed windows give their candidates to the pool.
-        uint split = near.open ? ris.candidates - ris.near_candidates : ris.candidates;
-        float m_all = float(ris.candidates), m_pool = float(split), m_near = m_all - m_pool;
-        // The pool's candidates, then the window's (two loops: llvmpipe would run both bodies for each).
-        for (uint i = pc.first; i < min(pc.last, split); i++) {
-            float prob;
-            Vpl vpl;
-            uint cell;
-            uint v = candidate(px, layer, i, seed, window, prob, vpl, cell);
-            if (!(prob > 0.0)) continue;
-            // The balance mixture of the two strategies (multiple-importance RIS): each candidate weighed
-            // by m_all / (m_pool p_source + m_near p_near).
-            prob = (m_pool * prob + m_near * near_prob(near, v)) / m_all;
-            add_candidate(r, u, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
-        }
-        if (near.open) {
-            for (uint i = max(pc.first, split); i < pc.last; i++) {
-                uint k = layer * ris.candidates + i;
-                float p_near;
-                ivec3 t = near_texel(near, px, k, p_near);
-                uint res = frame.size.w;
-                uint v = (uint(t.z) * res + uint(t.y)) * res + uint(t.x);
-                Vpl vpl = vpl_fetch_texel(t);
-                if (!vpl.valid) continue;
-#ifdef RIS_UNIFORM_SOURCE
-                // The uniform source with faces by Russian roulette draws a face by its count of VPLs, then
-                // a VPL of it uniformly: 1 / (all VPLs) for each. Its CDF's prefixes are integers, exact in
-                // f32, so this is the pool's cdf_prob_rows to rounding, without its divisions and loop.
-                float p_source = 1.0 / cdf_total_at(0u);
-#else
-                float p_source = source_prob(v);
-#endif
-                float prob = (m_pool * p_source + m_near * p_near) / m_all;
-#ifdef RIS_LEARNED
-                uint cell = vis_cell_at(uint(t.z), uint(t.x), uint(t.y));
-#else
-                uint cell = 0u;
-#endif
-                add_candidate(r, u, px, k, v, vpl, prob, cell, x, nx, ax, tile_base);
-            }
-        }
-#else
-        for (uint i = pc.first; i < pc.last; i++) {
-            float prob;
-            Vpl vpl;
-            uint cell;
-            uint v = candidate(px, layer, i, seed, window, prob, vpl, cell);
-            if (!(prob > 0.0)) continue;
-            add_candidate(r, u, px, layer * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
-        }
-#endif
-    }
-    if (pc.last < ris.candidates) {
-        res_out[idx] = r;
-        if (ris.control != 0u) unshadowed[idx] = u;
-        return;
-    }
+// Finishes pick r of layer `layer` after its M candidates: W = Σw / (M p̂(y)), then (ris.history) combined
+// with last frame's reservoir at the same pixel and layer.
+Reservoir finish(Reservoir r, ivec2 px, uint layer, uint idx, vec3 x, vec3 nx, vec3 ax) {
     float m = float(ris.candidates);
-    if (ris.control != 0u) unshadowed[idx] = vec4(ax * u.xyz / m, u.w);
     r.weight = r.target > 0.0 ? r.weight / (m * r.target) : 0.0;
     r.confidence = m;
     if (ris.history != 0u) {
@@ -510,7 +447,133 @@ void main() {
         r.confidence = total;
     }
     if (!(r.weight > 0.0)) r = empty_reservoir(r.confidence);
-    res_out[idx] = r;
+    return r;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    // Invocation z streams candidate set `stream` into its K = ris.picks picks, layers stream · K + j.
+    uint stream = gl_GlobalInvocationID.z;
+    uint layer = stream * ris.picks;
+    if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
+    uint idx = res_index(px, layer);
+    vec4 gp = texelFetch(g_position, px, 0);
+    if (gp.w == 0.0) {
+        for (uint j = 0u; j < ris.picks; j++) {
+            res_out[res_index(px, layer + j)] = empty_reservoir(0.0);
+            if (ris.control != 0u) unshadowed[res_index(px, layer + j)] = vec4(0.0);
+        }
+        return;
+    }
+    vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
+    // The streaming state: (y, Σw, p̂(y)), carried in the output between dispatches.
+    Reservoir r = pc.first == 0u ? empty_reservoir(0.0) : res_out[idx];
+    // The control variate's sums, carried between dispatches only when the shade uses them.
+    // (A stand-in of one vec4 is bound when it is off.)
+    vec4 u = vec4(0.0);
+    if (pc.first != 0u && ris.control != 0u) u = unshadowed[idx];
+    // The other picks' choices, carried in their own layers between dispatches.
+    Picks pk = Picks(uvec4(RIS_NONE), vec4(0.0), vec4(0.0));
+    if (pc.first != 0u) {
+        for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
+            if (j < ris.picks) {
+                Reservoir q = res_out[res_index(px, layer + j)];
+                pk.vpl[j] = q.vpl;
+                pk.target[j] = q.target;
+                if (ris.control != 0u) pk.ratio[j] = unshadowed[res_index(px, layer + j)].w;
+            }
+        }
+    }
+    if (cdf_total_at(0u) > 0.0) {
+        // Candidate i of stream s is point s·M + i of the pixel's stratified set, the gather's seed.
+        uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+#ifdef RIS_LEARNED
+        uint tile_base = vis_tile_base(px);
+#else
+        uint tile_base = 0u;
+#endif
+#ifdef RIS_POOL
+        uvec2 window = pool_window(px, stream);
+#else
+        uvec2 window = uvec2(0u);
+#endif
+#ifdef RIS_NEAR
+        Near near = near_windows(x);
+        // Closed windows give their candidates to the pool.
+        uint split = near.open ? ris.candidates - ris.near_candidates : ris.candidates;
+        float m_all = float(ris.candidates), m_pool = float(split), m_near = m_all - m_pool;
+        // The pool's candidates, then the window's (two loops: llvmpipe would run both bodies for each).
+        for (uint i = pc.first; i < min(pc.last, split); i++) {
+            float prob;
+            Vpl vpl;
+            uint cell;
+            uint v = candidate(px, stream, i, seed, window, prob, vpl, cell);
+            if (!(prob > 0.0)) continue;
+            // The balance mixture of the two strategies (multiple-importance RIS): each candidate weighed
+            // by m_all / (m_pool p_source + m_near p_near).
+            prob = (m_pool * prob + m_near * near_prob(near, v)) / m_all;
+            add_candidate(r, u, pk, px, stream * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
+        }
+        if (near.open) {
+            for (uint i = max(pc.first, split); i < pc.last; i++) {
+                uint k = stream * ris.candidates + i;
+                float p_near;
+                ivec3 t = near_texel(near, px, k, p_near);
+                uint res = frame.size.w;
+                uint v = (uint(t.z) * res + uint(t.y)) * res + uint(t.x);
+                Vpl vpl = vpl_fetch_texel(t);
+                if (!vpl.valid) continue;
+#ifdef RIS_UNIFORM_SOURCE
+                // The uniform source with faces by Russian roulette draws a face by its count of VPLs, then
+                // a VPL of it uniformly: 1 / (all VPLs) for each. Its CDF's prefixes are integers, exact in
+                // f32, so this is the pool's cdf_prob_rows to rounding, without its divisions and loop.
+                float p_source = 1.0 / cdf_total_at(0u);
+#else
+                float p_source = source_prob(v);
+#endif
+                float prob = (m_pool * p_source + m_near * p_near) / m_all;
+#ifdef RIS_LEARNED
+                uint cell = vis_cell_at(uint(t.z), uint(t.x), uint(t.y));
+#else
+                uint cell = 0u;
+#endif
+                add_candidate(r, u, pk, px, k, v, vpl, prob, cell, x, nx, ax, tile_base);
+            }
+        }
+#else
+        for (uint i = pc.first; i < pc.last; i++) {
+            float prob;
+            Vpl vpl;
+            uint cell;
+            uint v = candidate(px, stream, i, seed, window, prob, vpl, cell);
+            if (!(prob > 0.0)) continue;
+            add_candidate(r, u, pk, px, stream * ris.candidates + i, v, vpl, prob, cell, x, nx, ax, tile_base);
+        }
+#endif
+    }
+    if (pc.last < ris.candidates) {
+        res_out[idx] = r;
+        if (ris.control != 0u) unshadowed[idx] = u;
+        for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
+            if (j < ris.picks) {
+                res_out[res_index(px, layer + j)] = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
+                if (ris.control != 0u) unshadowed[res_index(px, layer + j)] = vec4(0.0, 0.0, 0.0, pk.ratio[j]);
+            }
+        }
+        return;
+    }
+    // Every pick shares the candidates' Σw and U_g; each has its own y, p̂(y) and ratio.
+    vec3 ug = ax * u.xyz / float(ris.candidates);
+    for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
+        if (j < ris.picks) {
+            uint idx_j = res_index(px, layer + j);
+            if (ris.control != 0u) unshadowed[idx_j] = vec4(ug, pk.ratio[j]);
+            Reservoir q = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
+            res_out[idx_j] = finish(q, px, layer + j, idx_j, x, nx, ax);
+        }
+    }
+    if (ris.control != 0u) unshadowed[idx] = vec4(ug, u.w);
+    res_out[idx] = finish(r, px, layer, idx, x, nx, ax);
 }
 #endif
 

@@ -156,6 +156,9 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define RIS_NEAR_LIGHTS 4
 // Most neighbours of one spatial pass (its loops are bounded by it).
 #define RIS_MAX_NEIGHBORS 8
+// Most picks per reservoir's candidates (ris.picks; the initial stage keeps them in the components of a
+// vec4, pick 0 in the reservoir itself).
+#define RIS_MAX_PICKS 4
 
 // ---- present: the viewer's running mean, tone mapping and sRGB encoding (passes/present.rs) -------------
 #define B_PRESENT_RADIANCE 40

@@ -71,7 +71,7 @@ struct GatherPush {
 // of ris's initial stage, the reservoir range of its shade stage).
 struct RisPush {
     uint candidates;  // M: candidates streamed into each reservoir
-    uint reservoirs;  // R: reservoirs (shadow rays) per pixel
+    uint reservoirs;  // R: reservoirs (layers; shadow rays) per pixel, K per candidate stream
     uint pass;        // the spatial pass (its neighbours' hash)
     uint neighbors;   // k: neighbours per spatial pass
     float radius;     // spatial radius, pixels
@@ -85,6 +85,7 @@ struct RisPush {
     uint near_candidates; // the last this many of the M candidates come from the near window (0: none)
     uint near_radius; // the near window's half-width, texels (2r + 1 wide)
     uint control;     // 1: the shade adds β (U_g − g(y) W), the unshadowed control variate (no reuse only)
+    uint picks;       // K: VPLs each reservoir's candidates keep, independently (layers: R = streams · K)
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

@@ -382,6 +382,12 @@ fn bad_inputs_give_one_line_and_exit_2() {
             vec!["--method", "ris", "--control-variate", "yes"],
             "--control-variate",
         ),
+        (
+            "more picks than a reservoir holds",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--method", "ris", "--picks", "9"],
+            "--picks",
+        ),
     ];
     for (name, files, args, must) in cases {
         let dir = d.join(name.replace(' ', "-"));
@@ -683,7 +689,7 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
     // visibility blocks little; shadow rays in the two rooms, where it blocks nearly everything.
     for (scene, budget) in [
         (scene.clone(), "2 reservoirs × 128"),
-        (bounce_tests::workspace().join("assets/two-rooms/scene.toml"), "4 reservoirs × 32"),
+        (bounce_tests::workspace().join("assets/two-rooms/scene.toml"), "2 reservoirs × 64"),
     ] {
         let mut args = vec!["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--method", "ris"];
         args.extend(small);

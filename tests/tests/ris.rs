@@ -5,7 +5,8 @@
 //! candidate and no reuse it is its source method; candidates from the presampled pool are unbiased too, with the near window as well
 //! (two lights, every light map); the candidates' split over dispatches (lavapipe's
 //! loop limit) does not change the image; bad flag combinations are a `SettingsError`. The shade's
-//! unshadowed control variate is unbiased over progressive frames, and applied only without reuse.
+//! unshadowed control variate is unbiased over progressive frames, and applied only without reuse; so
+//! are several picks from one reservoir's candidates, with and without reuse.
 
 use crate::vpl::{converges_to, indirect_with};
 use bounce_graph::frame::{FrameSettings, Method, Renderer, RisSettings, RisSource, SettingsError, Visibility};
@@ -180,6 +181,68 @@ fn ris_control_variate_is_unbiased_over_progressive_frames() {
     let a = indirect_with(&mut r, reused(true), w, h, res, vox);
     r.clear_frame_cache();
     assert_eq!(a, indirect_with(&mut r, reused(false), w, h, res, vox), "the control variate ran with reuse");
+}
+
+/// Several picks per reservoir's candidates (`--picks K`): K independent choices among the same M
+/// candidates, each its own layer, shadow ray and control-variate term (sharing Σw and U_g). Each pick is
+/// on its own a reservoir of those candidates, so the frame stays unbiased: over progressive frames with
+/// the pool, the near window and the control variate (exact visibility), with per-pixel draws and
+/// spatial reuse (voxel), and with temporal reuse (voxel). The picks really differ (K = 3 is not K = 1's
+/// image), and the picks' state survives the candidates' split over dispatches.
+#[test]
+fn ris_picks_share_their_candidates_without_bias() {
+    const FRAMES: u64 = 3;
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let picked = |s: FrameSettings, picks| FrameSettings { vpls: 2, ris: RisSettings { picks, ..s.ris }, ..s };
+    let all_exact = all(&mut r, Visibility::Exact);
+    converges_to("ris (3 picks of 2 reservoirs, pool, control variate, exact)", &all_exact, |run| {
+        r.clear_frame_cache();
+        let mut sum = vec![[0.0f32; 3]; all_exact.len()];
+        for k in 0..FRAMES {
+            let mut s = FrameSettings { cdf_seed: Some(1), ..ris(Visibility::Exact, run * FRAMES + k, 0, 0.0) };
+            s.ris.pool_tiles = 3;
+            let img = indirect_with(&mut r, picked(s, 3), w, h, res, vox);
+            for (a, p) in sum.iter_mut().zip(&img) {
+                (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
+            }
+        }
+        sum
+    });
+    let all_voxel = all(&mut r, Visibility::Voxel);
+    converges_to("ris (4 picks of 2 reservoirs, per-pixel draws, 1 spatial pass, voxel)", &all_voxel, |seed| {
+        indirect_with(&mut r, picked(ris(Visibility::Voxel, seed, 1, 0.0), 4), w, h, res, vox)
+    });
+    converges_to("ris (2 picks of 2 reservoirs, temporal reuse, voxel)", &all_voxel, |run| {
+        r.clear_frame_cache();
+        let mut sum = vec![[0.0f32; 3]; all_voxel.len()];
+        for k in 0..FRAMES {
+            let s = FrameSettings { cdf_seed: Some(1), ..ris(Visibility::Voxel, run * FRAMES + k, 0, 4.0) };
+            let img = indirect_with(&mut r, picked(s, 2), w, h, res, vox);
+            for (a, p) in sum.iter_mut().zip(&img) {
+                (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
+            }
+        }
+        sum
+    });
+    r.clear_frame_cache();
+    let one = indirect_with(&mut r, picked(ris(Visibility::Exact, 5, 0, 0.0), 1), w, h, res, vox);
+    r.clear_frame_cache();
+    let three = indirect_with(&mut r, picked(ris(Visibility::Exact, 5, 0, 0.0), 3), w, h, res, vox);
+    assert_ne!(one, three, "the picks changed nothing");
+    let mut split = |chunk: Option<u32>| {
+        let mut s = picked(ris(Visibility::Exact, 9, 0, 0.0), 3);
+        (s.ris.candidates, s.ris.pool_tiles) = (37, 3);
+        s.ris.candidates_chunk = chunk.and_then(std::num::NonZeroU32::new);
+        r.clear_frame_cache();
+        indirect_with(&mut r, s, w, h, res, vox)
+    };
+    let whole = split(None);
+    for chunk in [1, 20] {
+        assert_eq!(split(Some(chunk)), whole, "{chunk} candidates per dispatch changed the 3 picks' image");
+    }
 }
 
 /// The near window (`--near-candidates`) in a scene the default one does not cover: two lights (the window's
@@ -437,6 +500,8 @@ fn ris_rejects_bad_flag_combinations() {
         ("--pool-tiles", with(&|s| s.ris.pool_tiles = 4097)),
         ("--learn-visibility", with(&|s| s.ris.learn_visibility = 1.5)),
         ("--learn-visibility", with(&|s| s.ris.learn_visibility = 0.1)), // base has reuse
+        ("--picks", with(&|s| s.ris.picks = 0)),
+        ("--picks", with(&|s| s.ris.picks = 5)),
     ];
     for (names, s) in cases {
         let e = r.render(&s).err().unwrap_or_else(|| panic!("{names}: accepted"));

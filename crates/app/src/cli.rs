@@ -165,15 +165,15 @@ pub const FACES: Choices<FaceMode> = Choices(&[
 /// `--vpls` when not given.
 pub const DEFAULT_VPLS: u32 = 64;
 /// ris's budget per progressive frame under `render --time-limit` when neither --vpls nor --candidates
-/// is given: (reservoirs, candidates, near-window candidates), chosen per view by the share of the
-/// unshadowed transport that visibility blocks (`Renderer::blocked_share`, the threshold of
+/// is given: (reservoirs, candidates, near-window candidates, picks), chosen per view by the share of
+/// the unshadowed transport that visibility blocks (`Renderer::blocked_share`, the threshold of
 /// `--learn-visibility auto`). Where visibility blocks most of it, each shadow ray is the scarce
-/// resource: 4 reservoirs of 32 candidates. Elsewhere the candidates are: 2 reservoirs of 128.
-/// Measured at equal time (BENCHMARKS.md, "ris: the unshadowed control variate"): with the control
-/// variate, 2 × 128 gives 1.2× lower error than 2 × 64 on the Cornell box, 1.0–1.1× on Sibenik and
-/// Conference, and 1.4–2× higher in the two rooms, where 4 × 32 is kept.
-pub const RIS_FRAME_BLOCKED: (u32, u32, u32) = (4, 32, 8);
-pub const RIS_FRAME_OPEN: (u32, u32, u32) = (2, 128, 16);
+/// resource: 2 reservoirs of 64 candidates. Elsewhere the candidates are: 2 reservoirs of 128. Either
+/// way each reservoir keeps 3 picks (`--picks`), 6 shadow rays a frame: most of a frame's error is
+/// the kept samples' own, which picks cut at the price of a shadow ray each, not of new candidates.
+/// Measured at equal time (BENCHMARKS.md, "ris: several picks per reservoir").
+pub const RIS_FRAME_BLOCKED: (u32, u32, u32, u32) = (2, 64, 8, 3);
+pub const RIS_FRAME_OPEN: (u32, u32, u32, u32) = (2, 128, 16, 3);
 
 /// What one picture is: its size, component, method, VPL count and seed (`render` and `view`; `bench`
 /// sweeps method, VPLs and seed itself).
@@ -284,6 +284,10 @@ pub struct FrameArgs {
     /// --time-limit` without --vpls).
     #[arg(long)]
     pub candidates: Option<u32>,
+    /// VPLs each reservoir of --method ris keeps from its candidates, independently, each with its own
+    /// shadow ray (1 to 4; default 1, or chosen per view under `render --time-limit` without --vpls).
+    #[arg(long)]
+    pub picks: Option<u32>,
     /// Spatial reuse passes of --method ris (0: none).
     #[arg(long, default_value_t = RisSettings::default().spatial_passes)]
     pub spatial_passes: u32,
@@ -372,6 +376,7 @@ impl FrameArgs {
                 learn_auto: self.learn_visibility == Learn::Auto,
                 candidates_chunk: None,
                 control_variate: self.control_variate,
+                picks: self.picks.unwrap_or(RisSettings::default().picks),
             },
             ..FrameSettings::default()
         }

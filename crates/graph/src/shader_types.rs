@@ -158,8 +158,11 @@ pub struct RisPush {
     pub near_radius: u32,
     /// 1: the shade adds the unshadowed control variate β (U_g − g(y) W) (passes/ris.rs; without reuse).
     pub control: u32,
+    /// K: VPLs each reservoir's candidates keep, independently, each traced by its own shadow ray; the
+    /// reservoirs (layers) are `reservoirs` / K candidate streams of K picks.
+    pub picks: u32,
 }
-const _: () = assert!(size_of::<RisPush>() == 60);
+const _: () = assert!(size_of::<RisPush>() == 64);
 
 /// ris's push constant block: the gather's sampling fields, then ris's own.
 #[repr(C)]
@@ -168,7 +171,8 @@ pub struct RisPushBlock {
     pub gather: GatherPush,
     pub ris: RisPush,
 }
-const _: () = assert!(size_of::<RisPushBlock>() == 124);
+// 128 bytes: the least maxPushConstantsSize a Vulkan device may have.
+const _: () = assert!(size_of::<RisPushBlock>() == 128);
 const _: () = assert!(offset_of!(RisPushBlock, ris) == 64);
 
 /// One reservoir of ris (`Reservoir` in `glsl/shared/types.glsl`).

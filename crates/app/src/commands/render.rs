@@ -216,20 +216,23 @@ fn ris_frame_budget(
     err: &mut dyn Write,
 ) -> Result<()> {
     let blocked = renderer.blocked_share(settings.width, settings.height)?;
-    let (r, m, n) = if a.frame.candidates.is_none() && a.frame.near_candidates.is_none() {
+    let (r, m, n, k) = if a.frame.candidates.is_none() && a.frame.near_candidates.is_none() {
         if blocked.is_some_and(|b| b < bounce_graph::passes::ris::AUTO_LEARN_BLOCKED) {
             crate::cli::RIS_FRAME_OPEN
         } else {
             crate::cli::RIS_FRAME_BLOCKED
         }
     } else {
-        (crate::cli::RIS_FRAME_BLOCKED.0, settings.ris.candidates, settings.ris.near_candidates)
+        let k = crate::cli::RIS_FRAME_BLOCKED.3;
+        (crate::cli::RIS_FRAME_BLOCKED.0, settings.ris.candidates, settings.ris.near_candidates, k)
     };
-    (settings.vpls, settings.ris.candidates, settings.ris.near_candidates) = (r, m, n);
+    // An explicit --picks stands.
+    let k = a.frame.picks.unwrap_or(k);
+    (settings.vpls, settings.ris.candidates, settings.ris.near_candidates, settings.ris.picks) = (r, m, n, k);
     let share = blocked.map_or("nothing lit in view".into(), |b| format!("{:.0} %", 100.0 * b));
     writeln!(
         err,
-        "ris per frame: {r} reservoirs × {m} candidates ({} from the near window); visibility blocks {share} of the view's unshadowed transport",
+        "ris per frame: {r} reservoirs × {m} candidates ({} from the near window), {k} picks each; visibility blocks {share} of the view's unshadowed transport",
         n.min(m.saturating_sub(1))
     )?;
     Ok(())

@@ -200,7 +200,9 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
     let ris = &s.ris;
     let push = RisPush {
         candidates: ris.candidates,
-        reservoirs: s.vpls,
+        // Each of the --vpls candidate streams keeps `picks` VPLs, a layer of reservoirs each.
+        reservoirs: s.vpls * ris.picks,
+        picks: ris.picks,
         neighbors: ris.spatial_neighbors,
         radius: ris.spatial_radius,
         history_cap: ris.temporal_cap,

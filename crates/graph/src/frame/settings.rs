@@ -133,6 +133,11 @@ pub struct RisSettings {
     /// kept VPL is visible the reservoir's estimate becomes (1 − β) f W + β U_g, the colour and spread of
     /// all M candidates instead of one's. Only without reuse (off otherwise).
     pub control_variate: bool,
+    /// VPLs kept from each reservoir's M candidates (K in 1 ..= `RIS_MAX_PICKS`), each an independent
+    /// choice of the same candidates with its own shadow ray: K reservoirs for the candidates' price of
+    /// one. Where a frame's error is the kept samples' own (their visibility, the choice among the
+    /// candidates) rather than the candidates', K picks cut it nearly as K reservoirs would.
+    pub picks: u32,
 }
 
 impl Default for RisSettings {
@@ -161,6 +166,7 @@ impl Default for RisSettings {
             near_radius: 8,
             candidates_chunk: None,
             control_variate: true,
+            picks: 1,
         }
     }
 }
@@ -447,6 +453,10 @@ impl FrameSettings {
         if !(1..=1024).contains(&r.candidates) {
             reject!("--candidates must be between 1 and 1024 (got {})", r.candidates);
         }
+        let max_picks = crate::bindings::RIS_MAX_PICKS;
+        if !(1..=max_picks).contains(&r.picks) {
+            reject!("--picks must be between 1 and {max_picks} (got {})", r.picks);
+        }
         let max_k = crate::bindings::RIS_MAX_NEIGHBORS;
         if r.spatial_neighbors > max_k {
             reject!("--spatial-neighbors must be at most {max_k} (got {})", r.spatial_neighbors);
@@ -483,10 +493,11 @@ impl FrameSettings {
         if !(r.temporal_cap.is_finite() && r.temporal_cap >= 0.0) {
             reject!("--temporal-cap must be finite and non-negative (got {})", r.temporal_cap);
         }
-        let bytes = crate::passes::ris::Ris::layer_bytes(self.width, self.height) * self.vpls as u64;
+        let layers = self.vpls as u64 * r.picks as u64;
+        let bytes = crate::passes::ris::Ris::layer_bytes(self.width, self.height) * layers;
         let range = gpu.limits().max_storage_buffer_range as u64;
         if bytes > range {
-            reject!("ris keeps {} reservoirs per pixel: {bytes} bytes exceed maxStorageBufferRange ({range}); lower --vpls or the size", self.vpls);
+            reject!("ris keeps {layers} reservoirs per pixel: {bytes} bytes exceed maxStorageBufferRange ({range}); lower --vpls, --picks or the size");
         }
         Ok(())
     }
