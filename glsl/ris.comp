@@ -5,7 +5,7 @@
 //   p̂_x(v) = luminance(albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x · k(d²)) (k: the VPL kernel, shared/vpl.glsl),
 // the source is the gather's mixture (draw_vpl, its exact probability p_v). Stages (one variant each):
 // RIS_INITIAL (dispatch W × H × R / K): candidate set s streams candidates [first, last) of its M: v ~ p,
-//   w = p̂(v)/p_v, v kept with probability w / Σw, independently by each of its K = ris.picks picks
+//   w = p̂(v)/p_v, v kept with probability w / Σw, independently by each of its K = RIS_PICKS picks
 //   (layers s·K + j); after the M-th, each pick's W = Σw / (M p̂(y_j)), then (RIS_HISTORY) combined with
 //   last frame's reservoir at the same pixel and layer.
 // RIS_PRESAMPLE (RIS_POOL_TILE × T, --pool-tiles T > 0; RIS_UNIFORM_SOURCE: the uniform source's shortcut): the
@@ -63,6 +63,8 @@ layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir re
 #endif
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 #ifdef RIS_INITIAL
+// K: picks per reservoir (RisPush::picks selects the pipeline specialised to it).
+layout(constant_id = SPEC_RIS_PICKS) const uint RIS_PICKS = 1u;
 layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Reservoir res_history[]; };
 // The control variate's state (add_candidate): xyz the candidates' estimate U_g of the reservoir (while
 // streaming, its sum before the albedo and 1/M), w the kept VPL's ratio s / (p̂ / luminance(f)).
@@ -234,7 +236,7 @@ uint candidate(ivec2 q, uint layer, uint i, uint seed, uvec2 window, out float p
 // make U_g = 1/M Σ g(v)/prob; u.w is the kept VPL's s / (p̂ / luminance(f)), so that the shade's g(y) W is
 // f(y)/luminance(f(y)) · p̂(y) W · u.w. s is 1 (the shade's β scales it), or with the learned
 // visibility the tile's and cell's visible fraction so far, visible / (traced + 1).
-// With ris.picks = K > 1 the candidates feed K picks: pick 0 is the reservoir itself, picks 1 .. K − 1 are
+// With RIS_PICKS = K > 1 the candidates feed K picks: pick 0 is the reservoir itself, picks 1 .. K − 1 are
 // held in component j of these (the VPL, its p̂, its control ratio), each with its own random numbers, so
 // each pick is on its own a reservoir of the same M candidates (the same Σw and U_g).
 struct Picks {
@@ -268,10 +270,10 @@ void add_candidate(inout Reservoir r, inout vec4 u, inout Picks pk, ivec2 px, ui
         r.target = t;
         u.w = ratio;
     }
-    if (ris.picks > 1u) {
+    if (RIS_PICKS > 1u) {
         uint h = ris_hash(px, 32u, k);
-        for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
-            if (j < ris.picks && unit_float(pcg_hash(h + j)) * r.weight < w) {
+        for (uint j = 1u; j < RIS_PICKS; j++) {
+            if (unit_float(pcg_hash(h + j)) * r.weight < w) {
                 pk.vpl[j] = v;
                 pk.target[j] = t;
                 pk.ratio[j] = ratio;
@@ -452,14 +454,14 @@ Reservoir finish(Reservoir r, ivec2 px, uint layer, uint idx, vec3 x, vec3 nx, v
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-    // Invocation z streams candidate set `stream` into its K = ris.picks picks, layers stream · K + j.
+    // Invocation z streams candidate set `stream` into its K = RIS_PICKS picks, layers stream · K + j.
     uint stream = gl_GlobalInvocationID.z;
-    uint layer = stream * ris.picks;
+    uint layer = stream * RIS_PICKS;
     if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
     uint idx = res_index(px, layer);
     vec4 gp = texelFetch(g_position, px, 0);
     if (gp.w == 0.0) {
-        for (uint j = 0u; j < ris.picks; j++) {
+        for (uint j = 0u; j < RIS_PICKS; j++) {
             res_out[res_index(px, layer + j)] = empty_reservoir(0.0);
             if (ris.control != 0u) unshadowed[res_index(px, layer + j)] = vec4(0.0);
         }
@@ -475,13 +477,11 @@ void main() {
     // The other picks' choices, carried in their own layers between dispatches.
     Picks pk = Picks(uvec4(RIS_NONE), vec4(0.0), vec4(0.0));
     if (pc.first != 0u) {
-        for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
-            if (j < ris.picks) {
-                Reservoir q = res_out[res_index(px, layer + j)];
-                pk.vpl[j] = q.vpl;
-                pk.target[j] = q.target;
-                if (ris.control != 0u) pk.ratio[j] = unshadowed[res_index(px, layer + j)].w;
-            }
+        for (uint j = 1u; j < RIS_PICKS; j++) {
+            Reservoir q = res_out[res_index(px, layer + j)];
+            pk.vpl[j] = q.vpl;
+            pk.target[j] = q.target;
+            if (ris.control != 0u) pk.ratio[j] = unshadowed[res_index(px, layer + j)].w;
         }
     }
     if (cdf_total_at(0u) > 0.0) {
@@ -554,23 +554,19 @@ void main() {
     if (pc.last < ris.candidates) {
         res_out[idx] = r;
         if (ris.control != 0u) unshadowed[idx] = u;
-        for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
-            if (j < ris.picks) {
-                res_out[res_index(px, layer + j)] = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
-                if (ris.control != 0u) unshadowed[res_index(px, layer + j)] = vec4(0.0, 0.0, 0.0, pk.ratio[j]);
-            }
+        for (uint j = 1u; j < RIS_PICKS; j++) {
+            res_out[res_index(px, layer + j)] = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
+            if (ris.control != 0u) unshadowed[res_index(px, layer + j)] = vec4(0.0, 0.0, 0.0, pk.ratio[j]);
         }
         return;
     }
     // Every pick shares the candidates' Σw and U_g; each has its own y, p̂(y) and ratio.
     vec3 ug = ax * u.xyz / float(ris.candidates);
-    for (uint j = 1u; j < uint(RIS_MAX_PICKS); j++) {
-        if (j < ris.picks) {
-            uint idx_j = res_index(px, layer + j);
-            if (ris.control != 0u) unshadowed[idx_j] = vec4(ug, pk.ratio[j]);
-            Reservoir q = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
-            res_out[idx_j] = finish(q, px, layer + j, idx_j, x, nx, ax);
-        }
+    for (uint j = 1u; j < RIS_PICKS; j++) {
+        uint idx_j = res_index(px, layer + j);
+        if (ris.control != 0u) unshadowed[idx_j] = vec4(ug, pk.ratio[j]);
+        Reservoir q = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
+        res_out[idx_j] = finish(q, px, layer + j, idx_j, x, nx, ax);
     }
     if (ris.control != 0u) unshadowed[idx] = vec4(ug, u.w);
     res_out[idx] = finish(r, px, layer, idx, x, nx, ax);

@@ -21,6 +21,10 @@ const float LUMINANCE_B = 0.114;
 // Specialisation constant ids. SPEC_TEXTURED: the scene has textures (false: albedo_at reads no
 // texture, so an untextured scene runs the shader variant without texture fetches).
 #define SPEC_TEXTURED 0
+// SPEC_RIS_PICKS: K, the picks per reservoir of ris's initial stage (ris.comp; RisPush::picks chooses the
+// pipeline), so that a frame runs only its own picks' code: llvmpipe runs an `if` body under masks even
+// when no lane takes it.
+#define SPEC_RIS_PICKS 1
 
 // ---- Scene data: every pass that reads the mesh (gbuffer, dprsm, direct, voxelize, ...) ---------------
 #define B_FRAME 0

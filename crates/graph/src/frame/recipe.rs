@@ -69,7 +69,7 @@ pub fn build_frame<'a>(
     s: &FrameSettings,
     i: &RecipeInputs<'a>,
     chunk: Range<u32>,
-) -> FrameOut {
+) -> anyhow::Result<FrameOut> {
     let (f, k) = (i.f, &i.keys);
     // The voxel grid only where something marches it: exact and hybrid rays need none; ris's target
     // marches it under `--target-floor` < 1.
@@ -81,7 +81,7 @@ pub fn build_frame<'a>(
     let direct = g.cached("direct", &k.direct, |g| r.direct.add(g, f, &gbuffer, &shadow));
     let combined = (s.component == Component::Combined).then_some(direct);
     if s.component == Component::Direct {
-        return FrameOut { radiance: direct, second_moment: None, cdf: None };
+        return Ok(FrameOut { radiance: direct, second_moment: None, cdf: None });
     }
     let desc = |name| radiance_desc(name, f.width, f.height);
     let mut out = g.temporal_image("radiance", desc(out_name(s.method)), &()).handle;
@@ -96,7 +96,7 @@ pub fn build_frame<'a>(
         let bvh = f.bvh.expect("the reference traces the BVH (the renderer builds it first)");
         let (push, per_dispatch) = (reference_push(s, chunk), i.reference_per_dispatch);
         r.reference.add(g, f, bvh, io, &mut out, &mut sq, push, s.reference_estimator, per_dispatch);
-        return FrameOut { radiance: out, second_moment: Some(sq), cdf: None };
+        return Ok(FrameOut { radiance: out, second_moment: Some(sq), cdf: None });
     }
     let p = i.importance;
     let rows = f.vpl_faces * f.scene.light_count * f.dprsm_res;
@@ -115,12 +115,12 @@ pub fn build_frame<'a>(
         inputs.psm = Some(r.psm.add(g, f, &vpls, cdf.importance, cdf.cdf, s.psm_res, push));
     }
     if s.method == Method::Ris {
-        r.ris.add(g, f, &inputs, &mut out, push, ris_frame(s, i, push));
-        return FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) };
+        r.ris.add(g, f, &inputs, &mut out, push, ris_frame(s, i, push))?;
+        return Ok(FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) });
     }
     let pass = if s.method == Method::Mis { &r.mis } else { &r.gather };
     pass.add(g, f, &inputs, &mut out, push);
-    FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) }
+    Ok(FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) })
 }
 
 /// The radiance image's name (labels and validation messages).

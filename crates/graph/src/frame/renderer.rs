@@ -262,7 +262,7 @@ impl Renderer {
         let mut read = (vec![], None);
         for_each_chunk(total, per_chunk, progress, |chunk, last| {
             let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
-            let out = build_frame(&ctx.passes, &mut g, s, &i, chunk);
+            let out = build_frame(&ctx.passes, &mut g, s, &i, chunk)?;
             g.export(&out.radiance);
             let presented = match &present {
                 Some(p) if last => {

@@ -107,24 +107,55 @@ use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
+use std::sync::OnceLock;
+
+/// One variant of the initial stage, specialised per pick count K (`SPEC_RIS_PICKS`): K = 1 is built
+/// with the renderer, K > 1 when a frame first asks for it (`--picks`), so start-up pays for no pick
+/// count it does not use and a frame runs only its own picks' code.
+struct Picked {
+    spirv: &'static [u8],
+    bindings: Vec<Binding>,
+    by_picks: [OnceLock<ComputePipeline>; RIS_MAX_PICKS as usize],
+}
+
+impl Picked {
+    fn new(gpu: &Gpu, spirv: &'static [u8], bindings: &[Binding]) -> Result<Self> {
+        let me = Picked { spirv, bindings: bindings.to_vec(), by_picks: Default::default() };
+        me.get(gpu, 1)?;
+        Ok(me)
+    }
+
+    /// The pipeline for K picks (1 ..= `RIS_MAX_PICKS`, checked by the settings), built on first use.
+    fn get(&self, gpu: &Gpu, picks: u32) -> Result<&ComputePipeline> {
+        let cell = &self.by_picks[picks as usize - 1];
+        if let Some(p) = cell.get() {
+            return Ok(p);
+        }
+        let push = std::mem::size_of::<RisPushBlock>() as u32;
+        let spec = [(SPEC_RIS_PICKS, picks)];
+        let p = ComputePipeline::new(gpu, "ris_initial", &crate::spirv(self.spirv), &self.bindings, push, &spec)?;
+        Ok(cell.get_or_init(|| p))
+    }
+}
 
 pub struct Ris {
+    gpu: Gpu,
     /// The initial and spatial stages with the unshadowed target ([0]) and the voxel-visibility one ([1],
     /// `--target-floor` < 1: only these read the voxel grid).
-    initial: [ComputePipeline; 2],
+    initial: [Picked; 2],
     spatial: [ComputePipeline; 2],
     /// The pool's presampling (any source, and the uniform source with faces by Russian roulette, whose
     /// mixture is one CDF) and the initial stage that draws from it (`--pool-tiles` > 0).
     presample: ComputePipeline,
     presample_uniform: ComputePipeline,
-    initial_pool: [ComputePipeline; 2],
+    initial_pool: [Picked; 2],
     /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
-    initial_pool_learned: ComputePipeline,
+    initial_pool_learned: Picked,
     /// The near window's variants, `[multi][uniform]`: one light's window, or every light's (scenes with
     /// more than one light); any source, or the uniform source's shortcut (`RisFrame::uniform_source`).
-    initial_pool_near: [[ComputePipeline; 2]; 2],
+    initial_pool_near: [[Picked; 2]; 2],
     /// The same with the learned visibility.
-    initial_pool_learned_near: [[ComputePipeline; 2]; 2],
+    initial_pool_learned_near: [[Picked; 2]; 2],
     /// The shade in the gather's visibility variants (voxel, exact, hybrid).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -282,15 +313,13 @@ impl Ris {
             b.extend_from_slice(extra);
             pair(name, spirv, &b)
         };
-        let initial = stage(
-            "ris_initial",
-            [RIS_INITIAL_COMP, RIS_INITIAL_VOXEL_TARGET_COMP],
-            &[
-                Binding::storage_buffer(B_RIS_OUT),
-                Binding::storage_buffer(B_RIS_HISTORY),
-                Binding::storage_buffer(B_RIS_UNSHADOWED),
-            ],
-        )?;
+        // The initial stage's variants, each specialised per pick count (Picked).
+        let picked_pair = |spirv: [&'static [u8]; 2], b: &[Binding]| -> Result<[Picked; 2]> {
+            Ok([Picked::new(gpu, spirv[0], b)?, Picked::new(gpu, spirv[1], b)?])
+        };
+        let mut b = base();
+        b.extend([B_RIS_OUT, B_RIS_HISTORY, B_RIS_UNSHADOWED].map(Binding::storage_buffer));
+        let initial = picked_pair([RIS_INITIAL_COMP, RIS_INITIAL_VOXEL_TARGET_COMP], &b)?;
         let spatial = stage(
             "ris_spatial",
             [RIS_SPATIAL_COMP, RIS_SPATIAL_VOXEL_TARGET_COMP],
@@ -310,11 +339,10 @@ impl Ris {
         ]);
         let mut bl = b.clone();
         bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
-        let initial_pool_learned =
-            ComputePipeline::new(gpu, "ris_initial", &crate::spirv(RIS_INITIAL_POOL_LEARNED_COMP), &bl, push, &[])?;
+        let initial_pool_learned = Picked::new(gpu, RIS_INITIAL_POOL_LEARNED_COMP, &bl)?;
         // The near window's pairs (any source, the uniform source's shortcut), one window or every light's.
-        let near = |one: [&[u8]; 2], multi: [&[u8]; 2], b: &[Binding]| -> Result<[[ComputePipeline; 2]; 2]> {
-            Ok([pair("ris_initial", one, b)?, pair("ris_initial", multi, b)?])
+        let near = |one: [&'static [u8]; 2], multi: [&'static [u8]; 2], b: &[Binding]| -> Result<[[Picked; 2]; 2]> {
+            Ok([picked_pair(one, b)?, picked_pair(multi, b)?])
         };
         let initial_pool_learned_near = near(
             [RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP],
@@ -326,13 +354,14 @@ impl Ris {
             [RIS_INITIAL_POOL_NEAR_MULTI_COMP, RIS_INITIAL_POOL_NEAR_MULTI_UNIFORM_COMP],
             &b,
         )?;
-        let initial_pool = pair("ris_initial", [RIS_INITIAL_POOL_COMP, RIS_INITIAL_POOL_VOXEL_TARGET_COMP], &b)?;
+        let initial_pool = picked_pair([RIS_INITIAL_POOL_COMP, RIS_INITIAL_POOL_VOXEL_TARGET_COMP], &b)?;
         let mut b = base();
         b.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV].map(Binding::storage_buffer));
         b.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
         let variants = [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP, RIS_SHADE_HYBRID_COMP];
         let shade = VisibilityVariants::new(gpu, "ris_shade", variants, b, push)?;
         Ok(Ris {
+            gpu: gpu.clone(),
             initial,
             spatial,
             presample,
@@ -362,7 +391,7 @@ impl Ris {
         out: &mut Handle<Image>,
         push: GatherPush,
         r: RisFrame,
-    ) {
+    ) -> Result<()> {
         let reservoirs = r.push.reservoirs;
         let desc = |name: &str| BufferDesc::storage(name, Self::layer_bytes(f.width, f.height) * reservoirs as u64);
         let history = g.history_buffer("ris.reservoirs", desc("ris.reservoirs"), &r.key);
@@ -412,7 +441,7 @@ impl Ris {
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
-            self.add_initial(g, f, i, dst, &mut unshadowed, previous, pool, learned, push, r);
+            self.add_initial(g, f, i, dst, &mut unshadowed, previous, pool, learned, push, r)?;
         }
         for pass in 0..r.spatial_passes {
             let s = pass + 1;
@@ -424,6 +453,7 @@ impl Ris {
             self.add_spatial(g, f, i, src, dst, push, RisPush { pass, ..r.push });
         }
         self.add_shade(g, f, i, current, unshadowed, &mut vis, &mut cv, out, push, r.push);
+        Ok(())
     }
 
     /// The descriptor writes every stage shares: scene, G-buffer, VPLs, voxels, importance, CDF.
@@ -487,8 +517,22 @@ impl Ris {
         learned: Option<Handle<Buffer>>,
         push: GatherPush,
         r: RisFrame,
-    ) {
+    ) -> Result<()> {
         let (i, o, u) = (*i, *dst, *unshadowed);
+        // The variant, specialised to the frame's picks (built here on first use, so a failure is an error
+        // of this frame, not of the recorded pass).
+        let multi = (f.scene.light_count > 1) as usize;
+        let uniform = r.uniform_source as usize;
+        let variant = match (pool.is_some(), learned.is_some()) {
+            (true, true) if r.push.near_candidates > 0 => &self.initial_pool_learned_near[multi][uniform],
+            (true, true) => &self.initial_pool_learned,
+            (true, false) if r.push.near_candidates > 0 && Self::voxel_target(&r.push) == 0 => {
+                &self.initial_pool_near[multi][uniform]
+            }
+            (true, false) => &self.initial_pool[Self::voxel_target(&r.push)],
+            (false, _) => &self.initial[Self::voxel_target(&r.push)],
+        };
+        let pipeline = variant.get(&self.gpu, r.push.picks)?;
         let mut b = Self::reads(g.add_pass("ris_initial"), &i);
         for p in previous.iter().chain(pool.iter()).chain(learned.iter()) {
             b = b.read(p, Access::ComputeRead);
@@ -502,24 +546,12 @@ impl Ris {
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_HISTORY, history)
                 .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u));
-            let multi = (f.scene.light_count > 1) as usize;
-            let (pipeline, writes) = match (&pool, &learned) {
-                (Some(p), Some(v)) => (
-                    if r.push.near_candidates > 0 {
-                        &self.initial_pool_learned_near[multi][r.uniform_source as usize]
-                    } else {
-                        &self.initial_pool_learned
-                    },
-                    writes.texel_view4(B_RIS_POOL, ctx.buffer(p)).texel_view(B_RIS_VIS, ctx.buffer(v)),
-                ),
-                (Some(p), None) if r.push.near_candidates > 0 && Self::voxel_target(&r.push) == 0 => {
-                    let pipeline = &self.initial_pool_near[multi][r.uniform_source as usize];
-                    (pipeline, writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
+            let writes = match (&pool, &learned) {
+                (Some(p), Some(v)) => {
+                    writes.texel_view4(B_RIS_POOL, ctx.buffer(p)).texel_view(B_RIS_VIS, ctx.buffer(v))
                 }
-                (Some(p), None) => {
-                    (&self.initial_pool[Self::voxel_target(&r.push)], writes.texel_view4(B_RIS_POOL, ctx.buffer(p)))
-                }
-                (None, _) => (&self.initial[Self::voxel_target(&r.push)], writes),
+                (Some(p), None) => writes.texel_view4(B_RIS_POOL, ctx.buffer(p)),
+                (None, _) => writes,
             };
             for (first, last) in super::dispatch_ranges(0, r.push.candidates, r.candidates_per_dispatch) {
                 if first > 0 {
@@ -535,6 +567,7 @@ impl Ris {
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
             }
         });
+        Ok(())
     }
 
     #[allow(clippy::too_many_arguments)]
