@@ -267,6 +267,7 @@ fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
 /// reused); within a budget, the frames after the first reuse them, as `render --time-limit` does.
 fn measure(r: &mut Renderer, s: &FrameSettings, column: Column, reference: &RgbImage) -> Result<Sample> {
     r.clear_frame_cache();
+    r.prepare(s)?;
     let t0 = Instant::now();
     let (f, frames, gpu_ms) = match column.seconds {
         None => {

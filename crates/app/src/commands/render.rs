@@ -37,6 +37,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
             "note: this frame is the same for every seed (`all` or direct light): one frame, whatever the time limit"
         )?;
     }
+    renderer.prepare(&settings)?;
     let t0 = Instant::now();
     let (frame, frames) = match a.time_limit {
         None => (renderer.render(&settings)?, None),

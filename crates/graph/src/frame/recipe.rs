@@ -198,7 +198,30 @@ fn gather_push(s: &FrameSettings, f: FrameInputs, p: ImportanceParams, chunk: Ra
 /// camera and size (G-buffer key), the CDF, and every sampling and reuse setting.
 fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFrame {
     let ris = &s.ris;
-    let push = RisPush {
+    let push = ris_push(s);
+    let sampling = GatherPush { seed: 0, ..gather };
+    let key = crate::graph::fingerprint(&(
+        i.keys.gbuffer,
+        i.keys.cdf,
+        bytemuck::bytes_of(&sampling),
+        bytemuck::bytes_of(&push),
+        ris.spatial_passes,
+    ));
+    let candidates_per_dispatch =
+        ris.candidates_chunk.map_or(i.ris_candidates_per_dispatch, |c| c.get().min(i.ris_candidates_per_dispatch));
+    let uniform_source = ris_uniform_source(s);
+    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key, uniform_source }
+}
+
+/// Whether ris's candidates take the uniform source's shortcut (`RisFrame::uniform_source`).
+pub(crate) fn ris_uniform_source(s: &FrameSettings) -> bool {
+    s.ris.source == RisSource::Uniform && s.face == FaceMode::RussianRoulette
+}
+
+/// ris's stages' settings (`pass` and `history` are set per stage).
+pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
+    let ris = &s.ris;
+    RisPush {
         candidates: ris.candidates,
         // Each of the --vpls candidate streams keeps `picks` VPLs, a layer of reservoirs each.
         reservoirs: s.vpls * ris.picks,
@@ -223,19 +246,7 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
         control: (ris.control_variate && ris.candidates > 1 && ris.spatial_passes == 0 && ris.temporal_cap == 0.0)
             as u32,
         ..RisPush::default()
-    };
-    let sampling = GatherPush { seed: 0, ..gather };
-    let key = crate::graph::fingerprint(&(
-        i.keys.gbuffer,
-        i.keys.cdf,
-        bytemuck::bytes_of(&sampling),
-        bytemuck::bytes_of(&push),
-        ris.spatial_passes,
-    ));
-    let candidates_per_dispatch =
-        ris.candidates_chunk.map_or(i.ris_candidates_per_dispatch, |c| c.get().min(i.ris_candidates_per_dispatch));
-    let uniform_source = ris.source == RisSource::Uniform && s.face == FaceMode::RussianRoulette;
-    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key, uniform_source }
+    }
 }
 
 /// The reference's push constants for the sample range `chunk` of `--spp`.

@@ -221,6 +221,20 @@ impl Renderer {
         Ok(share)
     }
 
+    /// Builds what a frame of `s` will build on first use and is not part of its work: ris's initial
+    /// pipeline for its pick count (`passes::ris::Ris::prepare`). Timed runs call it before the clock.
+    pub fn prepare(&mut self, s: &FrameSettings) -> Result<()> {
+        self.check(s)?;
+        let auto = self.auto_learn(s)?;
+        let s = auto.as_ref().unwrap_or(s);
+        if s.method == Method::Ris {
+            let push = super::recipe::ris_push(s);
+            let uniform_source = super::recipe::ris_uniform_source(s);
+            self.ctx.passes.ris.prepare(&push, uniform_source, self.ctx.scene.light_count > 1)?;
+        }
+        Ok(())
+    }
+
     /// `s` with `--learn-visibility auto` decided for the current view (None: `s` as it is).
     fn auto_learn(&mut self, s: &FrameSettings) -> Result<Option<FrameSettings>> {
         let r = &s.ris;

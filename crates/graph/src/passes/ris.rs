@@ -461,6 +461,29 @@ impl Ris {
         i.sampling_writes(&f, ctx, self.sampler.raw)
     }
 
+    /// The initial stage's variant for a frame of `push` (`pool`: candidates from the pool, `learned`: the
+    /// learned visibility's counts in the target, `multi`: more than one light).
+    fn initial_variant(&self, push: &RisPush, uniform_source: bool, multi: bool, pool: bool, learned: bool) -> &Picked {
+        let (multi, uniform) = (multi as usize, uniform_source as usize);
+        match (pool, learned) {
+            (true, true) if push.near_candidates > 0 => &self.initial_pool_learned_near[multi][uniform],
+            (true, true) => &self.initial_pool_learned,
+            (true, false) if push.near_candidates > 0 && Self::voxel_target(push) == 0 => {
+                &self.initial_pool_near[multi][uniform]
+            }
+            (true, false) => &self.initial_pool[Self::voxel_target(push)],
+            (false, _) => &self.initial[Self::voxel_target(push)],
+        }
+    }
+
+    /// Builds the initial stage's pipeline a frame of `push` will use (its pick count's specialisation),
+    /// so that a timed run does not pay for it in its first frame.
+    pub fn prepare(&self, push: &RisPush, uniform_source: bool, multi: bool) -> Result<()> {
+        let (pool, learned) = (push.pool_tiles > 0, push.learned > 0.0);
+        self.initial_variant(push, uniform_source, multi, pool, learned).get(&self.gpu, push.picks)?;
+        Ok(())
+    }
+
     /// Which variant of the initial and spatial stages: 1 when the target marches the voxel grid.
     fn voxel_target(push: &RisPush) -> usize {
         (push.target_floor < 1.0) as usize
@@ -521,17 +544,8 @@ impl Ris {
         let (i, o, u) = (*i, *dst, *unshadowed);
         // The variant, specialised to the frame's picks (built here on first use, so a failure is an error
         // of this frame, not of the recorded pass).
-        let multi = (f.scene.light_count > 1) as usize;
-        let uniform = r.uniform_source as usize;
-        let variant = match (pool.is_some(), learned.is_some()) {
-            (true, true) if r.push.near_candidates > 0 => &self.initial_pool_learned_near[multi][uniform],
-            (true, true) => &self.initial_pool_learned,
-            (true, false) if r.push.near_candidates > 0 && Self::voxel_target(&r.push) == 0 => {
-                &self.initial_pool_near[multi][uniform]
-            }
-            (true, false) => &self.initial_pool[Self::voxel_target(&r.push)],
-            (false, _) => &self.initial[Self::voxel_target(&r.push)],
-        };
+        let multi = f.scene.light_count > 1;
+        let variant = self.initial_variant(&r.push, r.uniform_source, multi, pool.is_some(), learned.is_some());
         let pipeline = variant.get(&self.gpu, r.push.picks)?;
         let mut b = Self::reads(g.add_pass("ris_initial"), &i);
         for p in previous.iter().chain(pool.iter()).chain(learned.iter()) {
