@@ -18,10 +18,10 @@ pub struct WalkCount {
     pub tests: u32,
 }
 
-/// Whether the segment a → b meets box [lo, hi] at a parameter in [0, 1] (slabs in f64, closed).
-fn meets_box(lo: DVec3, hi: DVec3, a: DVec3, b: DVec3) -> bool {
+/// Whether the segment a → b meets box [lo, hi] at a parameter in [t.0, t.1] (slabs in f64, closed).
+fn meets_box_within(lo: DVec3, hi: DVec3, a: DVec3, b: DVec3, t: (f64, f64)) -> bool {
     let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    let (mut t0, mut t1) = t;
     for k in 0..3 {
         if d[k] == 0.0 {
             if a[k] < lo[k] || a[k] > hi[k] {
@@ -38,6 +38,13 @@ fn meets_box(lo: DVec3, hi: DVec3, a: DVec3, b: DVec3) -> bool {
 
 /// The walk over `records` for the segment a → b, occluders counted at parameters in (lo, hi).
 pub fn walk(records: &[GpuThreadRec], a: DVec3, b: DVec3, lo: f64, hi: f64) -> WalkCount {
+    walk_clipped(records, a, b, lo, hi, &[(0.0, 1.0)])
+}
+
+/// [`walk`] entering a box only where one of the parameter intervals `runs` of the segment meets it: the
+/// same answer when every triangle that can cross the segment lies in a run (`march-length`'s question:
+/// how many records skipping empty space would save).
+pub fn walk_clipped(records: &[GpuThreadRec], a: DVec3, b: DVec3, lo: f64, hi: f64, runs: &[(f64, f64)]) -> WalkCount {
     let mut c = WalkCount::default();
     let mut i = 0;
     while i < records.len() {
@@ -53,7 +60,8 @@ pub fn walk(records: &[GpuThreadRec], a: DVec3, b: DVec3, lo: f64, hi: f64) -> W
             i += 1;
         } else {
             let (blo, bhi) = (DVec3::from(r.a.map(f64::from)), DVec3::from(r.b.map(f64::from)));
-            i = if meets_box(blo, bhi, a, b) { i + 1 } else { r.link as usize };
+            let meets = runs.iter().any(|&t| meets_box_within(blo, bhi, a, b, t));
+            i = if meets { i + 1 } else { r.link as usize };
         }
     }
     c
