@@ -686,10 +686,11 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
     assert_eq!(get("time_limit_s").as_deref(), Some("1.5"));
 
     // ris without --vpls picks its budget per frame from the view: candidates on the Cornell box, where
-    // visibility blocks little; shadow rays in the two rooms, where it blocks nearly everything.
-    for (scene, budget) in [
-        (scene.clone(), "2 reservoirs × 128"),
-        (bounce_tests::workspace().join("assets/two-rooms/scene.toml"), "2 reservoirs × 64"),
+    // visibility blocks little; shadow rays in the two rooms, where it blocks nearly everything, and
+    // there candidates from the gathered CDF.
+    for (scene, budget, gathered) in [
+        (scene.clone(), "2 reservoirs × 128", false),
+        (bounce_tests::workspace().join("assets/two-rooms/scene.toml"), "2 reservoirs × 64", true),
     ] {
         let mut args = vec!["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--method", "ris"];
         args.extend(small);
@@ -697,6 +698,7 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
         let r = bounce(&args);
         assert_eq!(r.code, 0, "{}", r.stderr);
         assert!(r.stderr.contains(&format!("ris per frame: {budget} candidates")), "{}", r.stderr);
+        assert_eq!(r.stderr.contains("from the gathered CDF"), gathered, "{}", r.stderr);
     }
 
     let all_out = d.join("all.exr");

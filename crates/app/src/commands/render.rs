@@ -10,7 +10,7 @@ use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
 use bounce_graph::frame::progressive::{render_for, Progressive};
-use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer};
+use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer, RisSource};
 use bounce_graph::passes::psm::{Psm, MAX_PSM_BYTES};
 use std::io::Write;
 use std::time::{Duration, Instant};
@@ -230,10 +230,17 @@ fn ris_frame_budget(
     // An explicit --picks stands.
     let k = a.frame.picks.unwrap_or(k);
     (settings.vpls, settings.ris.candidates, settings.ris.near_candidates, settings.ris.picks) = (r, m, n, k);
+    let gathered = a.frame.source.is_none()
+        && a.frame.defensive.is_none()
+        && blocked.is_some_and(|b| b >= crate::cli::RIS_GATHERED_BLOCKED);
+    if gathered {
+        (settings.ris.source, settings.defensive) = (RisSource::Gbg, crate::cli::RIS_GATHERED_DEFENSIVE);
+    }
     let share = blocked.map_or("nothing lit in view".into(), |b| format!("{:.0} %", 100.0 * b));
+    let source = if gathered { ", from the gathered CDF (gbg, defensive 0.5)" } else { "" };
     writeln!(
         err,
-        "ris per frame: {r} reservoirs × {m} candidates ({} from the near window), {k} picks each; visibility blocks {share} of the view's unshadowed transport",
+        "ris per frame: {r} reservoirs × {m} candidates ({} from the near window){source}, {k} picks each; visibility blocks {share} of the view's unshadowed transport",
         n.min(m.saturating_sub(1))
     )?;
     Ok(())
