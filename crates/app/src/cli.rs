@@ -385,6 +385,7 @@ impl FrameArgs {
                 near_radius: self.near_radius,
                 learn_visibility: self.learn_visibility.floor(),
                 learn_auto: self.learn_visibility == Learn::Auto,
+                learn_tile: 0,
                 candidates_chunk: None,
                 control_variate: self.control_variate,
                 picks: self.picks.unwrap_or(RisSettings::default().picks),

@@ -232,7 +232,7 @@ pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
         target_floor: ris.target_floor,
         pool_tiles: ris.pool_tiles,
         learned: ris.learn_visibility,
-        vis_tile: crate::passes::ris::vis_tile(s.width, s.height),
+        vis_tile: crate::passes::ris::vis_tile(s.width, s.height, ris.learn_tile),
         vis_cell: crate::passes::ris::vis_cell(s.dprsm_res),
         // The near window needs the pool and a target without the voxel march: off otherwise.
         near_candidates: if ris.pool_tiles > 0 && ris.target_floor >= 1.0 {

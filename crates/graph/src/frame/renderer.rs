@@ -246,7 +246,11 @@ impl Renderer {
         if !blocked.is_some_and(|b| b >= crate::passes::ris::AUTO_LEARN_BLOCKED) {
             return Ok(None);
         }
-        let ris = RisSettings { learn_visibility: crate::passes::ris::AUTO_LEARN_FLOOR, ..s.ris };
+        let ris = RisSettings {
+            learn_visibility: crate::passes::ris::AUTO_LEARN_FLOOR,
+            learn_tile: crate::passes::ris::auto_vis_tile(blocked.expect("checked above")),
+            ..s.ris
+        };
         Ok(Some(FrameSettings { ris, ..s.clone() }))
     }
 

@@ -116,6 +116,9 @@ pub struct RisSettings {
     /// transport (`passes::ris::blocked_share` ≥ `AUTO_LEARN_BLOCKED`, estimated once per view on the
     /// CPU), when the other settings allow it (the pool, no reuse, the unshadowed target).
     pub learn_auto: bool,
+    /// The learned visibility's smallest screen tile, pixels (0: 16). `auto` sets it from the view's
+    /// blocked share (`passes::ris::auto_vis_tile`).
+    pub learn_tile: u32,
     /// The last this many of each reservoir's M candidates come from the near window (0: none): texels of
     /// a light's map within `near_radius` of where the pixel projects into it, drawn uniformly, combined
     /// with the pool's by balance weights (multiple-importance RIS, unbiased). It proposes the VPLs next
@@ -160,6 +163,7 @@ impl Default for RisSettings {
             pool_tiles: 16,
             learn_visibility: 0.0,
             learn_auto: true,
+            learn_tile: 0,
             // 8 of 32 from a 17 × 17 window (2026-11-30, third session): 3–10× lower error at equal time
             // on Sibenik and Conference (BENCHMARKS.md, "ris: the near window").
             near_candidates: 8,

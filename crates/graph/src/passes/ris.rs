@@ -264,12 +264,20 @@ pub fn blocked_share(
     (unshadowed > 0.0).then(|| (1.0 - visible / unshadowed) as f32)
 }
 
-/// The learned visibility's screen tiles, pixels per side: at least 16, and at most 64 tiles a side.
-/// Larger tiles learn from more rays per count, smaller ones follow visibility more closely. Measured at
-/// 128², equal time (BENCHMARKS.md, "ris: the unshadowed control variate"): 16 against 8 px, 1.25×
-/// lower error in the two rooms and 1.09× higher in the doorway; 32 px, 1.34× lower and 1.26× higher.
-pub fn vis_tile(width: u32, height: u32) -> u32 {
-    width.max(height).div_ceil(64).max(16)
+/// The learned visibility's screen tiles, pixels per side: at least `tile` (0: 16), and at most 64 tiles
+/// a side. Larger tiles learn from more rays per count, smaller ones follow visibility more closely.
+pub fn vis_tile(width: u32, height: u32, tile: u32) -> u32 {
+    width.max(height).div_ceil(64).max(if tile > 0 { tile } else { 16 })
+}
+
+/// `--learn-visibility auto`'s tile for a view whose estimated blocked share is `blocked`: 8 px where
+/// about half the transport gets through, growing as 1 / √(unblocked share) to 32 px. A count's
+/// relative error goes as 1 / √(visible rays), and the rays that get through fall with the unblocked
+/// share, so the fewer get through, the more pixels a count must pool. Measured at 128², equal time
+/// (BENCHMARKS.md, "ris: several picks per reservoir"): the doorway (0.52) 8 against 16 px, 1.08× lower
+/// error; the two rooms (0.99) 32 against 16 px, 1.07× lower, and 8 px 1.27× higher.
+pub fn auto_vis_tile(blocked: f32) -> u32 {
+    (8.0 * (0.5 / (1.0 - blocked).max(1e-3)).sqrt()).round().clamp(8.0, 32.0) as u32
 }
 
 /// The learned visibility's light-map cells, texels per side: at least 4, and at most 16 cells a side.
@@ -278,8 +286,8 @@ pub fn vis_cell(res: u32) -> u32 {
 }
 
 /// Bytes of the learned visibility's counts: two per (screen tile, light-map cell).
-pub fn vis_bytes(width: u32, height: u32, res: u32, faces: u32) -> u64 {
-    let (t, c) = (vis_tile(width, height), vis_cell(res));
+pub fn vis_bytes(width: u32, height: u32, tile: u32, res: u32, faces: u32) -> u64 {
+    let (t, c) = (tile, vis_cell(res));
     let tiles = width.div_ceil(t) as u64 * height.div_ceil(t) as u64;
     8 * tiles * faces as u64 * (res.div_ceil(c) as u64).pow(2)
 }
@@ -405,7 +413,8 @@ impl Ris {
         // The learned visibility's counts: kept across the frames of one view (the history's key), zeroed
         // when new; a stand-in the shade never writes when off.
         let mut vis = if r.push.learned > 0.0 {
-            let bytes = vis_bytes(f.width, f.height, f.dprsm_res, f.vpl_faces * f.scene.light_count);
+            let faces = f.vpl_faces * f.scene.light_count;
+            let bytes = vis_bytes(f.width, f.height, r.push.vis_tile, f.dprsm_res, faces);
             let mut desc = BufferDesc::storage("ris.visibility", bytes);
             desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
             let t = g.temporal_buffer("ris.visibility", desc, &r.key);
