@@ -93,8 +93,8 @@ uint res_index(ivec2 q, uint layer) {
     return layer * frame.size.x * frame.size.y + uint(q.y) * frame.size.x + uint(q.x);
 }
 
-// A uniform in [0, 1) that depends on (pixel, frame seed, stream, index) only: reservoir choices, apart
-// from the candidates' own stratified numbers.
+// A hash, and ris_rand a uniform in [0, 1) from it, that depend on (pixel, frame seed, stream, index) only:
+// reservoir choices, apart from the candidates' own stratified numbers.
 uint ris_hash(ivec2 q, uint stream, uint i) {
     uint h = pcg_hash(uint(q.x) + 65536u * uint(q.y)) ^ pcg_hash(pc.seed ^ 0x2545F491u);
     return pcg_hash(h ^ pcg_hash(stream * 0x9E3779B9u + i));

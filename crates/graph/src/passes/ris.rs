@@ -42,10 +42,12 @@
 //!   confidence c = M. With a history (temporal reuse), it then combines that reservoir with last frame's
 //!   final one at the same pixel and layer, whose confidence is capped at `history_cap` · M.
 //! - **Picks** (`--picks K`, `RisPush::picks`): an invocation streams one candidate set into K
-//!   reservoirs at once (layers s·K + j, R = S·K layers for S candidate sets), each keeping its own
-//!   y_j with its own random numbers; they share Σw (so W_j = Σw / (M p̂(y_j))) and U_g. Each pick is,
-//!   on its own, exactly the reservoir above, so each is unbiased, and so is their mean; the picks
-//!   only correlate through the shared candidates. Why: once the candidates are good, most of a
+//!   reservoirs at once (layers s·K + j, R = S·K layers for S candidate sets, `ris_initial` then runs
+//!   W × H × S invocations), each keeping its own y_j; they share Σw (so W_j = Σw / (M p̂(y_j))) and
+//!   U_g. Pick j decides with pick 0's uniform rotated by j/K, which for each pick alone is uniform and
+//!   independent across candidates, so each pick is, on its own, exactly the reservoir above: each is
+//!   unbiased, and so is their mean. Jointly the rotation keeps two picks off one candidate unless its
+//!   running share w/Σw exceeds 1/K (a repeated pick traces the same shadow ray again). Why: once the candidates are good, most of a
 //!   frame's error is the choice among them and its visibility (measured: 128 → 1024 candidates cut
 //!   box-on-floor's error per frame by a quarter, 2 → 4 reservoirs by half), and a pick costs a
 //!   random number per candidate and a shadow ray, not M candidates.
