@@ -668,7 +668,16 @@ void main() {
         // (Read only when on: a stand-in of one uvec2 pair is bound when off.)
         uvec2 counts = uvec2(0u);
         if (ris.control != 0u) counts = cv_counts[pixel];
+        // The counts of this candidate set's picks so far, added to β's counts only after its last pick:
+        // the picks' choices depend on one another given their candidates (rotated uniforms), so a
+        // pick's β must not see its siblings' rays. Other sets' rays are independent of this pick's
+        // choice given the pool, and count at once. (Dispatches hold whole sets: passes/ris.rs.)
+        uvec2 siblings = uvec2(0u);
         for (uint layer = pc.first; layer < pc.last; layer++) {
+            if (layer % ris.picks == 0u) {
+                counts += siblings;
+                siblings = uvec2(0u);
+            }
             uint idx = res_index(px, layer);
             Reservoir r = res_in[idx];
             // An empty reservoir had no candidate with w > 0, so its U_g is 0 too: it adds nothing.
@@ -681,14 +690,14 @@ void main() {
                 // kept VPL's colour ratio f / luminance(f) times p̂(y) W = Σw / M. Given the candidates,
                 // E[g(y) W] = U_g exactly, so the term has mean 0 for any β fixed without this
                 // reservoir's choice: here from this pixel's earlier shadow rays (earlier frames and
-                // earlier layers of this frame), β = visible / (traced + 1), 0 until one got through: a
+                // earlier candidate sets of this frame), β = visible / (traced + 1), 0 until one got through: a
                 // pixel no ray reaches keeps its exact 0 instead of the control's zero-mean noise.
                 vec4 ug = unshadowed[idx];
                 float lum = dot(vpl_luminance_albedo(ax), vpl.flux);
                 vec3 gw = lum > 0.0 ? ax * vpl.flux * (r.target * r.weight * ug.w / lum) : vec3(0.0);
                 float beta = ris.learned > 0.0 ? 1.0 : float(counts.x) / float(counts.y + 1u);
                 sum += beta * (ug.xyz - gw);
-                counts += uvec2(c != vec3(0.0) ? 1u : 0u, 1u);
+                siblings += uvec2(c != vec3(0.0) ? 1u : 0u, 1u);
             }
             if (ris.learned > 0.0) {
                 // A kept VPL has an unshadowed contribution (its target is positive): 0 means occluded.
@@ -698,7 +707,7 @@ void main() {
             }
         }
         sum /= float(ris.reservoirs);
-        if (ris.control != 0u) cv_counts[pixel] = counts;
+        if (ris.control != 0u) cv_counts[pixel] = counts + siblings;
     }
     if (pc.add_direct != 0u) sum += texelFetch(direct_radiance, px, 0).rgb;
     if (pc.accumulate != 0u) sum += imageLoad(out_radiance, px).rgb;

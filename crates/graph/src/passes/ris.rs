@@ -666,7 +666,10 @@ impl Ris {
             let (pipeline, writes) = self.shade.pick(&f, writes);
             // All reservoirs of a pixel, accumulated over dispatches as the gather's samples.
             let whole = GatherPush { first: 0, last: ris.reservoirs, accumulate: 0, ..push };
-            for (first, last) in super::dispatch_ranges(0, ris.reservoirs, f.vpls_per_dispatch) {
+            // Whole candidate sets per dispatch: the shade holds a set's picks' shadow-ray counts back
+            // until its last pick (ris.comp), so a dispatch must not end inside a set.
+            let per = (f.vpls_per_dispatch - f.vpls_per_dispatch % ris.picks).max(ris.picks);
+            for (first, last) in super::dispatch_ranges(0, ris.reservoirs, per) {
                 if first > 0 {
                     // The next reservoirs add to what the previous dispatch stored (image and counts).
                     ctx.serialize(&o);
