@@ -201,9 +201,9 @@ pub struct PictureArgs {
     /// scene measured (BENCHMARKS.md).
     #[arg(long, value_parser = METHODS, default_value = "ris")]
     pub method: Method,
-    /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray each). Default 64; `render
-    /// --time-limit` with ris takes 2 or 4 per frame, chosen per view, many cheap frames (at equal time
-    /// lower error than few costly ones: BENCHMARKS.md).
+    /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray per pick). Default 64; `render
+    /// --time-limit` with ris takes 2 of 3 picks each per frame, the candidates chosen per view, many
+    /// cheap frames (at equal time lower error than few costly ones: BENCHMARKS.md).
     #[arg(long)]
     pub vpls: Option<u32>,
     /// Random seed (same seed, same image).
