@@ -56,7 +56,7 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
 layout(std430, set = 0, binding = B_RIS_VIS) buffer RisVis { uint vis_counts[]; };
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) readonly buffer RisUnshadowed { vec4 unshadowed[]; };
-layout(std430, set = 0, binding = B_RIS_CV) buffer RisCv { uvec2 cv_counts[]; };
+layout(std430, set = 0, binding = B_RIS_CV) buffer RisCv { uvec4 cv_counts[]; };
 #else
 #ifdef RIS_SPATIAL
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
@@ -93,17 +93,12 @@ uint res_index(ivec2 q, uint layer) {
     return layer * frame.size.x * frame.size.y + uint(q.y) * frame.size.x + uint(q.x);
 }
 
-// A hash, and ris_rand a uniform in [0, 1) from it, that depend on (pixel, frame seed, stream, index) only:
-// reservoir choices, apart from the candidates' own stratified numbers.
-uint ris_hash(ivec2 q, uint stream, uint i) {
-    uint h = pcg_hash(uint(q.x) + 65536u * uint(q.y)) ^ pcg_hash(pc.seed ^ 0x2545F491u);
-    return pcg_hash(h ^ pcg_hash(stream * 0x9E3779B9u + i));
-}
-float unit_float(uint h) {
-    return float(h >> 8) * (1.0 / 16777216.0);
-}
+// A uniform in [0, 1) that depends on (pixel, frame seed, stream, index) only: reservoir choices, apart
+// from the candidates' own stratified numbers.
 float ris_rand(ivec2 q, uint stream, uint i) {
-    return unit_float(ris_hash(q, stream, i));
+    uint h = pcg_hash(uint(q.x) + 65536u * uint(q.y)) ^ pcg_hash(pc.seed ^ 0x2545F491u);
+    h = pcg_hash(h ^ pcg_hash(stream * 0x9E3779B9u + i));
+    return float(h >> 8) * (1.0 / 16777216.0);
 }
 
 // The target p̂ of pixel geometry (x, n, a) for VPL v: the unshadowed contribution's luminance, times
@@ -665,14 +660,15 @@ void main() {
     if (gp.w != 0.0) {
         vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
         uint pixel = uint(px.y) * frame.size.x + uint(px.x);
-        // (Read only when on: a stand-in of one uvec2 pair is bound when off.)
-        uvec2 counts = uvec2(0u);
-        if (ris.control != 0u) counts = cv_counts[pixel];
-        // The counts of this candidate set's picks so far, added to β's counts only after its last pick:
-        // the picks' choices depend on one another given their candidates (rotated uniforms), so a
-        // pick's β must not see its siblings' rays. Other sets' rays are independent of this pick's
-        // choice given the pool, and count at once. (Dispatches hold whole sets: passes/ris.rs.)
-        uvec2 siblings = uvec2(0u);
+        // (Read only when on: a stand-in of one uvec4 is bound when off.)
+        uvec4 state = uvec4(0u);
+        if (ris.control != 0u) state = cv_counts[pixel];
+        // counts: β's (visible, traced). siblings: the same for the candidate set in progress, added to
+        // counts only at the next set's first pick: the picks' choices depend on one another given their
+        // candidates (rotated uniforms), so a pick's β must not see its siblings' rays. Other sets' rays
+        // are independent of this pick's choice given the pool, and count at once. Both are carried
+        // across dispatches and frames, so a dispatch may end inside a set.
+        uvec2 counts = state.xy, siblings = state.zw;
         for (uint layer = pc.first; layer < pc.last; layer++) {
             if (layer % ris.picks == 0u) {
                 counts += siblings;
@@ -707,7 +703,7 @@ void main() {
             }
         }
         sum /= float(ris.reservoirs);
-        if (ris.control != 0u) cv_counts[pixel] = counts + siblings;
+        if (ris.control != 0u) cv_counts[pixel] = uvec4(counts, siblings);
     }
     if (pc.add_direct != 0u) sum += texelFetch(direct_radiance, px, 0).rgb;
     if (pc.accumulate != 0u) sum += imageLoad(out_radiance, px).rgb;

@@ -144,7 +144,7 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define B_RIS_HISTORY 33
 // The control variate (passes/ris.rs): per reservoir, the candidates' unshadowed estimate U_g (written by
 // the initial stage, read by the shade); per pixel, (visible, traced) counts of its earlier shadow rays,
-// the control's coefficient β.
+// the control's coefficient β, and the same counts of the candidate set in progress, not yet in β.
 #define B_RIS_UNSHADOWED 34
 #define B_RIS_CV 35
 // Reservoir.vpl of an empty reservoir.

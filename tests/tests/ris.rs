@@ -41,6 +41,22 @@ fn ris(visibility: Visibility, seed: u64, reuse: u32, cap: f32) -> FrameSettings
     }
 }
 
+/// The mean of `frames` progressive frames of one view, frame k rendered with `settings(k)` after the
+/// frame caches are cleared, as `render --time-limit` averages them.
+fn progressive_mean(r: &mut Renderer, frames: u64, settings: impl Fn(u64) -> FrameSettings) -> Vec<[f32; 3]> {
+    let (w, h, res, vox) = SIZE;
+    r.clear_frame_cache();
+    let mut sum: Vec<[f32; 3]> = vec![];
+    for k in 0..frames {
+        let img = indirect_with(r, settings(k), w, h, res, vox);
+        sum.resize(img.len(), [0.0; 3]);
+        for (a, p) in sum.iter_mut().zip(&img) {
+            (0..3).for_each(|c| a[c] += p[c] / frames as f32);
+        }
+    }
+    sum
+}
+
 fn all(r: &mut Renderer, visibility: Visibility) -> Vec<[f32; 3]> {
     let (w, h, res, vox) = SIZE;
     let s = FrameSettings { method: Method::All, clamp: 0.01, visibility, ..FrameSettings::default() };
@@ -156,15 +172,7 @@ fn ris_control_variate_is_unbiased_over_progressive_frames() {
         let all = all(&mut r, visibility);
         let name = format!("ris (control variate, {vpls} reservoirs, pool of 3 tiles, {visibility:?})");
         converges_to(&name, &all, |run| {
-            r.clear_frame_cache();
-            let mut sum = vec![[0.0f32; 3]; all.len()];
-            for k in 0..FRAMES {
-                let img = indirect_with(&mut r, settings(visibility, run * FRAMES + k, true, vpls), w, h, res, vox);
-                for (a, p) in sum.iter_mut().zip(&img) {
-                    (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
-                }
-            }
-            sum
+            progressive_mean(&mut r, FRAMES, |k| settings(visibility, run * FRAMES + k, true, vpls))
         });
     }
     r.clear_frame_cache();
@@ -183,8 +191,8 @@ fn ris_control_variate_is_unbiased_over_progressive_frames() {
     assert_eq!(a, indirect_with(&mut r, reused(false), w, h, res, vox), "the control variate ran with reuse");
 }
 
-/// Several picks per reservoir's candidates (`--picks K`): K independent choices among the same M
-/// candidates, each its own layer, shadow ray and control-variate term (sharing Σw and U_g). Each pick is
+/// Several picks per reservoir's candidates (`--picks K`): K choices among the same M candidates
+/// (rotated uniforms), each its own layer, shadow ray and control-variate term (sharing Σw and U_g). Each pick is
 /// on its own a reservoir of those candidates, so the frame stays unbiased: over progressive frames with
 /// the pool, the near window and the control variate (exact visibility), with per-pixel draws and
 /// spatial reuse (voxel), and with temporal reuse (voxel). The picks really differ (K = 3 is not K = 1's
@@ -198,51 +206,35 @@ fn ris_picks_share_their_candidates_without_bias() {
     let (w, h, res, vox) = SIZE;
     let picked = |s: FrameSettings, picks| FrameSettings { vpls: 2, ris: RisSettings { picks, ..s.ris }, ..s };
     let all_exact = all(&mut r, Visibility::Exact);
+    // Frame k of run `run`, progressive over one view (the CDF fixed), with temporal reuse capped at `cap`.
+    let frame = |visibility, run: u64, k: u64, cap: f32| FrameSettings {
+        cdf_seed: Some(1),
+        ..ris(visibility, run * FRAMES + k, 0, cap)
+    };
     converges_to("ris (3 picks of 2 reservoirs, pool, control variate, exact)", &all_exact, |run| {
-        r.clear_frame_cache();
-        let mut sum = vec![[0.0f32; 3]; all_exact.len()];
-        for k in 0..FRAMES {
-            let mut s = FrameSettings { cdf_seed: Some(1), ..ris(Visibility::Exact, run * FRAMES + k, 0, 0.0) };
+        progressive_mean(&mut r, FRAMES, |k| {
+            let mut s = frame(Visibility::Exact, run, k, 0.0);
             s.ris.pool_tiles = 3;
-            let img = indirect_with(&mut r, picked(s, 3), w, h, res, vox);
-            for (a, p) in sum.iter_mut().zip(&img) {
-                (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
-            }
-        }
-        sum
+            picked(s, 3)
+        })
     });
     // Few candidates, so that the picks often share one, and one reservoir: β's only rays of this frame
     // would be the siblings', which the shade holds back (ris.comp). On this scene the siblings' bias is
     // below what 48 runs resolve (the image mean moved by < 0.01 % with them counted), so this checks the
     // picks at their most correlated, not that rule.
     converges_to("ris (4 picks of 1 reservoir of 4 candidates, pool, control variate, exact)", &all_exact, |run| {
-        r.clear_frame_cache();
-        let mut sum = vec![[0.0f32; 3]; all_exact.len()];
-        for k in 0..FRAMES {
-            let mut s = FrameSettings { cdf_seed: Some(1), ..ris(Visibility::Exact, run * FRAMES + k, 0, 0.0) };
+        progressive_mean(&mut r, FRAMES, |k| {
+            let mut s = frame(Visibility::Exact, run, k, 0.0);
             (s.ris.pool_tiles, s.ris.candidates, s.ris.near_candidates) = (3, 4, 1);
-            let img = indirect_with(&mut r, FrameSettings { vpls: 1, ..picked(s, 4) }, w, h, res, vox);
-            for (a, p) in sum.iter_mut().zip(&img) {
-                (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
-            }
-        }
-        sum
+            FrameSettings { vpls: 1, ..picked(s, 4) }
+        })
     });
     let all_voxel = all(&mut r, Visibility::Voxel);
     converges_to("ris (4 picks of 2 reservoirs, per-pixel draws, 1 spatial pass, voxel)", &all_voxel, |seed| {
         indirect_with(&mut r, picked(ris(Visibility::Voxel, seed, 1, 0.0), 4), w, h, res, vox)
     });
     converges_to("ris (2 picks of 2 reservoirs, temporal reuse, voxel)", &all_voxel, |run| {
-        r.clear_frame_cache();
-        let mut sum = vec![[0.0f32; 3]; all_voxel.len()];
-        for k in 0..FRAMES {
-            let s = FrameSettings { cdf_seed: Some(1), ..ris(Visibility::Voxel, run * FRAMES + k, 0, 4.0) };
-            let img = indirect_with(&mut r, picked(s, 2), w, h, res, vox);
-            for (a, p) in sum.iter_mut().zip(&img) {
-                (0..3).for_each(|c| a[c] += p[c] / FRAMES as f32);
-            }
-        }
-        sum
+        progressive_mean(&mut r, FRAMES, |k| picked(frame(Visibility::Voxel, run, k, 4.0), 2))
     });
     r.clear_frame_cache();
     let one = indirect_with(&mut r, picked(ris(Visibility::Exact, 5, 0, 0.0), 1), w, h, res, vox);

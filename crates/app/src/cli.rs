@@ -173,6 +173,7 @@ pub const DEFAULT_VPLS: u32 = 64;
 /// the kept samples' own, which picks cut at the price of a shadow ray each, not of new candidates.
 /// Measured at equal time (BENCHMARKS.md, "ris: several picks per reservoir").
 pub const RIS_FRAME_BLOCKED: (u32, u32, u32, u32) = (2, 64, 8, 3);
+pub const RIS_FRAME_OPEN: (u32, u32, u32, u32) = (2, 128, 16, 3);
 /// Under the same budget choice, where visibility blocks at least this share of the view's unshadowed
 /// transport, ris draws its candidates from the gathering-based CDF (`--source gbg`: the VPLs the view's
 /// own cosine rays reach) with a defensive share of `RIS_GATHERED_DEFENSIVE`, unless --source or
@@ -182,7 +183,6 @@ pub const RIS_FRAME_BLOCKED: (u32, u32, u32, u32) = (2, 64, 8, 3);
 /// relMSE. In the doorway (0.52) it cost 1.5× (BENCHMARKS.md, "ris: several picks per reservoir").
 pub const RIS_GATHERED_BLOCKED: f32 = 0.8;
 pub const RIS_GATHERED_DEFENSIVE: f32 = 0.5;
-pub const RIS_FRAME_OPEN: (u32, u32, u32, u32) = (2, 128, 16, 3);
 
 /// What one picture is: its size, component, method, VPL count and seed (`render` and `view`; `bench`
 /// sweeps method, VPLs and seed itself).
@@ -295,8 +295,8 @@ pub struct FrameArgs {
     /// --time-limit` without --vpls).
     #[arg(long)]
     pub candidates: Option<u32>,
-    /// VPLs each reservoir of --method ris keeps from its candidates, independently, each with its own
-    /// shadow ray (1 to 4; default 1, or chosen per view under `render --time-limit` without --vpls).
+    /// VPLs each reservoir of --method ris keeps from its candidates, each a choice of its own with its
+    /// own shadow ray (1 to 4; default 1, or chosen per view under `render --time-limit` without --vpls).
     #[arg(long)]
     pub picks: Option<u32>,
     /// Spatial reuse passes of --method ris (0: none).

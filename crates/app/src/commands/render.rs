@@ -237,7 +237,11 @@ fn ris_frame_budget(
         (settings.ris.source, settings.defensive) = (RisSource::Gbg, crate::cli::RIS_GATHERED_DEFENSIVE);
     }
     let share = blocked.map_or("nothing lit in view".into(), |b| format!("{:.0} %", 100.0 * b));
-    let source = if gathered { ", from the gathered CDF (gbg, defensive 0.5)" } else { "" };
+    let source = if gathered {
+        format!(", from the gathered CDF (gbg, defensive {})", crate::cli::RIS_GATHERED_DEFENSIVE)
+    } else {
+        String::new()
+    };
     writeln!(
         err,
         "ris per frame: {r} reservoirs × {m} candidates ({} from the near window){source}, {k} picks each; visibility blocks {share} of the view's unshadowed transport",

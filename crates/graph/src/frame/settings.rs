@@ -136,8 +136,8 @@ pub struct RisSettings {
     /// kept VPL is visible the reservoir's estimate becomes (1 − β) f W + β U_g, the colour and spread of
     /// all M candidates instead of one's. Only without reuse (off otherwise).
     pub control_variate: bool,
-    /// VPLs kept from each reservoir's M candidates (K in 1 ..= `RIS_MAX_PICKS`), each an independent
-    /// choice of the same candidates with its own shadow ray: K reservoirs for the candidates' price of
+    /// VPLs kept from each reservoir's M candidates (K in 1 ..= `RIS_MAX_PICKS`), each a choice of its own
+    /// among the same candidates with its own shadow ray: K reservoirs for the candidates' price of
     /// one. Where a frame's error is the kept samples' own (their visibility, the choice among the
     /// candidates) rather than the candidates', K picks cut it nearly as K reservoirs would.
     pub picks: u32,

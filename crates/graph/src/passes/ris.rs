@@ -34,8 +34,8 @@
 //!   VPL next to x of the other light's to the pool, which drew it rarely and with a huge weight: the
 //!   two-light clutter scene's fireflies, 3× its error at equal time.)
 //!
-//! - `ris_initial` (W × H × R invocations): each of a pixel's R reservoirs streams M candidates
-//!   v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
+//! - `ris_initial` (W × H × R invocations; R / K with picks, below): each of a pixel's R reservoirs
+//!   streams M candidates v_i ~ p (the gather's source mixture, `draw_vpl`, exact p_v, points r·M + i of the pixel's
 //!   stratified set) with weights w_i = p̂(v_i) / p(v_i), where the target p̂(v) is the luminance of the
 //!   unshadowed contribution at the pixel (flux, both cosines, 1/d², albedo: `vpl_unshadowed`). It keeps
 //!   y with probability w_y / Σw and sets W = Σw / (M p̂(y)), the unbiased contribution weight, with
@@ -47,10 +47,11 @@
 //!   U_g. Pick j decides with pick 0's uniform rotated by j/K, which for each pick alone is uniform and
 //!   independent across candidates, so each pick is, on its own, exactly the reservoir above: each is
 //!   unbiased, and so is their mean. Jointly the rotation keeps two picks off one candidate unless its
-//!   running share w/Σw exceeds 1/K (a repeated pick traces the same shadow ray again). Why: once the candidates are good, most of a
-//!   frame's error is the choice among them and its visibility (measured: 128 → 1024 candidates cut
-//!   box-on-floor's error per frame by a quarter, 2 → 4 reservoirs by half), and a pick costs a
-//!   random number per candidate and a shadow ray, not M candidates.
+//!   running share w/Σw exceeds 1/K (a repeated pick traces the same shadow ray again). Why: once the
+//!   candidates are good, most of a frame's error is the choice among them and its visibility
+//!   (measured: 128 → 1024 candidates cut box-on-floor's error per frame by a quarter, 2 → 4
+//!   reservoirs by half), and a pick costs a random number per candidate and a shadow ray, not M
+//!   candidates.
 //! - `ris_spatial` (P passes of W × H × R): each reservoir is combined with those of up to k neighbours
 //!   of the same layer within `radius` pixels, picked by a hash of (pixel, seed, pass, layer) and kept
 //!   only if their normal and eye distance are close (a deterministic function of the two G-buffer
@@ -68,8 +69,9 @@
 //!   colour and spread of all M candidates replace one VPL's (the Cornell box's red and green walls
 //!   seen from the white one were most of its error); only occluded choices add the selection's noise.
 //!   Without the learned visibility s = 1 and β = visible / (traced + 1) counts the pixel's earlier
-//!   shadow rays (`ris.cv`, kept across the frames of one view; earlier reservoirs of the same frame
-//!   count too, being independent of this one's choice given the pool): 0 until one got through, so a
+//!   shadow rays (`ris.cv`, kept across the frames of one view; earlier candidate sets of the same
+//!   frame count too, being independent of this one's choice given the pool, but not this set's other
+//!   picks, whose choices depend on this one's): 0 until one got through, so a
 //!   pixel no ray reaches stays exactly black. With it, β = 1 and s(v) = visible / (traced + 1) of the
 //!   pixel's screen tile and the VPL's light-map cell, the counts the target already read: U_g is then
 //!   the estimate with the learned visibility in place of the real one, and the shadow ray only
@@ -183,11 +185,11 @@ pub struct RisFrame {
 /// `--learn-visibility auto` turns the learned visibility on (at this floor) for a view where visibility
 /// blocks at least [`AUTO_LEARN_BLOCKED`] of the unshadowed transport ([`blocked_share`]).
 pub const AUTO_LEARN_FLOOR: f32 = 0.1;
-/// The blocked share from which `auto` learns (and `render --time-limit` gives a frame 4 reservoirs of 32
-/// candidates). Measured with the control variate (BENCHMARKS.md, "ris: the unshadowed control
-/// variate"): 0.99 in the two rooms and 0.52 in the doorway, where learning with 4 × 32 cuts the error
-/// 1.3–2.2× at equal time; 0.08–0.29 on the Cornell box, box-on-floor, clutter, Sibenik and Conference,
-/// where it costs 1.1–1.4×. The threshold sits between the two groups.
+/// The blocked share from which `auto` learns (and `render --time-limit` gives a frame its blocked
+/// budget, `cli::RIS_FRAME_BLOCKED`). Measured with the control variate (BENCHMARKS.md, "ris: the
+/// unshadowed control variate"): 0.99 in the two rooms and 0.52 in the doorway, where learning cut the
+/// error 1.3–2.2× at equal time; 0.08–0.29 on the Cornell box, box-on-floor, clutter, Sibenik and
+/// Conference, where it cost 1.1–1.4×. The threshold sits between the two groups.
 pub const AUTO_LEARN_BLOCKED: f32 = 0.4;
 
 /// The share 1 − T/U of the unshadowed one-bounce transport into the view that visibility blocks,
@@ -438,7 +440,7 @@ impl Ris {
         let mut cv = if r.push.control != 0 {
             let t = g.temporal_buffer(
                 "ris.cv",
-                BufferDesc::storage("ris.cv", 8 * f.width as u64 * f.height as u64),
+                BufferDesc::storage("ris.cv", 16 * f.width as u64 * f.height as u64),
                 &r.key,
             );
             let mut h = t.handle;
@@ -472,11 +474,10 @@ impl Ris {
         i.sampling_writes(&f, ctx, self.sampler.raw)
     }
 
-    /// The initial stage's variant for a frame of `push` (`pool`: candidates from the pool, `learned`: the
-    /// learned visibility's counts in the target, `multi`: more than one light).
-    fn initial_variant(&self, push: &RisPush, uniform_source: bool, multi: bool, pool: bool, learned: bool) -> &Picked {
+    /// The initial stage's variant for a frame of `push` (`multi`: more than one light).
+    fn initial_variant(&self, push: &RisPush, uniform_source: bool, multi: bool) -> &Picked {
         let (multi, uniform) = (multi as usize, uniform_source as usize);
-        match (pool, learned) {
+        match (push.pool_tiles > 0, push.learned > 0.0) {
             (true, true) if push.near_candidates > 0 => &self.initial_pool_learned_near[multi][uniform],
             (true, true) => &self.initial_pool_learned,
             (true, false) if push.near_candidates > 0 && Self::voxel_target(push) == 0 => {
@@ -490,8 +491,7 @@ impl Ris {
     /// Builds the initial stage's pipeline a frame of `push` will use (its pick count's specialisation),
     /// so that a timed run does not pay for it in its first frame.
     pub fn prepare(&self, push: &RisPush, uniform_source: bool, multi: bool) -> Result<()> {
-        let (pool, learned) = (push.pool_tiles > 0, push.learned > 0.0);
-        self.initial_variant(push, uniform_source, multi, pool, learned).get(&self.gpu, push.picks)?;
+        self.initial_variant(push, uniform_source, multi).get(&self.gpu, push.picks)?;
         Ok(())
     }
 
@@ -555,8 +555,7 @@ impl Ris {
         let (i, o, u) = (*i, *dst, *unshadowed);
         // The variant, specialised to the frame's picks (built here on first use, so a failure is an error
         // of this frame, not of the recorded pass).
-        let multi = f.scene.light_count > 1;
-        let variant = self.initial_variant(&r.push, r.uniform_source, multi, pool.is_some(), learned.is_some());
+        let variant = self.initial_variant(&r.push, r.uniform_source, f.scene.light_count > 1);
         let pipeline = variant.get(&self.gpu, r.push.picks)?;
         let mut b = Self::reads(g.add_pass("ris_initial"), &i);
         for p in previous.iter().chain(pool.iter()).chain(learned.iter()) {
@@ -666,10 +665,7 @@ impl Ris {
             let (pipeline, writes) = self.shade.pick(&f, writes);
             // All reservoirs of a pixel, accumulated over dispatches as the gather's samples.
             let whole = GatherPush { first: 0, last: ris.reservoirs, accumulate: 0, ..push };
-            // Whole candidate sets per dispatch: the shade holds a set's picks' shadow-ray counts back
-            // until its last pick (ris.comp), so a dispatch must not end inside a set.
-            let per = (f.vpls_per_dispatch - f.vpls_per_dispatch % ris.picks).max(ris.picks);
-            for (first, last) in super::dispatch_ranges(0, ris.reservoirs, per) {
+            for (first, last) in super::dispatch_ranges(0, ris.reservoirs, f.vpls_per_dispatch) {
                 if first > 0 {
                     // The next reservoirs add to what the previous dispatch stored (image and counts).
                     ctx.serialize(&o);
