@@ -20,7 +20,7 @@ made relative to the centre of the bounds (as bounce does), vertex normals when 
 else face normals, and one mesh per material whose albedo is a `bitmap` texture holding
 Kd × sRGB-decoded texel (NEAREST filter, repeat wrap, v flipped: the contract's lookup) or a constant Kd.
 
-Ground truth per scene: bounce's `--method reference` at --gt-spp (cached under --out). The script checks
+Ground truth per scene: bounce's `--method reference` at --gt-spp with a seed of its own (cached under --out). The script checks
 that the Mitsuba tracer converges to it (relMSE and mean ratio at --check-spp), then measures the
 Mitsuba tracer's wall time at --spp as a user would (a fresh process: Python start-up, scene build, JIT
 and the EXR write included) and runs every bounce method with `--time-limit` = that time. bounce's
@@ -52,6 +52,10 @@ METHOD_ARGS = {"ris-learned": ["--vpls", "4", "--candidates", "32", "--learn-vis
 # Labels that run another bounce method with their METHOD_ARGS.
 METHOD_OF = {"ris-learned": "ris"}
 DEFAULT_ALBEDO = 0.5
+# The ground truth's seed. The compared bounce runs keep the default seed (1); the reference continues one
+# Owen-scrambled Sobol sequence per pixel and seed over its progressive frames, so with the ground truth's
+# seed its first samples would be the ground truth's own, and its error against it would read low.
+GT_SEED = 90001
 # Segment visibility ignores hits within this fraction of either end (bounce's BVH_SHADOW_EPS).
 SHADOW_EPS = 1e-4
 
@@ -372,12 +376,13 @@ def bounce_cmd(a, scene_path, exr, method, extra):
 
 
 def ground_truth(a, name, scene_path):
-    """bounce's --method reference at --gt-spp, cached under --out."""
-    exr = os.path.join(a.out, f"{name}-{a.size}-gt{a.gt_spp}.exr")
+    """bounce's --method reference at --gt-spp with its own seed (GT_SEED), cached under --out."""
+    exr = os.path.join(a.out, f"{name}-{a.size}-gt{a.gt_spp}-seed{GT_SEED}.exr")
     if os.path.exists(exr):
         print(f"ground truth: {exr} (cached)")
     else:
-        wall, _ = run_timed(bounce_cmd(a, scene_path, exr, "reference", ["--spp", str(a.gt_spp)]))
+        extra = ["--spp", str(a.gt_spp), "--seed", str(GT_SEED)]
+        wall, _ = run_timed(bounce_cmd(a, scene_path, exr, "reference", extra))
         print(f"ground truth: {exr} (bounce --method reference --spp {a.gt_spp}, {wall:.1f} s)")
     return exr
 

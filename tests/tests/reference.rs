@@ -7,7 +7,8 @@
 //!   does not reach: the two-sided density without the radiance);
 //! - each other: the mean of the MIS estimator over seeds agrees with the cosine estimator's within
 //!   their combined standard errors;
-//! - themselves: a frame's image does not depend on how its samples are split into submissions.
+//! - themselves: a frame's image does not depend on how its samples are split into submissions, and
+//!   the mean of progressive frames is one frame of all their samples (they continue one sequence).
 
 use super::vpl::sphere_scene;
 use bounce_graph::frame::{Component, FrameSettings, Method, ReferenceEstimator, Renderer};
@@ -166,6 +167,56 @@ fn a_reference_frame_does_not_depend_on_its_chunks() {
             assert!(run(chunk, 3) == whole, "{}: chunks of {chunk:?} gave another image", name(e));
         }
         assert!(run(None, 4) != whole, "{}: another seed gave the same image", name(e));
+    }
+}
+
+/// Progressive frames of the reference continue one sample sequence (`progressive::frame_settings`):
+/// the mean of 4 frames of 2 samples is, up to float rounding, the one frame of 8 samples with the same
+/// seed. Independent scrambles per frame would differ from it by the image's noise (checked: the frames
+/// with another seed each do, by more than 100× the tolerance).
+#[test]
+fn progressive_reference_frames_are_one_sequence() {
+    use bounce_graph::frame::progressive::frame_settings;
+    let scene = cornell_three_lights();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    for e in ESTIMATORS {
+        let base = FrameSettings { reference_estimator: e, spp: 2, seed: 7, ..FrameSettings::default() };
+        let mut mean = |base: &FrameSettings| {
+            let mut sum = vec![[0.0f64; 3]; 16 * 16];
+            for k in 0..4 {
+                let frame = frame_settings(&FrameSettings { method: Method::Reference, ..base.clone() }, k);
+                assert_eq!(frame.seed, base.seed, "frame {k} changed the seed");
+                for (a, p) in sum.iter_mut().zip(reference_with(&mut r, frame, 16, 16)) {
+                    (0..3).for_each(|c| a[c] += p[c] as f64 / 4.0);
+                }
+            }
+            sum
+        };
+        let frames = mean(&base);
+        let other = mean(&FrameSettings { seed: 8, ..base.clone() });
+        let whole = reference_with(&mut r, FrameSettings { spp: 8, ..base.clone() }, 16, 16);
+        let dev = |img: &[[f64; 3]]| {
+            img.iter()
+                .zip(&whole)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c] as f64).abs()))
+                .fold(0.0, f64::max)
+        };
+        let scale = whole.iter().flat_map(|p| p.iter().map(|&c| c as f64)).fold(0.0, f64::max);
+        assert!(scale > 0.0, "{}: a black image", name(e));
+        let tol = 1e-5 * scale;
+        assert!(
+            dev(&frames) <= tol,
+            "{}: frames differ from one frame of their samples by {:.3e} (tolerance {tol:.3e})",
+            name(e),
+            dev(&frames)
+        );
+        assert!(
+            dev(&other) > 100.0 * tol,
+            "{}: another seed's frames match ({:.3e}): the check cannot tell",
+            name(e),
+            dev(&other)
+        );
     }
 }
 

@@ -6,6 +6,11 @@
 //! seed is `--cdf-seed`, else the first frame's seed), as the viewer's do: the importance and CDF are
 //! built once and kept by the graph, and each later frame records only the gather.
 //!
+//! The reference is the exception ([`frame_settings`]): its frames keep the seed and continue the
+//! pixel's Owen-scrambled Sobol sequence (frame k takes samples k · spp .. (k + 1) · spp), so their mean
+//! is that of one stratified set of F · spp points, whose variance falls faster than 1/F. Each point is
+//! still uniform, so the mean stays unbiased. Measured: BENCHMARKS.md, "The path tracer's frames".
+//!
 //! `all` and the direct component are the same every frame: they render one frame, whatever the budget.
 //!
 //! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
@@ -37,6 +42,21 @@ pub fn averages(s: &FrameSettings) -> bool {
     s.method != Method::All && s.component != Component::Direct
 }
 
+/// Frame `k` of a progressive render of `s`: the reference's frames continue one stratified sample
+/// sequence (same seed, samples `k · spp ..`), until it would run past 2^32 points, where it moves on to
+/// the next seed's; every other method's frames take seeds `s.seed + k`, one CDF between them.
+pub fn frame_settings(s: &FrameSettings, k: u32) -> FrameSettings {
+    if s.method == Method::Reference {
+        let per_seed = ((u32::MAX - s.sample_offset) / s.spp.max(1)).max(1);
+        return FrameSettings {
+            seed: s.seed.wrapping_add((k / per_seed) as u64),
+            sample_offset: s.sample_offset.wrapping_add((k % per_seed) * s.spp),
+            ..s.clone()
+        };
+    }
+    FrameSettings { seed: s.seed.wrapping_add(k as u64), cdf_seed: Some(s.cdf_seed.unwrap_or(s.seed)), ..s.clone() }
+}
+
 /// Render frames of `s` (seeds `s.seed`, `s.seed + 1`, …) until `budget`, and average them.
 /// `progress(frames, elapsed)` is called after each frame.
 pub fn render_for(
@@ -50,11 +70,7 @@ pub fn render_for(
     let (mut frames, mut gpu_ms) = (0u32, Some(0.0));
     let mut previous = Duration::ZERO;
     let last = loop {
-        let frame_s = FrameSettings {
-            seed: s.seed.wrapping_add(frames as u64),
-            cdf_seed: Some(s.cdf_seed.unwrap_or(s.seed)),
-            ..s.clone()
-        };
+        let frame_s = frame_settings(s, frames);
         let f = r.render(&frame_s)?;
         sum.resize(f.radiance.len(), [0.0; 4]);
         for (a, p) in sum.iter_mut().zip(&f.radiance) {

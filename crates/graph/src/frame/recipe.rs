@@ -249,13 +249,14 @@ pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
     }
 }
 
-/// The reference's push constants for the sample range `chunk` of `--spp`.
+/// The reference's push constants for the sample range `chunk` of `--spp`, which starts at sample
+/// `s.sample_offset` of the pixel's sequence.
 fn reference_push(s: &FrameSettings, chunk: Range<u32>) -> GatherPush {
     GatherPush {
         samples: s.spp,
         seed: seed32(s.seed),
-        first: chunk.start,
-        last: chunk.end,
+        first: s.sample_offset + chunk.start,
+        last: s.sample_offset + chunk.end,
         accumulate: (chunk.start > 0) as u32,
         add_direct: (chunk.start == 0 && s.component == Component::Combined) as u32,
         ..GatherPush::default()

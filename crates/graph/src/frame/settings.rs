@@ -382,6 +382,11 @@ pub struct FrameSettings {
     /// Samples per pixel of the reference integrator (under `ReferenceEstimator::Mis`, a sample is one
     /// point of each strategy).
     pub spp: u32,
+    /// The reference's first sample index: its samples are `sample_offset .. sample_offset + spp` of
+    /// the pixel's Owen-scrambled Sobol sequence for `seed`. Progressive frames keep the seed and move
+    /// this on by `spp` ([`super::progressive`]), so F frames are the first F · spp points of one
+    /// stratified sequence instead of F independent scrambles of its first `spp`.
+    pub sample_offset: u32,
     pub reference_estimator: ReferenceEstimator,
     /// Samples per submission of the reference (`None`: a few dispatches' worth under the device's loop
     /// limit, at most 64). The image does not depend on it.
@@ -423,6 +428,7 @@ impl Default for FrameSettings {
             face: FaceMode::RussianRoulette,
             mis_weights: MisWeights::Consistent,
             spp: 256,
+            sample_offset: 0,
             reference_estimator: ReferenceEstimator::Mis,
             reference_chunk: None,
             visibility: Visibility::Exact,
@@ -558,6 +564,13 @@ impl FrameSettings {
         self.validate_ris(gpu)?;
         if self.spp == 0 {
             reject!("--spp must be at least 1");
+        }
+        if self.sample_offset.checked_add(self.spp).is_none() {
+            reject!(
+                "the reference's samples {} + {} run past its sequence's 2^32 points",
+                self.sample_offset,
+                self.spp
+            );
         }
         if !(1..=1024).contains(&self.voxels) {
             reject!("voxels must be between 1 and 1024 (got {})", self.voxels);
