@@ -43,14 +43,15 @@ import tomllib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = ["cornell-box", "two-rooms", "sibenik", "conference"]
-METHODS = ["uniform", "global", "stratified", "local", "gbg", "mis", "reference", "ris"]
+METHODS = ["default", "uniform", "global", "stratified", "local", "gbg", "mis", "reference", "ris"]
 # Per-frame settings of a method where the render default does not fit a progressive frame. ris runs as
-# `bounce render --time-limit T` does by default: without --vpls it picks its reservoirs and candidates per
-# frame for the view itself. `ris-learned` forces the learned visibility (--learn-visibility 0.1) at
-# 4 reservoirs of 32 candidates per frame.
+# `bounce render --time-limit T --method ris` does by default: without --vpls it picks its reservoirs and
+# candidates per frame for the view itself. `ris-learned` forces the learned visibility (--learn-visibility
+# 0.1) at 4 reservoirs of 32 candidates per frame.
 METHOD_ARGS = {"ris-learned": ["--vpls", "4", "--candidates", "32", "--learn-visibility", "0.1"]}
-# Labels that run another bounce method with their METHOD_ARGS.
-METHOD_OF = {"ris-learned": "ris"}
+# Labels that run another bounce method with their METHOD_ARGS; `default` is `bounce render --time-limit T`
+# without --method (and without --spp): what a user gets who asks for the best image in T seconds.
+METHOD_OF = {"ris-learned": "ris", "default": None}
 DEFAULT_ALBEDO = 0.5
 # The ground truth's seed. The compared bounce runs keep the default seed (1); the reference continues one
 # Owen-scrambled Sobol sequence per pixel and seed over its progressive frames, so with the ground truth's
@@ -371,8 +372,9 @@ def run_timed(cmd):
 
 
 def bounce_cmd(a, scene_path, exr, method, extra):
+    """`bounce render` of the indirect component; method None: the command's default."""
     return [a.bounce, "render", scene_path, "--width", str(a.size), "--height", str(a.size),
-            "--component", "indirect", "--method", method, "--out", exr] + extra
+            "--component", "indirect", "--out", exr] + (["--method", method] if method else []) + extra
 
 
 def ground_truth(a, name, scene_path):

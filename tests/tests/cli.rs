@@ -663,7 +663,7 @@ fn a_textured_scene_renders_its_texture() {
 }
 
 /// `render --time-limit`: progressive frames until the budget, their count and the time in the EXR's
-/// metadata; `all` (the same every frame) renders one frame and says so; `bench --time-limits` writes one
+/// metadata; without --method the path tracer; `all` (the same every frame) renders one frame and says so; `bench --time-limits` writes one
 /// row per method and budget with the frames it averaged.
 #[test]
 fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
@@ -699,6 +699,26 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
         assert_eq!(r.code, 0, "{}", r.stderr);
         assert!(r.stderr.contains(&format!("ris per frame: {budget} candidates")), "{}", r.stderr);
         assert_eq!(r.stderr.contains("from the gathered CDF"), gathered, "{}", r.stderr);
+    }
+
+    // Without --method, a time-limited render is the path tracer's, TIME_LIMIT_SPP samples a frame, and
+    // says so; an explicit --method and --spp stand.
+    for (extra, method, spp) in [
+        (&[][..], "reference", "8"),
+        (&["--method", "reference", "--spp", "2"][..], "reference", "2"),
+        (&["--method", "uniform", "--vpls", "2"][..], "uniform", "256"),
+    ] {
+        let mut args = vec!["render", s, "--out", out.to_str().unwrap()];
+        args.extend(small);
+        args.extend(extra);
+        args.extend(["--time-limit", "0.3"]);
+        let r = bounce(&args);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        assert_eq!(r.stderr.contains("method: reference (no --method"), extra.is_empty(), "{}", r.stderr);
+        let (_, meta) = read_exr(&out).unwrap();
+        let get = |k: &str| meta.iter().find(|(m, _)| m == &format!("bounce.{k}")).map(|(_, v)| v.clone());
+        assert_eq!(get("method").as_deref(), Some(method), "{extra:?}");
+        assert_eq!(get("spp").as_deref(), Some(spp), "{extra:?}");
     }
 
     let all_out = d.join("all.exr");

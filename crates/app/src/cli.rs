@@ -164,6 +164,19 @@ pub const FACES: Choices<FaceMode> = Choices(&[
 
 /// `--vpls` when not given.
 pub const DEFAULT_VPLS: u32 = 64;
+/// `--spp` when not given (one frame of the reference).
+pub const DEFAULT_SPP: u32 = 256;
+/// `render --time-limit`'s method when --method is not given: the path tracer. Its progressive frames
+/// continue one stratified sample sequence per pixel, and at equal time it had the lowest error of every
+/// method on every scene of the suite, below ris and below the Mitsuba MIS tracer of
+/// `scripts/compare-mitsuba.py` (BENCHMARKS.md, "The path tracer's frames").
+pub const TIME_LIMIT_METHOD: Method = Method::Reference;
+/// The reference's samples per pixel per progressive frame under `render --time-limit` when --spp is
+/// not given. Frames of one sequence differ only in how many samples the budget holds: a frame costs a
+/// fixed ~16 ms on lavapipe besides its samples, which 4 a frame pays too often, and 16 or 32 lose more
+/// to the last frame that does not fit. 8 reached the most samples, or nearly, on every scene measured
+/// (BENCHMARKS.md, "The path tracer's frames").
+pub const TIME_LIMIT_SPP: u32 = 8;
 /// ris's budget per progressive frame under `render --time-limit` when neither --vpls nor --candidates
 /// is given: (reservoirs, candidates, near-window candidates, picks), chosen per view by the share of
 /// the unshadowed transport that visibility blocks (`Renderer::blocked_share`, the threshold of
@@ -198,9 +211,10 @@ pub struct PictureArgs {
     #[arg(long, value_parser = COMPONENTS, default_value = "combined")]
     pub component: Component,
     /// How the gather picks VPLs. Default ris: the lowest error at equal time of the VPL methods on every
-    /// scene measured (BENCHMARKS.md).
-    #[arg(long, value_parser = METHODS, default_value = "ris")]
-    pub method: Method,
+    /// scene measured (BENCHMARKS.md); `render --time-limit` without it renders `reference`, the lowest
+    /// error at equal time of all methods (`TIME_LIMIT_METHOD`).
+    #[arg(long, value_parser = METHODS)]
+    pub method: Option<Method>,
     /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray per pick). Default 64; `render
     /// --time-limit` with ris takes 2 of 3 picks each per frame, the candidates chosen per view, many
     /// cheap frames (at equal time lower error than few costly ones: BENCHMARKS.md).
@@ -219,7 +233,7 @@ impl PictureArgs {
         let height = self.height.or(scene.render_height).unwrap_or(fallback_size);
         FrameSettings {
             component: self.component,
-            method: self.method,
+            method: self.method.unwrap_or(Method::Ris),
             vpls: self.vpls.unwrap_or(DEFAULT_VPLS),
             seed: self.seed,
             ..frame.settings(width, height)
@@ -264,10 +278,11 @@ pub struct FrameArgs {
     /// MIS weights (--method mis).
     #[arg(long, value_parser = MIS_WEIGHTS, default_value = "consistent")]
     pub mis_weights: MisWeights,
-    /// Samples per pixel of --method reference (256: with `mis`, its own noise is ≈ relMSE 1e-4 on the
-    /// default scene at 128², in 1/9 of the time the cosine-only 4096 took for 0.0016).
-    #[arg(long, default_value_t = 256)]
-    pub spp: u32,
+    /// Samples per pixel of --method reference (default 256: with `mis`, its own noise is ≈ relMSE 1e-4
+    /// on the default scene at 128², in 1/9 of the time the cosine-only 4096 took for 0.0016); under
+    /// `render --time-limit`, per frame (default 8, `TIME_LIMIT_SPP`).
+    #[arg(long)]
+    pub spp: Option<u32>,
     /// The reference's estimator (`mis`: one sample is one point of each strategy).
     #[arg(long, value_parser = REFERENCE_ESTIMATORS, default_value = "mis")]
     pub reference_estimator: ReferenceEstimator,
@@ -352,7 +367,7 @@ impl FrameArgs {
         FrameSettings {
             width,
             height,
-            spp: self.spp,
+            spp: self.spp.unwrap_or(DEFAULT_SPP),
             reference_estimator: self.reference_estimator,
             visibility: self.visibility,
             psm_res: self.psm_res,
@@ -601,7 +616,7 @@ mod tests {
     fn every_choice_parses_to_its_graph_value() {
         for (name, value, _) in METHODS.0 {
             let Command::Render(a) = parse(&["render", "s.toml", "--method", name]) else { panic!() };
-            assert_eq!(a.picture.method, *value);
+            assert_eq!(a.picture.method, Some(*value));
         }
         for (name, value, _) in VISIBILITIES.0 {
             let Command::Render(a) = parse(&["render", "s.toml", "--visibility", name]) else { panic!() };

@@ -20,6 +20,9 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     let scene = super::load_scene(&a.scene, err)?;
     let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
     let mut settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
+    if a.time_limit.is_some() {
+        time_limit_method(a, &mut settings, err)?;
+    }
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
     if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
@@ -132,6 +135,23 @@ fn animate(
         output::write_png(&stem.with_extension("png"), &img)?;
     }
     writeln!(err, "wrote {frames} frame(s) to {} (frame_0000.exr/.png …)", dir.display())?;
+    Ok(())
+}
+
+/// `--time-limit`'s defaults: without --method the path tracer ([`crate::cli::TIME_LIMIT_METHOD`], said
+/// on `err`), and the reference's frames of [`crate::cli::TIME_LIMIT_SPP`] samples unless --spp is given.
+fn time_limit_method(a: &RenderArgs, settings: &mut FrameSettings, err: &mut dyn Write) -> Result<()> {
+    if a.picture.method.is_none() && settings.component != Component::Direct {
+        settings.method = crate::cli::TIME_LIMIT_METHOD;
+        writeln!(
+            err,
+            "method: {} (no --method: the lowest error at equal time of every method measured, BENCHMARKS.md)",
+            settings.method.name()
+        )?;
+    }
+    if settings.method == Method::Reference && a.frame.spp.is_none() {
+        settings.spp = crate::cli::TIME_LIMIT_SPP;
+    }
     Ok(())
 }
 
