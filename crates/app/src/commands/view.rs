@@ -2,7 +2,8 @@
 //! (`bounce_device::Swapchain`); each redraw renders one frame with the same `Renderer` as
 //! `bounce render` and presents it on the GPU (`Renderer::present`, passes/present.rs): the present pass
 //! adds it to a running mean while camera, lights and settings stay put (progressive accumulation,
-//! frame k after a change with seed `--seed + k`), tone-maps the mean (Reinhard, as the PNG output)
+//! frame k after a change with seed `--seed + k`, or for the reference samples k · spp … of one
+//! sequence: `progressive::frame_settings`, as `render --time-limit`), tone-maps the mean (Reinhard, as the PNG output)
 //! into an 8-bit image, and the swapchain copies that image in. No frame is read back to the host
 //! except a screenshot's. What does not change is not re-rendered: the renderer's frame cache keeps the G-buffer,
 //! the paraboloid maps, the direct light, the importance and the CDF, so a static frame records only
@@ -23,7 +24,7 @@
 //! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
 //! for scripts and tests (under Xvfb on lavapipe). The mean of those N frames is the mean of
 //! `bounce render --seed S+k --cdf-seed C` for k < N with the same settings, C being `--cdf-seed`
-//! (default: S): the frames share one CDF, so the importance and CDF passes run only when the camera
+//! (default: S; the reference's frames continue one sequence of seed S instead): the frames share one CDF, so the importance and CDF passes run only when the camera
 //! or a setting changes. The frame flags are `render`'s, with cheaper defaults (`cli::ViewArgs`).
 //!
 //! The screenshot reads the GPU's running mean back once (f32 sums: equal to the mean of the frames
@@ -37,6 +38,7 @@ use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::{vk, Gpu, GpuOptions, Image, Presented, Swapchain};
 use bounce_graph::camera::Camera;
+use bounce_graph::frame::progressive::frame_settings;
 use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer};
 use bounce_graph::graph::Persistent;
 use bounce_graph::passes::present::{Present, PresentParams};
@@ -337,8 +339,10 @@ impl Viewer<'_> {
         }
         let last = self.args.frames.is_some_and(|n| st.total + 1 >= n);
         let shot = last || std::mem::take(&mut st.shot_requested);
-        let seed = self.args.animation.temporal.seed(self.settings.seed, st.total, st.frames);
-        let s = FrameSettings { seed, ..self.settings.clone() };
+        // The run's seed where this accumulation began, then its frame st.frames as `render --time-limit`
+        // takes it (seed + k; the reference: the next samples of one sequence).
+        let seed = self.args.animation.temporal.seed(self.settings.seed, st.total.saturating_sub(st.frames), 0);
+        let s = frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames);
         let params = PresentParams {
             frames: st.frames + 1,
             reset: st.frames == 0,
