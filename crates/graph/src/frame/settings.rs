@@ -451,6 +451,21 @@ impl FrameSettings {
         }
     }
 
+    /// The sample counts, and where the pixel's sequence starts (`sample_offset`).
+    fn validate_samples(&self) -> Result<(), SettingsError> {
+        if self.spp == 0 {
+            reject!("--spp must be at least 1");
+        }
+        if self.sample_offset.checked_add(self.spp).is_none() {
+            reject!(
+                "the reference's samples {} + {} run past its sequence's 2^32 points",
+                self.sample_offset,
+                self.spp
+            );
+        }
+        Ok(())
+    }
+
     /// `Method::Ris`'s settings against each other and the device's limits (other methods ignore them).
     fn validate_ris(&self, gpu: &Gpu) -> Result<(), SettingsError> {
         if self.method != Method::Ris {
@@ -562,16 +577,7 @@ impl FrameSettings {
             }
         }
         self.validate_ris(gpu)?;
-        if self.spp == 0 {
-            reject!("--spp must be at least 1");
-        }
-        if self.sample_offset.checked_add(self.spp).is_none() {
-            reject!(
-                "the reference's samples {} + {} run past its sequence's 2^32 points",
-                self.sample_offset,
-                self.spp
-            );
-        }
+        self.validate_samples()?;
         if !(1..=1024).contains(&self.voxels) {
             reject!("voxels must be between 1 and 1024 (got {})", self.voxels);
         }
