@@ -144,14 +144,19 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+/// The path-traced reference's seed, none of the runs' (1..=repeats): the reference method's progressive
+/// frames continue their seed's sample sequence, so a run with the reference's seed would take its first
+/// samples, and its error against it would read low.
+const PATH_REFERENCE_SEED: u64 = 0xFFFF_FFF0;
+
 impl Reference {
     /// The settings of the reference frame over the plan's base settings.
     fn settings(self, base: &FrameSettings) -> FrameSettings {
-        let (method, spp) = match self {
-            Reference::Path { spp } => (Method::Reference, spp),
-            Reference::All => (Method::All, base.spp),
+        let (method, spp, seed) = match self {
+            Reference::Path { spp } => (Method::Reference, spp, PATH_REFERENCE_SEED),
+            Reference::All => (Method::All, base.spp, base.seed),
         };
-        FrameSettings { method, spp, component: Component::Indirect, ..base.clone() }
+        FrameSettings { method, spp, seed, component: Component::Indirect, ..base.clone() }
     }
 
     /// What the plot's error axis says it is measured against.
@@ -181,6 +186,9 @@ impl Reference {
         let mut kind = self.kind();
         if base.reference_estimator == ReferenceEstimator::Mis && self != Reference::All {
             kind += "-mis"; // caches of earlier runs, named without it, hold the cosine estimator
+        }
+        if self != Reference::All {
+            kind += &format!("-seed{PATH_REFERENCE_SEED}"); // earlier caches used the runs' seed 1
         }
         if self == Reference::All {
             match base.light_map {
