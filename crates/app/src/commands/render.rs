@@ -46,7 +46,8 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         None => (renderer.render(&settings)?, None),
         Some(t) => {
             let p = progressive(&mut renderer, &settings, t)?;
-            let last = FrameOutput { radiance: p.radiance, ..p.last };
+            // The reference's standard error is the last frame's, not the mean's: not reported.
+            let last = FrameOutput { radiance: p.radiance, stderr: None, ..p.last };
             (last, Some((p.frames, p.gpu_ms)))
         }
     };
