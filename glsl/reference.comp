@@ -134,7 +134,7 @@ vec3 light_sample(vec3 o, vec3 x, vec3 n, vec3 ax, uint k, uint seed, float tota
     vec3 lp = lights[l].position.xyz;
     uint tri;
     vec2 bary;
-    if (bvh_closest(lp, vec3(r * cos(phi), r * sin(phi), z), 1e30, tri, bary) <= 0.0) return vec3(0.0);
+    if (bvh_closest_walk(lp, vec3(r * cos(phi), r * sin(phi), z), 1e30, tri, bary) <= 0.0) return vec3(0.0);
     Hit h = hit_at(tri, bary, x);
     vec3 w = h.y - o;
     float r2 = dot(w, w);
@@ -158,7 +158,7 @@ vec3 cosine_sample(vec3 o, vec3 x, vec3 n, vec3 ax, uint k, uint seed, float tot
     vec3 d = cosine_direction(n, u.x, u.y);
     uint tri;
     vec2 bary;
-    if (bvh_closest(o, d, 1e30, tri, bary) <= 0.0) return vec3(0.0);
+    if (bvh_closest_walk(o, d, 1e30, tri, bary) <= 0.0) return vec3(0.0);
     Hit h = hit_at(tri, bary, x);
 #ifdef COSINE_ONLY
     return ax * direct_at(h);

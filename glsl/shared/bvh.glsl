@@ -11,7 +11,8 @@
 //  * triangle j = { v0, tri, v1, -, v2, - }: the three vertex positions of the scene triangle `tri` (vertices
 //    3·tri .. 3·tri+3 of the scene), stored again in leaf order so a leaf is one contiguous run. Zero-area
 //    triangles are left out (they are never hit, as in the CPU reference).
-//  * the threaded records: the same tree for the stackless any-hit walk (bvh_any_hit, below).
+//  * the threaded records: the same tree for the stackless walks (bvh_any_hit and bvh_closest_walk,
+//    below); a triangle record's b.w is its scene triangle.
 //
 // Functions (d need not be unit; t is in units of |d|, the hit is at o + t·d):
 //  * float bvh_closest(o, d, tmax, out tri, out bary): the closest hit with t ∈ (0, tmax], or −1. `tri` is the
@@ -26,6 +27,8 @@
 //    already lifted off their surfaces (the exact gather's shadow rays; see the function).
 //    Both are bvh_any_hit(o, d, tmin, tmax): the stackless walk over the threaded records, with its own
 //    iteration bound (see the function).
+//  * float bvh_closest_walk(o, d, tmax, out tri, out bary): bvh_closest's answer by the threaded walk (see
+//    the function for which callers it suits).
 //  * float bvh_trace(o, d, tmin, tmax, any_hit, out tri, out bary): the stack traversal behind bvh_closest.
 //    Closest mode accepts t ∈ (tmin, tmax]; any-hit mode t ∈ (tmin, tmax) and stops at the first such hit
 //    (the same answer as bvh_any_hit, which the tests check).
@@ -42,7 +45,7 @@
 // a ray lying exactly in the plane of a flat box then sees it only at its origin, which loses nothing: such a
 // box holds only triangles in that plane, which the ray could meet edge-on at most.
 //
-// Traversal and its iteration bound (bvh_trace; bvh_any_hit's walk has its own, see there). One loop; each iteration is exactly one of: test one triangle of the
+// Traversal and its iteration bound (bvh_trace; the threaded walks have their own, see bvh_any_hit). One loop; each iteration is exactly one of: test one triangle of the
 // current leaf; visit one node (read its two children, test both boxes, descend into the nearer one and push the
 // other with its entry distance); pop a node whose entry distance is beyond the closest hit so far (culled); or
 // the final iteration that finds the stack empty. A node is visited or popped at most once and a triangle tested
@@ -330,6 +333,77 @@ bool bvh_any_hit(vec3 o, vec3 d, float tmin, float tmax) {
     bvh_steps = steps;
     bvh_exhausted = !done;
     return hit;
+}
+
+// One step of the closest-hit walk over the threaded records: a box is entered only if it meets
+// (tmin, best) (a box starting beyond the closest hit so far is skipped with its subtree); a triangle
+// replaces the closest hit under bvh_trace's rule (nearer, or as near with a lower triangle index).
+void bvh_closest_step(BvhRay r, float tmin, int end, inout int i, inout uint steps, inout float best,
+                      inout bool found, inout uint best_tri, inout vec2 best_bary) {
+    if (i >= end) return;
+    steps++;
+    uvec4 a = texelFetch(bvh_threaded, 3 * i);
+    uvec4 b = texelFetch(bvh_threaded, 3 * i + 1);
+    if (a.w == BVH_THREAD_TRI) {
+        vec3 c = uintBitsToFloat(texelFetch(bvh_threaded, 3 * i + 2).xyz);
+        float t;
+        vec2 bary;
+        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), c, t, bary) && t > tmin) {
+            uint tri = b.w;
+            if (t < best || (t == best && (!found || tri < best_tri))) {
+                found = true;
+                best = t;
+                best_tri = tri;
+                best_bary = bary;
+            }
+        }
+        i++;
+    } else {
+        float tnear;
+        i = bvh_hit_box(r, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), tmin, best, tnear) ? i + 1 : int(a.w);
+    }
+}
+
+// bvh_closest's answer (the tests check every query bit for bit) by the walk the shadow rays take over the
+// threaded records. It reads every record whose box meets the ray before the closest hit found so far:
+// more than the ordered stack traversal, which visits the nearer child first, but each step is three
+// texel fetches and one test instead of a node, its two children and a stack push. Which wins depends
+// on the rays (measured: BENCHMARKS.md, "The path tracer's frames"): the reference's first hits take it
+// (10–20 % less time a frame), gbg's importance rays do not (25 % more).
+float bvh_closest_walk(vec3 o, vec3 d, float tmax, out uint tri, out vec2 bary) {
+    tri = BVH_NO_TRI;
+    bary = vec2(0.0);
+    bvh_steps = 0u;
+    bvh_exhausted = false;
+    float dmax = max(abs(d.x), max(abs(d.y), abs(d.z)));
+    if (!bvh_finite(o) || !bvh_finite(d) || !(dmax >= BVH_MIN_DIR) || isnan(tmax) || !(tmax > 0.0)) return -1.0;
+    BvhRay r = bvh_make_ray(o, d);
+    int end = textureSize(bvh_threaded) / 3;
+    int i = 0;
+    uint steps = 0u;
+    float best = tmax;
+    bool found = false;
+    uint best_tri = BVH_NO_TRI;
+    vec2 best_bary = vec2(0.0);
+    for (uint k = 0u; k < uint(BVH_MAX_STEPS / BVH_THREAD_UNROLL) && i < end; k++) {
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+        bvh_closest_step(r, 0.0, end, i, steps, best, found, best_tri, best_bary);
+    }
+    bvh_steps = steps;
+    if (i < end) {
+        bvh_exhausted = true;
+        return -1.0;
+    }
+    if (!found) return -1.0;
+    tri = best_tri;
+    bary = best_bary;
+    return best;
 }
 
 float bvh_closest(vec3 o, vec3 d, float tmax, out uint tri, out vec2 bary) {

@@ -25,7 +25,9 @@
 //! Also: rays from inside a closed sphere aimed exactly at its vertices and shared edges all hit (the
 //! triangle test is watertight), the loop iterations of every trace stay below the bound and within
 //! `max_iterations_per_ray()`, and a trace that cannot finish within the bound gives the documented
-//! answer (no hit / not occluded, `bvh_exhausted`) without disturbing its neighbours.
+//! answer (no hit / not occluded, `bvh_exhausted`) without disturbing its neighbours. The threaded
+//! closest-hit walk (`bvh_closest_walk`, the reference's) gives `bvh_closest`'s answer bit for bit on
+//! every query.
 
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
@@ -74,8 +76,11 @@ struct Res {
     steps: u32,
     occ_steps: u32,
     exhausted: u32,
+    walk_t: f32,
+    walk_tri: u32,
+    walk_bary: [f32; 2],
 }
-const _: () = assert!(std::mem::size_of::<Res>() == 40);
+const _: () = assert!(std::mem::size_of::<Res>() == 56);
 
 impl Query {
     fn ray(o: Vec3, d: Vec3, tmax: f32) -> Query {
@@ -290,6 +295,13 @@ fn compare(what: &str, mesh: &Mesh, cpu: &Bvh, queries: &[Query], res: &[Res], b
         );
         s.max_steps = s.max_steps.max(r.steps).max(r.occ_steps);
         steps_sum += (r.steps + r.occ_steps) as u64;
+        // The threaded closest-hit walk gives the stack traversal's answer, bit for bit.
+        let walk = (r.walk_t.to_bits(), r.walk_tri, r.walk_bary.map(f32::to_bits));
+        assert_eq!(
+            walk,
+            (r.t.to_bits(), r.tri, r.bary.map(f32::to_bits)),
+            "{what}: query {i}: bvh_closest_walk differs from bvh_closest: {r:?}"
+        );
 
         // Closest hit.
         let (o, d) = (q.origin(), q.dir());
@@ -629,18 +641,22 @@ fn a_trace_past_the_bound_answers_no_hit_and_leaves_its_neighbours_alone() {
         Query::ray(beside + z, -z, f32::INFINITY).with_segment(far + z, far - z),
     ];
     let (res, _) = gpu_trace(&gpu, &bvh, &queries);
-    // Query 0: both traces give up at the bound with the documented answers.
+    // Query 0: every trace gives up at the bound with the documented answers.
     assert_eq!(cpu.intersect(queries[0].origin(), queries[0].dir()).map(|h| h.tri), Some(0));
     assert_eq!((res[0].t, res[0].tri, res[0].steps), (-1.0, NO_TRI, MAX_STEPS), "{:?}", res[0]);
-    assert_eq!((res[0].occluded, res[0].occ_steps, res[0].exhausted), (0, MAX_STEPS, 3), "{:?}", res[0]);
+    assert_eq!((res[0].occluded, res[0].occ_steps, res[0].exhausted), (0, MAX_STEPS, 7), "{:?}", res[0]);
     // Query 1: a miss outside the box is immediate; the segment is occluded at its first triangle test.
     assert_eq!((res[1].t, res[1].exhausted, res[1].occluded), (-1.0, 0, 1), "{:?}", res[1]);
     assert!(res[1].steps <= 1 && res[1].occ_steps < 64, "{:?}", res[1]);
     assert!((res[1].occ_t - 0.5).abs() < 1e-6, "{:?}", res[1]);
     // Query 2: a ray beside the triangle exhausts the bound too (it must test every copy); the segment
     // outside the box does not.
-    assert_eq!((res[2].t, res[2].steps, res[2].exhausted), (-1.0, MAX_STEPS, 1), "{:?}", res[2]);
+    assert_eq!((res[2].t, res[2].steps, res[2].exhausted), (-1.0, MAX_STEPS, 5), "{:?}", res[2]);
     assert_eq!((res[2].occluded, res[2].occ_steps <= 1), (0, true), "{:?}", res[2]);
+    // The threaded closest-hit walk gives up on queries 0 and 2 as well (bit 2), with the same answers.
+    for r in &res {
+        assert_eq!((r.walk_t, r.walk_tri), (r.t, r.tri), "{r:?}");
+    }
 }
 
 #[test]

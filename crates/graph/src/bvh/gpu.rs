@@ -39,11 +39,12 @@
 //! ⌈log2(n / 2)⌉) wherever a child would otherwise be unable to fit below the limit: the result never
 //! exceeds 64 levels for any triangle count the buffers can hold. On real scenes nothing is rebuilt.
 //!
-//! **Iteration bound.** An occlusion test (`bvh_occluded*`) walks the threaded records forward, at
-//! most min([`MAX_STEPS`], records + 1) steps, [`THREAD_UNROLL`] steps to a loop iteration:
-//! [`GpuBvh::max_iterations_occluded`]. A closest-hit trace runs one loop of at most [`MAX_STEPS`] iterations (one triangle
+//! **Iteration bound.** An occlusion test (`bvh_occluded*`) and `bvh_closest_walk` walk the threaded
+//! records forward, at most min([`MAX_STEPS`], records + 1) steps, [`THREAD_UNROLL`] steps to a loop
+//! iteration: [`GpuBvh::max_iterations_occluded`]. The stack traversal (`bvh_trace`, behind
+//! `bvh_closest`) runs one loop of at most [`MAX_STEPS`] iterations (one triangle
 //! test, node visit or culled pop each; see `bvh.glsl`), and never more than nodes + triangles + 1:
-//! [`GpuBvh::max_iterations_per_ray`] is the smaller of the two, an honest upper bound. llvmpipe stops
+//! [`GpuBvh::max_iterations_per_ray`] is the smaller of the two, an honest upper bound of either. llvmpipe stops
 //! every loop of an invocation after 65535 iterations in total ([`bounce_device::Gpu`]'s
 //! `loop_iteration_limit`), so a shader that traces n rays per invocation needs
 //! n · `max_iterations_per_ray()` + (its other loop iterations) ≤ the limit, and must otherwise split
@@ -122,14 +123,16 @@ const _: () = assert!(offset_of!(GpuBvhTri, v2) == 32);
 
 /// A record of the threaded layout ([`FlatBvh::threaded`]): a box (`a` = lo, `b` = hi, `link` = the index
 /// of the first record after its subtree) or a triangle (`a`, `b`, `c` its positions, `link` =
-/// [`THREAD_TRI`]; the next record follows). GLSL: `BvhThreadRec`.
+/// [`THREAD_TRI`], `tri` the scene triangle, which the closest-hit walk reports; the next record
+/// follows). GLSL: `BvhThreadRec`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuThreadRec {
     pub a: [f32; 3],
     pub link: u32,
     pub b: [f32; 3],
-    pub pad1: u32,
+    /// The scene triangle of a triangle record (0 for a box).
+    pub tri: u32,
     pub c: [f32; 3],
     pub pad2: u32,
 }
@@ -250,7 +253,7 @@ impl FlatBvh {
             }
             if n.is_leaf() {
                 for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
-                    out.push(GpuThreadRec { a: t.v0, link: THREAD_TRI, b: t.v1, pad1: 0, c: t.v2, pad2: 0 });
+                    out.push(GpuThreadRec { a: t.v0, link: THREAD_TRI, b: t.v1, tri: t.tri, c: t.v2, pad2: 0 });
                 }
             } else {
                 let (l, r) = (n.first, n.first + 1);

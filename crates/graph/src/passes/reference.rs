@@ -70,7 +70,8 @@ impl Reference {
             ReferenceEstimator::Mis => 2,
             ReferenceEstimator::Cosine => 1,
         };
-        let rays = bvh.max_iterations_per_ray() + lights * bvh.max_iterations_occluded();
+        // First hits (bvh_closest_walk) and shadow rays walk the same threaded records.
+        let rays = (1 + lights) * bvh.max_iterations_occluded();
         let per_sample = strategies * (rays + 32 + 2 * lights) + 8;
         (limit.saturating_sub(64 + lights) / per_sample).max(1)
     }
