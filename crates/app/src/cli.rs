@@ -212,7 +212,7 @@ pub struct PictureArgs {
     pub component: Component,
     /// How the gather picks VPLs. Default ris: the lowest error at equal time of the VPL methods on every
     /// scene measured (BENCHMARKS.md); `render --time-limit` without it renders `reference`, the lowest
-    /// error at equal time of all methods (`TIME_LIMIT_METHOD`).
+    /// error at equal time of all methods (BENCHMARKS.md).
     #[arg(long, value_parser = METHODS)]
     pub method: Option<Method>,
     /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray per pick). Default 64; `render
@@ -280,7 +280,7 @@ pub struct FrameArgs {
     pub mis_weights: MisWeights,
     /// Samples per pixel of --method reference (default 256: with `mis`, its own noise is ≈ relMSE 1e-4
     /// on the default scene at 128², in 1/9 of the time the cosine-only 4096 took for 0.0016); under
-    /// `render --time-limit`, per frame (default 8, `TIME_LIMIT_SPP`).
+    /// `render --time-limit`, per frame (default 8).
     #[arg(long)]
     pub spp: Option<u32>,
     /// The reference's estimator (`mis`: one sample is one point of each strategy).
@@ -432,8 +432,10 @@ pub struct RenderArgs {
     /// Print a per-pass GPU time table.
     #[arg(long)]
     pub timings: bool,
-    /// Render progressive frames (seed, seed + 1, …; one CDF) for this many seconds of wall time and
-    /// write their mean: equal-time comparisons in one flag. Not for `all` (the same every frame).
+    /// Render progressive frames (seed, seed + 1, …; one CDF; the reference continues one sample
+    /// sequence) for this many seconds of wall time and write their mean: equal-time comparisons in one
+    /// flag. Without --method, the path tracer (the lowest error at equal time). Not for `all` (the same
+    /// every frame).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
     /// Render an animation of this many frames (with --light-path) into --out-dir: frame_0000.exr and
