@@ -173,8 +173,8 @@ pub const DEFAULT_SPP: u32 = 256;
 pub const TIME_LIMIT_METHOD: Method = Method::Reference;
 /// The reference's samples per pixel per progressive frame under `render --time-limit` when --spp is
 /// not given. Frames of one sequence differ only in how many samples the budget holds: a frame costs a
-/// fixed ~16 ms on lavapipe besides its samples, which 4 a frame pays too often, and 16 or 32 lose more
-/// to the last frame that does not fit. 8 reached the most samples, or nearly, on every scene measured
+/// few ms besides its samples, which 4 a frame pays more often, and 16 or 32 lose more to the last
+/// frame that does not fit. 8 reached the most samples, or nearly, on every scene measured
 /// (BENCHMARKS.md, "The path tracer's frames").
 pub const TIME_LIMIT_SPP: u32 = 8;
 /// ris's budget per progressive frame under `render --time-limit` when neither --vpls nor --candidates
