@@ -702,9 +702,10 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
     }
 
     // Without --method, a time-limited render is the path tracer's, TIME_LIMIT_SPP samples a frame, and
-    // says so; an explicit --method and --spp stand.
+    // says so; --vpls alone asks for the VPL default (ris); an explicit --method and --spp stand.
     for (extra, method, spp) in [
         (&[][..], "reference", "8"),
+        (&["--vpls", "2"][..], "ris", "256"),
         (&["--method", "reference", "--spp", "2"][..], "reference", "2"),
         (&["--method", "uniform", "--vpls", "2"][..], "uniform", "256"),
     ] {
@@ -714,7 +715,7 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
         args.extend(["--time-limit", "0.3"]);
         let r = bounce(&args);
         assert_eq!(r.code, 0, "{}", r.stderr);
-        assert_eq!(r.stderr.contains("method: reference (no --method"), extra.is_empty(), "{}", r.stderr);
+        assert_eq!(r.stderr.contains("method: reference (no --method or --vpls"), extra.is_empty(), "{}", r.stderr);
         let (_, meta) = read_exr(&out).unwrap();
         let get = |k: &str| meta.iter().find(|(m, _)| m == &format!("bounce.{k}")).map(|(_, v)| v.clone());
         assert_eq!(get("method").as_deref(), Some(method), "{extra:?}");

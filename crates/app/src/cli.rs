@@ -166,7 +166,7 @@ pub const FACES: Choices<FaceMode> = Choices(&[
 pub const DEFAULT_VPLS: u32 = 64;
 /// `--spp` when not given (one frame of the reference).
 pub const DEFAULT_SPP: u32 = 256;
-/// `render --time-limit`'s method when --method is not given: the path tracer. Its progressive frames
+/// `render --time-limit`'s method when neither --method nor --vpls is given: the path tracer. Its progressive frames
 /// continue one stratified sample sequence per pixel, and at equal time it had the lowest error of every
 /// method on every scene of the suite, below ris and below the Mitsuba MIS tracer of
 /// `scripts/compare-mitsuba.py` (BENCHMARKS.md, "The path tracer's frames").
@@ -434,8 +434,8 @@ pub struct RenderArgs {
     pub timings: bool,
     /// Render progressive frames (seed, seed + 1, …; one CDF; the reference continues one sample
     /// sequence) for this many seconds of wall time and write their mean: equal-time comparisons in one
-    /// flag. Without --method, the path tracer (the lowest error at equal time). Not for `all` (the same
-    /// every frame).
+    /// flag. Without --method (and --vpls), the path tracer (the lowest error at equal time). Not for
+    /// `all` (the same every frame).
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
     /// Render an animation of this many frames (with --light-path) into --out-dir: frame_0000.exr and

@@ -140,13 +140,14 @@ fn animate(
 }
 
 /// `--time-limit`'s defaults: without --method the path tracer ([`crate::cli::TIME_LIMIT_METHOD`], said
-/// on `err`), and the reference's frames of [`crate::cli::TIME_LIMIT_SPP`] samples unless --spp is given.
+/// on `err`), unless --vpls asks for VPLs (then ris, the VPL default); and the reference's frames of
+/// [`crate::cli::TIME_LIMIT_SPP`] samples unless --spp is given.
 fn time_limit_method(a: &RenderArgs, settings: &mut FrameSettings, err: &mut dyn Write) -> Result<()> {
-    if a.picture.method.is_none() && settings.component != Component::Direct {
+    if a.picture.method.is_none() && a.picture.vpls.is_none() && settings.component != Component::Direct {
         settings.method = crate::cli::TIME_LIMIT_METHOD;
         writeln!(
             err,
-            "method: {} (no --method: the lowest error at equal time of every method measured, BENCHMARKS.md)",
+            "method: {} (no --method or --vpls: the lowest error at equal time of every method measured, BENCHMARKS.md)",
             settings.method.name()
         )?;
     }
