@@ -184,13 +184,12 @@ impl Reference {
         let parent =
             scene.parent().and_then(|p| p.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let mut kind = self.kind();
-        if base.reference_estimator == ReferenceEstimator::Mis && self != Reference::All {
-            kind += "-mis"; // caches of earlier runs, named without it, hold the cosine estimator
-        }
         if self != Reference::All {
+            if base.reference_estimator == ReferenceEstimator::Mis {
+                kind += "-mis"; // caches of earlier runs, named without it, hold the cosine estimator
+            }
             kind += &format!("-seed{PATH_REFERENCE_SEED}"); // earlier caches used the runs' seed 1
-        }
-        if self == Reference::All {
+        } else {
             match base.light_map {
                 LightMap::Dprsm => {}
                 LightMap::Rsm { fov_deg } => kind += &format!("-rsm{fov_deg}"),

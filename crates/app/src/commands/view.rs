@@ -3,8 +3,8 @@
 //! `bounce render` and presents it on the GPU (`Renderer::present`, passes/present.rs): the present pass
 //! adds it to a running mean while camera, lights and settings stay put (progressive accumulation,
 //! frame k after a change with seed `--seed + k`, or for the reference samples k · spp … of one
-//! sequence: `progressive::frame_settings`, as `render --time-limit`), tone-maps the mean (Reinhard, as the PNG output)
-//! into an 8-bit image, and the swapchain copies that image in. No frame is read back to the host
+//! sequence: `progressive::frame_settings`, as `render --time-limit`), tone-maps the mean (Reinhard,
+//! as the PNG output) into an 8-bit image, and the swapchain copies that image in. No frame is read back to the host
 //! except a screenshot's. What does not change is not re-rendered: the renderer's frame cache keeps the G-buffer,
 //! the paraboloid maps, the direct light, the importance and the CDF, so a static frame records only
 //! the gather (the title names what was reused).
@@ -24,8 +24,8 @@
 //! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
 //! for scripts and tests (under Xvfb on lavapipe). The mean of those N frames is the mean of
 //! `bounce render --seed S+k --cdf-seed C` for k < N with the same settings, C being `--cdf-seed`
-//! (default: S; the reference's frames continue one sequence of seed S instead): the frames share one CDF, so the importance and CDF passes run only when the camera
-//! or a setting changes. The frame flags are `render`'s, with cheaper defaults (`cli::ViewArgs`).
+//! (default: S; the reference's frames continue one sequence of seed S instead): the frames share one
+//! CDF, so the importance and CDF passes run only when the camera or a setting changes. The frame flags are `render`'s, with cheaper defaults (`cli::ViewArgs`).
 //!
 //! The screenshot reads the GPU's running mean back once (f32 sums: equal to the mean of the frames
 //! `render` makes, bit for bit) and writes it as EXR and, tone-mapped on the host, as PNG; the log line
