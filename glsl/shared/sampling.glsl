@@ -115,17 +115,25 @@ uint draw_vpl(uint k, uint seed, out float prob) {
 // `*.hybrid.comp` variants, `--visibility hybrid`) the same shadow ray, traced only through the grid's
 // occupied cells (shared/hybrid.glsl): the same answer.
 // contribution_of takes VPL v's data already fetched (ris's shade reads its flux too).
+#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
+// The shadow ray's ends: x lifted along its normal, and VPL v lifted towards its light.
+vec3 shadow_origin(vec3 x, vec3 nx) {
+    return x + nx * surface_lift(x, frame.scene_min.w);
+}
+vec3 shadow_end(uint v, Vpl vpl) {
+    vec3 light = lights[v / (lm_faces() * frame.size.w * frame.size.w)].position.xyz;
+    return vpl.position + normalize(light - vpl.position) * surface_lift(vpl.position, frame.scene_min.w);
+}
+#endif
+
 vec3 contribution_of(vec3 x, vec3 nx, vec3 ax, uint v, Vpl vpl) {
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return c;
 #if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
-    float lx = surface_lift(x, frame.scene_min.w), lv = surface_lift(vpl.position, frame.scene_min.w);
-    vec3 light = lights[v / (lm_faces() * frame.size.w * frame.size.w)].position.xyz;
-    vec3 lifted = vpl.position + normalize(light - vpl.position) * lv;
 #ifdef HYBRID_VISIBILITY
-    return hybrid_occluded_lifted(x + nx * lx, lifted) ? vec3(0.0) : c;
+    return hybrid_occluded_lifted(shadow_origin(x, nx), shadow_end(v, vpl)) ? vec3(0.0) : c;
 #else
-    return bvh_occluded_lifted(x + nx * lx, lifted) ? vec3(0.0) : c;
+    return bvh_occluded_lifted(shadow_origin(x, nx), shadow_end(v, vpl)) ? vec3(0.0) : c;
 #endif
 #else
     return c * voxel_visibility(x, nx, vpl.position, vpl.normal);
