@@ -44,18 +44,11 @@ layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
 #endif
 
 #if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && !defined(PSM_VISIBILITY)
-// Exact shadow rays, traced from a queue. A SIMD vector of invocations (llvmpipe: 8 lanes) runs the walk's
-// steps until its slowest lane is done, so a loop of one ray per sample waits at every sample for the
-// vector's longest ray, and a lane whose sample needs no ray (a VPL behind x) idles through it. Instead
-// each block of GATHER_QUEUE samples is drawn first, its rays' ends and weighted contributions kept in
-// the queue (only those that need a ray), and then every lane walks its own queue: a lane whose ray is
-// done takes its next one at the next group of BVH_THREAD_UNROLL steps, so the vector waits only at the
-// end of a block, for the lane with the most steps in all. The answers and the order of the sums are
-// those of a ray per sample: the image is the same, bit for bit.
-#define GATHER_REFILL
-const uint GATHER_QUEUE = 32u;
-vec3 queue_weight[GATHER_QUEUE]; // c(x, v) / p_v, the unshadowed contribution
-vec3 queue_end[GATHER_QUEUE];    // the VPL's end of the shadow ray (shadow_end)
+// Exact shadow rays from a queue (shared/shadow_queue.glsl): each block of SHADOW_QUEUE samples is drawn
+// first, the rays it needs queued with their weighted contributions, and then traced.
+#define GATHER_QUEUE
+#include "shared/shadow_queue.glsl"
+vec3 queue_weight[SHADOW_QUEUE]; // c(x, v) / p_v, the unshadowed contribution
 
 // Queue VPL v, drawn with probability prob (1 for `all`: c / 1 is c exactly), if it gives x anything.
 void enqueue(vec3 x, vec3 nx, vec3 ax, uint v, float prob, inout uint n) {
@@ -63,52 +56,8 @@ void enqueue(vec3 x, vec3 nx, vec3 ax, uint v, float prob, inout uint n) {
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return;
     queue_weight[n] = c / prob;
-    queue_end[n] = shadow_end(v, vpl);
+    shadow_queue_end[n] = shadow_end(v, vpl);
     n++;
-}
-
-// sum += queue_weight[j] for each j < n whose shadow ray o → queue_end[j] is not occluded, in order:
-// bvh_occluded_lifted's answer, with its step bound per ray.
-void trace_queue(vec3 o, uint n, inout vec3 sum) {
-    int end = textureSize(bvh_threaded) / 3;
-    const float tmin = BVH_LIFTED_EPS, tmax = 1.0 - BVH_LIFTED_EPS;
-    uint next = 0u;
-    bool tracing = false;
-    BvhRay r;
-    vec3 w = vec3(0.0);
-    int i = 0;
-    uint steps = 0u;
-    bool done = false, hit = false;
-    while (tracing || next < n) {
-        if (!tracing) {
-            w = queue_weight[next];
-            vec3 d = queue_end[next] - o;
-            next++;
-            if (!bvh_usable_ray(o, d, tmin, tmax)) {
-                sum += w; // "no hit", as bvh_any_hit answers
-                continue;
-            }
-            r = bvh_make_ray(o, d);
-            i = 0;
-            steps = 0u;
-            done = false;
-            hit = false;
-            tracing = true;
-        }
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        // Exhausted after BVH_MAX_STEPS steps: "no hit", as bvh_any_hit answers.
-        if (done || steps >= uint(BVH_MAX_STEPS)) {
-            if (!hit) sum += w;
-            tracing = false;
-        }
-    }
 }
 #endif
 
@@ -121,15 +70,15 @@ void main() {
         vec3 x = gp.xyz;
         vec3 nx = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
-#ifdef GATHER_REFILL
+#ifdef GATHER_QUEUE
         bool sampled = pc.mode != GATHER_ALL;
         if (!sampled || cdf_total_at(0u) > 0.0) {
             uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
             vec3 o = shadow_origin(x, nx);
-            for (uint base = pc.first; base < pc.last; base += GATHER_QUEUE) {
+            for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
                 // Two loops, not one with `sampled ? draw_vpl(…) : k`: llvmpipe runs both sides of a
                 // branch under masks, so the `all` mode would pay for drawing every VPL.
-                uint n = 0u, top = min(base + GATHER_QUEUE, pc.last);
+                uint n = 0u, top = min(base + SHADOW_QUEUE, pc.last);
                 if (sampled) {
                     for (uint k = base; k < top; k++) {
                         float prob;
@@ -139,7 +88,10 @@ void main() {
                 } else {
                     for (uint v = base; v < top; v++) enqueue(x, nx, ax, v, 1.0, n);
                 }
-                trace_queue(o, n, sum);
+                // The visible ones, in sample order: the sums of a ray per sample, bit for bit.
+                uint visible = shadow_queue_trace(o, n);
+                for (uint j = 0u; j < n; j++)
+                    if ((visible & (1u << j)) != 0u) sum += queue_weight[j];
             }
             if (sampled) sum /= float(pc.samples);
         }

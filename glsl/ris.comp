@@ -87,6 +87,12 @@ layout(std430, set = 0, binding = B_RIS_POOL) writeonly buffer RisPool { vec4 po
 #include "shared/cdf.glsl"
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"
+#if defined(RIS_SHADE) && defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY)
+// The shade's shadow rays from a queue (shared/shadow_queue.glsl): a block's rays are queued first, traced,
+// and then the block's reservoirs are shaded in order with their answers.
+#define SHADE_QUEUE
+#include "shared/shadow_queue.glsl"
+#endif
 
 // Where reservoir `layer` of pixel q lives (layer-major: one layer is one image of reservoirs).
 uint res_index(ivec2 q, uint layer) {
@@ -669,37 +675,61 @@ void main() {
         // are independent of this pick's choice given the pool, and count at once. Both are carried
         // across dispatches and frames, so a dispatch may end inside a set.
         uvec2 counts = state.xy, siblings = state.zw;
-        for (uint layer = pc.first; layer < pc.last; layer++) {
-            if (layer % ris.picks == 0u) {
-                counts += siblings;
-                siblings = uvec2(0u);
+#ifdef SHADE_QUEUE
+        vec3 o = shadow_origin(x, nx);
+        for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
+            uint top = min(base + SHADOW_QUEUE, pc.last), n = 0u;
+            for (uint layer = base; layer < top; layer++) {
+                Reservoir r = res_in[res_index(px, layer)];
+                if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
+                Vpl vpl = vpl_fetch(r.vpl);
+                if (vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2) != vec3(0.0))
+                    shadow_queue_end[n++] = shadow_end(r.vpl, vpl);
             }
-            uint idx = res_index(px, layer);
-            Reservoir r = res_in[idx];
-            // An empty reservoir had no candidate with w > 0, so its U_g is 0 too: it adds nothing.
-            if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
-            Vpl vpl = vpl_fetch(r.vpl);
-            vec3 c = contribution_of(x, nx, ax, r.vpl, vpl);
-            sum += c * r.weight;
-            if (ris.control != 0u) {
-                // The control variate: + β (U_g − g(y) W), g = f p̂ / luminance(f), whose g(y) W is the
-                // kept VPL's colour ratio f / luminance(f) times p̂(y) W = Σw / M. Given the candidates,
-                // E[g(y) W] = U_g exactly, so the term has mean 0 for any β fixed without this
-                // reservoir's choice: here from this pixel's earlier shadow rays (earlier frames and
-                // earlier candidate sets of this frame), β = visible / (traced + 1), 0 until one got through: a
-                // pixel no ray reaches keeps its exact 0 instead of the control's zero-mean noise.
-                vec4 ug = unshadowed[idx];
-                float lum = dot(vpl_luminance_albedo(ax), vpl.flux);
-                vec3 gw = lum > 0.0 ? ax * vpl.flux * (r.target * r.weight * ug.w / lum) : vec3(0.0);
-                float beta = ris.learned > 0.0 ? 1.0 : float(counts.x) / float(counts.y + 1u);
-                sum += beta * (ug.xyz - gw);
-                siblings += uvec2(c != vec3(0.0) ? 1u : 0u, 1u);
-            }
-            if (ris.learned > 0.0) {
-                // A kept VPL has an unshadowed contribution (its target is positive): 0 means occluded.
-                uint vi = vis_tile_base(px) + 2u * vis_cell_of(r.vpl);
-                if (c != vec3(0.0)) atomicAdd(vis_counts[vi], 1u);
-                atomicAdd(vis_counts[vi + 1u], 1u);
+            uint visible = shadow_queue_trace(o, n), ray = 0u;
+#else
+        {
+            uint base = pc.first, top = pc.last;
+#endif
+            for (uint layer = base; layer < top; layer++) {
+                if (layer % ris.picks == 0u) {
+                    counts += siblings;
+                    siblings = uvec2(0u);
+                }
+                uint idx = res_index(px, layer);
+                Reservoir r = res_in[idx];
+                // An empty reservoir had no candidate with w > 0, so its U_g is 0 too: it adds nothing.
+                if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
+                Vpl vpl = vpl_fetch(r.vpl);
+#ifdef SHADE_QUEUE
+                // contribution_of's value: the unshadowed contribution, or 0 where the block's queued ray (the
+                // next one) was occluded.
+                vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
+                if (c != vec3(0.0) && (visible & (1u << ray++)) == 0u) c = vec3(0.0);
+#else
+                vec3 c = contribution_of(x, nx, ax, r.vpl, vpl);
+#endif
+                sum += c * r.weight;
+                if (ris.control != 0u) {
+                    // The control variate: + β (U_g − g(y) W), g = f p̂ / luminance(f), whose g(y) W is the
+                    // kept VPL's colour ratio f / luminance(f) times p̂(y) W = Σw / M. Given the candidates,
+                    // E[g(y) W] = U_g exactly, so the term has mean 0 for any β fixed without this
+                    // reservoir's choice: here from this pixel's earlier shadow rays (earlier frames and
+                    // earlier candidate sets of this frame), β = visible / (traced + 1), 0 until one got through: a
+                    // pixel no ray reaches keeps its exact 0 instead of the control's zero-mean noise.
+                    vec4 ug = unshadowed[idx];
+                    float lum = dot(vpl_luminance_albedo(ax), vpl.flux);
+                    vec3 gw = lum > 0.0 ? ax * vpl.flux * (r.target * r.weight * ug.w / lum) : vec3(0.0);
+                    float beta = ris.learned > 0.0 ? 1.0 : float(counts.x) / float(counts.y + 1u);
+                    sum += beta * (ug.xyz - gw);
+                    siblings += uvec2(c != vec3(0.0) ? 1u : 0u, 1u);
+                }
+                if (ris.learned > 0.0) {
+                    // A kept VPL has an unshadowed contribution (its target is positive): 0 means occluded.
+                    uint vi = vis_tile_base(px) + 2u * vis_cell_of(r.vpl);
+                    if (c != vec3(0.0)) atomicAdd(vis_counts[vi], 1u);
+                    atomicAdd(vis_counts[vi + 1u], 1u);
+                }
             }
         }
         sum /= float(ris.reservoirs);

@@ -26,7 +26,8 @@
 //  * bool bvh_occluded_lifted(a, b): the same with a window of BVH_LIFTED_EPS = 1e-6 at both ends, for ends
 //    already lifted off their surfaces (the exact gather's shadow rays; see the function).
 //    Both are bvh_any_hit(o, d, tmin, tmax): the stackless walk over the threaded records, with its own
-//    iteration bound (see the function).
+//    iteration bound (see the function). shared/shadow_queue.glsl runs the same walk (bvh_thread_step) for
+//    many rays back to back.
 //  * float bvh_closest_walk(o, d, tmax, out tri, out bary): bvh_closest's answer by the threaded walk (see
 //    the function for which callers it suits).
 //  * float bvh_trace(o, d, tmin, tmax, any_hit, out tri, out bary): the stack traversal behind bvh_closest.

@@ -57,7 +57,9 @@
 //!   only if their normal and eye distance are close (a deterministic function of the two G-buffer
 //!   texels).
 //! - `ris_shade` (W × H): L(x) = 1/R Σ_r f(y_r) V(y_r) W_r, f the unshadowed RGB contribution and V the
-//!   gather's visibility (`contribution()`: voxel march, exact or hybrid shadow rays).
+//!   gather's visibility (`contribution()`: voxel march, exact or hybrid shadow rays). Exact rays go
+//!   through the gather's queue (`glsl/shared/shadow_queue.glsl`): a block's rays are traced back to
+//!   back first, then its reservoirs are shaded in order with their answers (the same image).
 //! - With `--control-variate on` (the default; only without reuse, and with M > 1) each reservoir's
 //!   term is f(y) V(y) W + β (U_g − g(y) W), the **unshadowed control variate**. g = f · s for a guess s
 //!   at visibility fixed before the frame, U_g = 1/M Σ_i g(v_i) / p(v_i) over the reservoir's own
