@@ -124,6 +124,7 @@ const SHADERS: &[Shader] = &[
     file("test/cdf_sample.comp"),
     file("test/layout_echo.comp"),
     file("test/owen_sobol.comp"),
+    file("test/shadow_queue.comp"),
     file("test/voxel_march.comp"),
     file("test/voxel_rcp.comp"),
 ];

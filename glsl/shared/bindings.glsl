@@ -116,6 +116,8 @@ const uint CDF_HEADER = 4u;
 // Steps of the threaded walk per loop iteration (written out in bvh_any_hit; divides BVH_MAX_STEPS).
 #define BVH_THREAD_UNROLL 8
 #define BVH_MAX_STEPS 16384
+// Rays per shadow-ray queue (shared/shadow_queue.glsl): its answers are the bits of one uint.
+#define SHADOW_QUEUE 32u
 #define BVH_STACK_SIZE 64
 // bvh_tri of "no hit".
 #define BVH_NO_TRI 0xFFFFFFFFu

@@ -12,8 +12,6 @@
 #ifndef BOUNCE_SHADOW_QUEUE_GLSL
 #define BOUNCE_SHADOW_QUEUE_GLSL
 
-// Rays per queue: the answers come back as the bits of one uint.
-const uint SHADOW_QUEUE = 32u;
 vec3 shadow_queue_end[SHADOW_QUEUE];
 
 // Bit j set: the shadow ray o → shadow_queue_end[j] (j < n ≤ SHADOW_QUEUE) is not occluded.

@@ -27,7 +27,8 @@
 //! `max_iterations_per_ray()`, and a trace that cannot finish within the bound gives the documented
 //! answer (no hit / not occluded, `bvh_exhausted`) without disturbing its neighbours. The threaded
 //! closest-hit walk (`bvh_closest_walk`, the reference's) gives `bvh_closest`'s answer bit for bit on
-//! every query.
+//! every query, and the shadow-ray queue (`glsl/shared/shadow_queue.glsl`, through the test kernel
+//! `glsl/test/shadow_queue.comp`) gives `bvh_occluded_lifted`'s on every ray.
 
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
@@ -657,6 +658,92 @@ fn a_trace_past_the_bound_answers_no_hit_and_leaves_its_neighbours_alone() {
     for r in &res {
         assert_eq!((r.walk_t, r.walk_tri), (r.t, r.tri), "{r:?}");
     }
+}
+
+/// Rays per queue of `glsl/test/shadow_queue.comp` (`SHADOW_QUEUE`).
+const QUEUE: usize = bounce_graph::bindings::SHADOW_QUEUE as usize;
+
+/// One queue: rays from `o` to each of the first `n[0]` ends.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct QueueIn {
+    o: [f32; 4],
+    n: [u32; 4],
+    ends: [[f32; 4]; QUEUE],
+}
+
+/// Bit j: ray j not occluded, from the queue and from one `bvh_occluded_lifted` per ray.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct QueueOut {
+    queued: u32,
+    single: u32,
+    pad: [u32; 2],
+}
+
+/// The shadow-ray queue (`glsl/shared/shadow_queue.glsl`, the gather's and ris's shade) answers every ray
+/// as `bvh_occluded_lifted` does, bit for bit, whatever its neighbours in a SIMD vector hold: queues of
+/// every length from 0 to SHADOW_QUEUE side by side, rays blocked at once, rays that walk the whole
+/// tree, and rays the walk refuses (a zero-length ray, a NaN end: "no hit"). The one-ray walk itself is
+/// checked against the CPU reference by the tests above.
+#[test]
+fn the_shadow_queue_answers_every_ray_as_one_occlusion_test_does() {
+    let gpu = TestGpu::new();
+    let mut rng = Rng(0xB0A7_0009);
+    let mut tris = bumpy_sphere(24, 32, 0.12);
+    // A soup inside, so that segments between surface points are often blocked.
+    for _ in 0..300 {
+        let c = rng.unit() * 0.6 * rng.f32();
+        tris.push([0, 1, 2].map(|_| c + rng.unit() * 0.08));
+    }
+    let mesh = Mesh::new(tris);
+    let vertices = mesh.vertices();
+    let flat = FlatBvh::new(&Bvh::from_vertices(&vertices), &vertices);
+    let bvh = GpuBvh::upload(&gpu, &flat).unwrap();
+    // Each invocation traces its queue twice; its loops must stay under llvmpipe's limit (65535).
+    let loops = 2 * QUEUE as u32 * (bvh.max_iterations_occluded() + 1) + 4;
+    assert!(loops < 65535, "the test's mesh is too large for one invocation: {loops} loop iterations");
+    let queues: Vec<QueueIn> = (0..1200)
+        .map(|k| {
+            let o = mesh.surface_point(&mut rng);
+            let mut ends = [[0.0; 4]; QUEUE];
+            for (j, e) in ends.iter_mut().enumerate() {
+                let p = match (k + j) % 23 {
+                    0 => o,                                  // zero length: refused, "no hit"
+                    1 => Vec3::new(f32::NAN, 0.0, 0.0),      // not finite: refused, "no hit"
+                    2 => rng.unit() * 3.0,                   // outside the sphere: crosses it
+                    _ => mesh.surface_point(&mut rng),
+                };
+                *e = p.extend(0.0).to_array();
+            }
+            QueueIn { o: o.extend(0.0).to_array(), n: [(k % (QUEUE + 1)) as u32, 0, 0, 0], ends }
+        })
+        .collect();
+    let mut bindings = GpuBvh::bindings().to_vec();
+    bindings.extend([Binding::storage_buffer(T_IN), Binding::storage_buffer(T_OUT)]);
+    let spirv = bounce_graph::spirv(bounce_graph::shaders::SHADOW_QUEUE_COMP);
+    let p = ComputePipeline::new(&gpu, "shadow_queue", &spirv, &bindings, 0, &[]).unwrap();
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let inb = Buffer::with_data(&gpu, "queues", storage, bytemuck::cast_slice(&queues)).unwrap();
+    let size = (std::mem::size_of::<QueueOut>() * queues.len()) as u64;
+    let outb = Buffer::new(&gpu, &BufferDesc::storage("answers", size)).unwrap();
+    gpu.submit(|cmd| {
+        let w = bvh.writes(DescriptorWrites::new()).storage_buffer(T_IN, &inb).storage_buffer(T_OUT, &outb);
+        p.dispatch(cmd, &w, &[], [queues.len() as u32, 1, 1], [bounce_graph::bindings::WG_1D, 1, 1]);
+    })
+    .unwrap();
+    let out: Vec<QueueOut> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());
+    let (mut visible, mut blocked) = (0, 0);
+    for (k, (q, a)) in queues.iter().zip(&out).enumerate() {
+        let n = q.n[0] as usize;
+        assert_eq!(a.queued, a.single, "queue {k} ({n} rays): the queue's answers differ from one ray at a time");
+        let mask = if n == QUEUE { u32::MAX } else { (1u32 << n) - 1 };
+        assert_eq!(a.queued & !mask, 0, "queue {k}: an answer past its {n} rays");
+        visible += a.queued.count_ones();
+        blocked += n as u32 - a.queued.count_ones();
+    }
+    eprintln!("shadow queue: {visible} rays visible, {blocked} blocked, bound {loops} loop iterations");
+    assert!(visible > 2000 && blocked > 2000, "visible {visible}, blocked {blocked}: the scene should mix both");
 }
 
 #[test]
