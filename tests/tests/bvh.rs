@@ -709,9 +709,9 @@ fn the_shadow_queue_answers_every_ray_as_one_occlusion_test_does() {
             let mut ends = [[0.0; 4]; QUEUE];
             for (j, e) in ends.iter_mut().enumerate() {
                 let p = match (k + j) % 23 {
-                    0 => o,                                  // zero length: refused, "no hit"
-                    1 => Vec3::new(f32::NAN, 0.0, 0.0),      // not finite: refused, "no hit"
-                    2 => rng.unit() * 3.0,                   // outside the sphere: crosses it
+                    0 => o,                             // zero length: refused, "no hit"
+                    1 => Vec3::new(f32::NAN, 0.0, 0.0), // not finite: refused, "no hit"
+                    2 => rng.unit() * 3.0,              // outside the sphere: crosses it
                     _ => mesh.surface_point(&mut rng),
                 };
                 *e = p.extend(0.0).to_array();
