@@ -314,6 +314,20 @@ void bvh_thread_step(BvhRay r, float tmin, float tmax, int end, inout int i, ino
     if (i >= end) done = true;
 }
 
+// BVH_THREAD_UNROLL (8) steps, written out: a loop would count in llvmpipe's limit. One loop iteration of
+// every walk of the threaded records (bvh_any_hit, shared/shadow_queue.glsl).
+void bvh_thread_steps(BvhRay r, float tmin, float tmax, int end, inout int i, inout uint steps, inout bool done,
+                      inout bool hit) {
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+    bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+}
+
 bool bvh_any_hit(vec3 o, vec3 d, float tmin, float tmax) {
     bvh_steps = 0u;
     bvh_exhausted = false;
@@ -325,17 +339,8 @@ bool bvh_any_hit(vec3 o, vec3 d, float tmin, float tmax) {
     bool hit = false;
     bool done = false;
     uint steps = 0u;
-    // BVH_THREAD_UNROLL (8) steps per iteration, written out: a loop would count in llvmpipe's limit.
-    for (uint k = 0u; k < uint(BVH_MAX_STEPS / BVH_THREAD_UNROLL) && !done; k++) {
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-    }
+    for (uint k = 0u; k < uint(BVH_MAX_STEPS / BVH_THREAD_UNROLL) && !done; k++)
+        bvh_thread_steps(r, tmin, tmax, end, i, steps, done, hit);
     bvh_steps = steps;
     bvh_exhausted = !done;
     return hit;

@@ -37,14 +37,7 @@ uint shadow_queue_trace(vec3 o, uint n) {
             hit = false;
             tracing = true;
         }
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
-        bvh_thread_step(r, tmin, tmax, end, i, steps, done, hit);
+        bvh_thread_steps(r, tmin, tmax, end, i, steps, done, hit);
         // Exhausted after BVH_MAX_STEPS records: "no hit", as bvh_any_hit answers.
         if (done || steps >= uint(BVH_MAX_STEPS)) {
             if (!hit) visible |= 1u << current;

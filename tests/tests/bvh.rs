@@ -441,6 +441,17 @@ fn random_queries(mesh: &Mesh, n: usize, rng: &mut Rng) -> Vec<Query> {
         .collect()
 }
 
+/// `bumpy_sphere(rings, segments, 0.12)` with `soup` small random triangles inside, so that segments
+/// between surface points are often blocked.
+fn sphere_with_soup(rings: usize, segments: usize, soup: usize, rng: &mut Rng) -> Vec<[Vec3; 3]> {
+    let mut tris = bumpy_sphere(rings, segments, 0.12);
+    for _ in 0..soup {
+        let c = rng.unit() * 0.6 * rng.f32();
+        tris.push([0, 1, 2].map(|_| c + rng.unit() * 0.08));
+    }
+    tris
+}
+
 /// A closed, star-shaped sphere with bumps of relative height `bump` (0: a convex polyhedron, every vertex on
 /// the unit sphere): `rings` × `segments` UV grid with one vertex per pole, every vertex shared exactly by its
 /// triangles (2·segments·(rings − 1) triangles).
@@ -515,13 +526,7 @@ fn gpu_bvh_matches_the_cpu_reference_on_the_cornell_box() {
 fn gpu_bvh_matches_the_cpu_reference_on_a_50k_sphere_even_height_limited() {
     let gpu = TestGpu::new();
     let mut rng = Rng(0xB0A7_0002);
-    let mut tris = bumpy_sphere(158, 160, 0.12);
-    // A soup inside, so that segments between surface points are often blocked.
-    for _ in 0..2000 {
-        let c = rng.unit() * 0.6 * rng.f32();
-        tris.push([0, 1, 2].map(|_| c + rng.unit() * 0.08));
-    }
-    let mesh = Mesh::new(tris);
+    let mesh = Mesh::new(sphere_with_soup(158, 160, 2000, &mut rng));
     let vertices = mesh.vertices();
     let start = Instant::now();
     let cpu = Bvh::from_vertices(&vertices);
@@ -690,13 +695,7 @@ struct QueueOut {
 fn the_shadow_queue_answers_every_ray_as_one_occlusion_test_does() {
     let gpu = TestGpu::new();
     let mut rng = Rng(0xB0A7_0009);
-    let mut tris = bumpy_sphere(24, 32, 0.12);
-    // A soup inside, so that segments between surface points are often blocked.
-    for _ in 0..300 {
-        let c = rng.unit() * 0.6 * rng.f32();
-        tris.push([0, 1, 2].map(|_| c + rng.unit() * 0.08));
-    }
-    let mesh = Mesh::new(tris);
+    let mesh = Mesh::new(sphere_with_soup(24, 32, 300, &mut rng));
     let vertices = mesh.vertices();
     let flat = FlatBvh::new(&Bvh::from_vertices(&vertices), &vertices);
     let bvh = GpuBvh::upload(&gpu, &flat).unwrap();
