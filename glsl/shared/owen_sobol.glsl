@@ -28,14 +28,20 @@ uint nested_uniform_scramble(uint x, uint seed) {
 }
 
 // Sobol dimensions 0 (van der Corput: the index's bits reversed) and 1 (primitive polynomial x + 1:
-// direction numbers v_0 = 2^31, v_j = v_(j-1) ^ (v_(j-1) >> 1)). At most 32 loop iterations: one per
-// significant bit of the index.
+// direction numbers v_0 = 2^31, v_j = v_(j-1) ^ (v_(j-1) >> 1), so bit 31 − i of v_j is C(j, i) mod 2). By
+// Lucas's theorem C(j, i) is odd exactly when i's bits are a subset of j's, so dimension 1, bits reversed, is
+// at each bit i the XOR of the index's bits j ⊇ i: a superset transform, five shift-and-XOR steps. No loop:
+// llvmpipe runs a loop as long as its slowest lane, and a scrambled index has ~32 significant bits (the
+// loop over them cost the gather's sampling). tests/tests/reference.rs checks the points bit for bit
+// against a CPU twin that loops over the direction numbers (bounce_oracles::cpu_sobol).
 uvec2 sobol2(uint index) {
-    uint x = bitfieldReverse(index), y = 0u;
-    for (uint v = 0x80000000u; index != 0u; index >>= 1, v ^= v >> 1) {
-        if ((index & 1u) != 0u) y ^= v;
-    }
-    return uvec2(x, y);
+    uint w = index;
+    w ^= (w >> 1) & 0x55555555u;
+    w ^= (w >> 2) & 0x33333333u;
+    w ^= (w >> 4) & 0x0F0F0F0Fu;
+    w ^= (w >> 8) & 0x00FF00FFu;
+    w ^= (w >> 16) & 0x0000FFFFu;
+    return uvec2(bitfieldReverse(index), bitfieldReverse(w));
 }
 
 // Point `index` of the 2D set `seed`, in [0, 1)² with 24 bits per coordinate.

@@ -221,7 +221,7 @@ fn progressive_reference_frames_are_one_sequence() {
 }
 
 /// The sample points (`glsl/shared/owen_sobol.glsl`, run on the GPU by `glsl/test/owen_sobol.comp`):
-/// in [0, 1); every power-of-two prefix of a 2D set, and an aligned block further on, is a (0, m, 2)-net
+/// bit for bit those of the CPU twin (`bounce_oracles::cpu_sobol`); in [0, 1); every power-of-two prefix of a 2D set, and an aligned block further on, is a (0, m, 2)-net
 /// (exactly one point in each 2^a × 2^(m−a) elementary box, for every a); the 1D set's prefixes fall one
 /// per 1/2^m interval; and other seeds (pixels) give other points.
 #[test]
@@ -250,6 +250,12 @@ fn the_sample_points_are_stratified_in_every_power_of_two_prefix() {
     })
     .unwrap();
     let got: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());
+    // Bit for bit the CPU twin's, whose Sobol dimension 1 loops over its direction numbers.
+    for (q, &[i, s]) in got.iter().zip(&inputs) {
+        let [x, y] = bounce_oracles::cpu_sobol::owen_sobol2(i, s);
+        let z = bounce_oracles::cpu_sobol::owen_sobol1(i, s);
+        assert_eq!([q[0], q[1], q[2]].map(f32::to_bits), [x, y, z].map(f32::to_bits), "point {i} of seed {s:#x}");
+    }
     assert!(got.iter().all(|q| q[..3].iter().all(|&v| (0.0..1.0).contains(&v))), "a point outside [0, 1)");
     let is_net = |pts: &[[f32; 4]], m: u32| {
         (0..=m).all(|a| {

@@ -379,9 +379,8 @@ fn rsm_warning(s: &FrameSettings) -> Option<String> {
 impl RenderContext {
     /// VPLs per gather dispatch under the device's loop iteration limit. Per VPL an invocation loops at
     /// most: the visibility's (the march's steps, ≤ dims.x + dims.y + dims.z + 3, or a trace's bound),
-    /// the two Sobol pairs' bit loops and the CDF's two binary searches (≤ 32 each), the sections and
-    /// faces, plus 64 for the rest; another 64 are kept for the loops outside. (Without the Sobol
-    /// loops, `local` at 4096 VPLs under exact rays overran the limit: the march had hidden it.)
+    /// the CDF's two binary searches (≤ 32 each), the sections and faces, plus 64 for the rest; another
+    /// 64 are kept for the loops outside. (The Sobol points have no loop: `glsl/shared/owen_sobol.glsl`.)
     pub fn vpls_per_dispatch(&self, s: &FrameSettings) -> u32 {
         let Some(limit) = self.gpu.loop_iteration_limit else { return u32::MAX };
         let dims = self.voxel_spec(s).dims;
@@ -395,9 +394,8 @@ impl RenderContext {
             _ => self.trace_iterations(s).unwrap_or(grid_march),
         };
         let march = self.trace_iterations(s).unwrap_or(grid_march);
-        // draw_vpl: its two Owen-scrambled Sobol pairs (sobol2 loops once per bit of the scrambled index:
-        // ≤ 32 each), its two binary searches (≤ 32 each), the sections and faces.
-        let per_vpl = occlusion + 64 + 2 * 32 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
+        // draw_vpl: its two binary searches (≤ 32 each), the sections and faces.
+        let per_vpl = occlusion + 64 + 2 * 32 + 3 * sections + 2 * faces * (sections + 1);
         // MIS: a CDF sample adds one march (its gathering indicator); a gathering ray marches once to
         // its hit and then, per light, does a CDF sample's work (visibility march, probability look-up).
         let per_vpl = if s.method == Method::Mis {
@@ -426,10 +424,8 @@ impl RenderContext {
     /// a look-up per light.
     fn traces_per_dispatch(&self, s: &FrameSettings) -> u32 {
         match (self.gpu.loop_iteration_limit, self.trace_iterations(s)) {
-            // Per ray: the trace, its Sobol pair (≤ 32), and the look-up per light.
-            (Some(limit), Some(per)) => {
-                (limit.saturating_sub(64) / (per + 32 + 16 * self.scene.light_count + 16)).max(1)
-            }
+            // Per ray: the trace and the look-up per light.
+            (Some(limit), Some(per)) => (limit.saturating_sub(64) / (per + 16 * self.scene.light_count + 16)).max(1),
             _ => u32::MAX,
         }
     }

@@ -62,8 +62,8 @@ impl Reference {
     /// Samples one dispatch may take under the device's loop iteration limit. Per sample an invocation
     /// traces per strategy one first hit and `lights` shadow rays (the shadow rays at y; under MIS the
     /// light side's x ↔ y ray replaces the drawing light's own), each bounded by its own traversal's
-    /// bound, loops ≤ 32 times per Sobol point, and over the lights twice more under MIS (the pick, the
-    /// densities), plus 8 for the rest.
+    /// bound, and over the lights twice more under MIS (the pick, the densities), plus 8 for the rest
+    /// (the Sobol points have no loop).
     pub fn per_dispatch(gpu: &Gpu, bvh: &GpuBvh, lights: u32, estimator: ReferenceEstimator) -> u32 {
         let Some(limit) = gpu.loop_iteration_limit else { return u32::MAX };
         let strategies = match estimator {
@@ -72,7 +72,7 @@ impl Reference {
         };
         // First hits (bvh_closest_walk) and shadow rays walk the same threaded records.
         let rays = (1 + lights) * bvh.max_iterations_occluded();
-        let per_sample = strategies * (rays + 32 + 2 * lights) + 8;
+        let per_sample = strategies * (rays + 2 * lights) + 8;
         (limit.saturating_sub(64 + lights) / per_sample).max(1)
     }
 

@@ -299,13 +299,13 @@ pub fn vis_bytes(width: u32, height: u32, tile: u32, res: u32, faces: u32) -> u6
 }
 
 /// Candidates per initial dispatch under a loop iteration `limit`: per candidate `draw_vpl`'s loops (two
-/// Sobol pairs' bit loops and two binary searches, ≤ 32 each, the sections 3 · `sections`, the faces
+/// binary searches, ≤ 32 each, the sections 3 · `sections`, the faces
 /// 2 · `faces` · (`sections` + 1)), or none for a candidate from the pool (`pool`), the target's own
 /// loops (`target`: the voxel march under `--target-floor` < 1) and 64 for the rest; 128 kept for the
 /// history's combination and the code outside.
 pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, target: u32, pool: bool) -> u32 {
     let Some(limit) = limit else { return u32::MAX };
-    let draw = if pool { 0 } else { 4 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2) };
+    let draw = if pool { 0 } else { 2 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2) };
     let per = 64 + draw + target;
     (limit.saturating_sub(128 + target) / per).max(1)
 }
