@@ -9,7 +9,7 @@
 //! own triangles (`hybrid`: `glsl/shared/hybrid.glsl`, the same answer). Exact rays are traced from a
 //! per-invocation queue (`glsl/shared/shadow_queue.glsl`): each block of 32 samples is drawn first and
 //! its rays walked back to back, so a SIMD lane whose ray is done starts its next at once instead of
-//! waiting for the vector's longest (the same answers and sums, bit for bit; 7–24 % less gather time on
+//! waiting for the vector's longest (the same answers and sums, bit for bit; 5–20 % less gather time on
 //! lavapipe, BENCHMARKS.md). Modes:
 //! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
 //! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
