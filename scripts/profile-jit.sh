@@ -26,6 +26,8 @@ bin="${CARGO_TARGET_DIR:-$here/target}/release/bounce"
 work="$(mktemp -d "${TMPDIR:-/tmp}/bounce-jit.XXXXXX")"
 "$bin" render "$@" --out "$work/render.exr" >"$work/render.log" 2>&1 &
 pid=$!
+# Stop the render if anything below fails; after a normal end it has been waited for.
+trap 'kill "$pid" 2>/dev/null || true' EXIT
 sleep "$delay"
 kill -0 "$pid" 2>/dev/null || { echo "error: the render ended within the delay (see $work/render.log)" >&2; exit 1; }
 perf record -q -F 4000 -o "$work/perf.data" -p "$pid" -- sleep "$window" >/dev/null 2>&1
