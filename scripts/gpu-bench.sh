@@ -1,30 +1,37 @@
 #!/usr/bin/env bash
 # The thesis's measurements on a machine with a GPU, prepared here and run there in one command.
 #
-#   scripts/gpu-bench.sh stage          # here: build, then stage the stripped binary and the Vulkan
-#                                       # loader under out/gpu-bench/ (ignored by git; ~12 MiB)
+#   scripts/gpu-bench.sh stage          # here: build (release), then stage the stripped binary and the
+#                                       # Vulkan loader under out/gpu-bench/ (ignored by git; ~12 MiB)
 #   scripts/gpu-bench.sh run [OUT_DIR]  # there, from the repository root (assets/ and out/gpu-bench/
-#                                       # present): ~5 minutes on a recent GPU
+#                                       # present): ~6 minutes on a recent GPU
 #   scripts/gpu-bench.sh tiny [OUT_DIR] # the same steps at a tiny size on whatever device is here
-#                                       # (lavapipe in CI): builds, stages and runs (~1 minute)
+#                                       # (lavapipe in CI): builds (debug), stages and runs (~1 minute)
 #
-# `run` prints, for Sibenik and Conference: (1) the thesis configuration (512², 800 VPLs per pixel;
-# global, local, gbg, mis; the indirect component) with each pass's GPU ms, median of 3 frames with the
-# kept products dropped before each (full frames), shaped like the thesis's Tables 7.1 and 7.2; (2) the
-# equal-time error of each method against the path-traced ground truth (`--method reference`), every
-# method given the same wall-time budget (`render --time-limit`). Everything it prints is also written
-# to OUT_DIR/gpu-bench.md. No validation layers there (a GPU machine may have none).
+# `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
+# (1) the gather's GPU ms by visibility (voxel, exact, hybrid) on every scene of the suite at 256 VPLs
+# per pixel, median of 3 frames (issue 13's cost bound), at 512² and at the 64² of the lavapipe tables;
+# (2) for Sibenik and Conference the thesis configuration (512², 800 VPLs per pixel; global, local, gbg,
+# mis, ris; the indirect component) with each pass's GPU ms, median of 3 frames with the kept products
+# dropped before each (full frames), shaped like the thesis's Tables 7.1 and 7.2; (3) the equal-time
+# error of each method against the path-traced ground truth (`--method reference`), every method given
+# the same wall-time budget (`render --time-limit`). No validation layers there (a GPU machine may have
+# none).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 mode="${1:-}"
 stage="$here/out/gpu-bench"
 
+# $1: the cargo profile (release for a GPU's timings; debug for the tiny run, which CI's cache holds).
 stage_binary() {
+  local profile="$1"
   source "$here/scripts/setup.sh"
-  (cd "$here" && cargo build -q -p bounce)
+  (cd "$here" && cargo build -q -p bounce --profile "$profile")
   local target="${CARGO_TARGET_DIR:-$here/target}"
+  local dir="$profile"
+  [ "$profile" = dev ] && dir=debug
   mkdir -p "$stage/bin" "$stage/lib"
-  cp "$target/debug/bounce" "$stage/bin/bounce.tmp"
+  cp "$target/$dir/bounce" "$stage/bin/bounce.tmp"
   strip "$stage/bin/bounce.tmp" 2>/dev/null || true
   mv "$stage/bin/bounce.tmp" "$stage/bin/bounce"
   # The loader, for a machine that has a GPU driver but no libvulkan.
@@ -36,26 +43,39 @@ stage_binary() {
 
 median3() { sort -g | sed -n 2p; }
 
-run_bench() {
-  local out="$1" size="$2" vpls="$3" dprsm="$4" spp="$5" budget="$6" shadow="$7"
-  shift 7
-  local scenes=("$@")
-  local bin="$stage/bin/bounce"
-  [ -x "$bin" ] || { echo "error: $bin is missing: run 'scripts/gpu-bench.sh stage' first" >&2; exit 2; }
-  export LD_LIBRARY_PATH="$stage/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-  local icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-  if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then export VK_DRIVER_FILES="$icd"; fi
-  mkdir -p "$out"
-  local md="$out/gpu-bench.md"
-  local device
-  device="$("$bin" info | awk -F': ' '/^device/ && !n++ {print $2}')"
-  local common=(--width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" --shadow-res "$shadow")
-  local methods=(global local gbg mis ris)
+# The gather's GPU ms by visibility on each scene, `uniform` at $vpls VPLs per pixel, median of 3 frames
+# (issue 13's cost bound: the default visibility's gather no dearer than the voxel march's).
+vis_table() {
+  local out="$1" md="$2" size="$3" vpls="$4" dprsm="$5" shadow="$6"
+  shift 6
   {
-    echo "# gpu-bench: $(date -u +%Y-%m-%d), ${device:-unknown device}"
     echo
-    echo "\`scripts/gpu-bench.sh $mode\`: ${size}², ${vpls} VPLs per pixel, DPRSM ${dprsm}² per face, indirect."
-  } | tee "$md"
+    echo "## Gather GPU ms by visibility (uniform, $vpls VPLs per pixel, ${size}², DPRSM ${dprsm}², median of 3 frames)"
+    echo
+    echo "| scene | voxel | exact | hybrid | exact ÷ voxel |"
+    echo "|---|---:|---:|---:|---:|"
+  } | tee -a "$md"
+  local scene v
+  for scene in "$@"; do
+    local toml="$here/assets/$scene/scene.toml"
+    declare -A ms=()
+    for v in voxel exact hybrid; do
+      ms[$v]="$(for k in 1 2 3; do "$bin" render "$toml" --width "$size" --height "$size" --component indirect \
+        --dprsm-res "$dprsm" --shadow-res "$shadow" --method uniform --vpls "$vpls" --seed "$k" \
+        --visibility "$v" --timings --out "$out/vis-$scene-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
+    done
+    local ratio="–"
+    [ -n "${ms[voxel]}" ] && [ -n "${ms[exact]}" ] && ratio="$(awk -v e="${ms[exact]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
+    echo "| $scene | ${ms[voxel]:-–} | ${ms[exact]:-–} | ${ms[hybrid]:-–} | $ratio |" | tee -a "$md"
+    unset ms
+  done
+}
+
+# The thesis configuration's per-pass GPU ms (Tables 7.1/7.2) for each of $scenes.
+pass_tables() {
+  local out="$1" md="$2"
+  shift 2
+  local scene m k p
   for scene in "${scenes[@]}"; do
     local toml="$here/assets/$scene/scene.toml"
     {
@@ -86,19 +106,15 @@ run_bench() {
         echo
       done
     } | tee -a "$md"
-    # The visibilities' cost: the gather alone (issue 13's measure), median of 3.
-    {
-      echo
-      echo "## $scene: gather GPU ms by visibility (uniform, $vpls VPLs, median of 3)"
-      echo
-      echo "| visibility | gather ms |"
-      echo "|---|---:|"
-      for v in voxel exact hybrid; do
-        ms="$(for k in 1 2 3; do "$bin" render "$toml" "${common[@]}" --method uniform --vpls "$vpls" --seed "$k" \
-          --visibility "$v" --timings --out "$out/$scene-vis-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
-        echo "| $v | ${ms:-–} |"
-      done
-    } | tee -a "$md"
+  done
+}
+
+# Each method's error against the path-traced ground truth at equal wall time, for each of $scenes.
+equal_time() {
+  local out="$1" md="$2"
+  local scene m
+  for scene in "${scenes[@]}"; do
+    local toml="$here/assets/$scene/scene.toml"
     local ref="$out/$scene-reference.exr"
     "$bin" render "$toml" "${common[@]}" --method reference --spp "$spp" --out "$ref" 2>/dev/null
     {
@@ -125,16 +141,59 @@ run_bench() {
       printf '| %s | %s | %.4g | %.4f |\n' "$m" "${frames:-?}" "$rel" "$mean" | tee -a "$md"
     done
   done
+}
+
+# $1 OUT_DIR; $2 size, $3 VPLs per pixel, $4 DPRSM resolution, $5 reference spp, $6 equal-time budget (s),
+# $7 direct-light shadow resolution, $8 the visibility tables' sizes (comma-separated); the rest: scenes of
+# the thesis tables (the visibility tables take every scene of the suite).
+run_bench() {
+  local out="$1" size="$2" vpls="$3" dprsm="$4" spp="$5" budget="$6" shadow="$7" vis_sizes="$8"
+  shift 8
+  local scenes=("$@")
+  bin="$stage/bin/bounce"
+  [ -x "$bin" ] || { echo "error: $bin is missing: run 'scripts/gpu-bench.sh stage' first" >&2; exit 2; }
+  export LD_LIBRARY_PATH="$stage/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  local icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+  if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then export VK_DRIVER_FILES="$icd"; fi
+  mkdir -p "$out"
+  local md="$out/gpu-bench.md"
+  local device
+  device="$("$bin" info | sed -n '1s/, Vulkan.*//p')"
+  [ -n "$device" ] || { echo "error: no Vulkan device found ('bounce info' printed nothing)" >&2; exit 1; }
+  common=(--width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" --shadow-res "$shadow")
+  methods=(global local gbg mis ris)
+  {
+    echo "# gpu-bench: $(date -u +%Y-%m-%d), $device"
+    echo
+    echo "\`scripts/gpu-bench.sh $mode\`: ${size}², ${vpls} VPLs per pixel, DPRSM ${dprsm}² per face, indirect."
+  } | tee "$md"
+  # The whole suite at issue 13's 256 VPLs; the tiny run keeps to its own scenes and VPL count.
+  local suite=(cornell-box two-rooms box-on-floor doorway clutter sibenik conference) vis_vpls=256
+  [ "$mode" = tiny ] && suite=("${scenes[@]}") && vis_vpls="$vpls"
+  local vs
+  IFS=, read -ra vs <<<"$vis_sizes"
+  SECONDS=0
+  vis_table "$out" "$md" "${vs[0]}" "$vis_vpls" "$dprsm" "$shadow" "${suite[@]}"
+  echo "visibility table at ${vs[0]}²: done at ${SECONDS} s" >&2
+  pass_tables "$out" "$md"
+  echo "pass tables: done at ${SECONDS} s" >&2
+  equal_time "$out" "$md"
+  echo "equal time: done at ${SECONDS} s" >&2
+  local s
+  for s in "${vs[@]:1}"; do
+    vis_table "$out" "$md" "$s" "$vis_vpls" 32 "$shadow" "${suite[@]}"
+    echo "visibility table at $s²: done at ${SECONDS} s" >&2
+  done
   echo >&2
   echo "wrote $md" >&2
 }
 
 case "$mode" in
-  stage) stage_binary ;;
-  run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 2048 sibenik conference ;;
+  stage) stage_binary release ;;
+  run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 2048 512,64 sibenik conference ;;
   tiny)
-    stage_binary
-    run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 256 sibenik conference
+    stage_binary dev
+    run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 256 16 sibenik conference
     ;;
   *)
     echo "error: usage: scripts/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR]" >&2
