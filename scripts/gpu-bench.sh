@@ -6,7 +6,16 @@
 #   scripts/gpu-bench.sh run [OUT_DIR]  # there, from the repository root (assets/ and out/gpu-bench/
 #                                       # present): ~6 minutes on a recent GPU
 #   scripts/gpu-bench.sh tiny [OUT_DIR] # the same steps at a tiny size on whatever device is here
-#                                       # (lavapipe in CI): builds (debug), stages and runs (~1 minute)
+#                                       # (lavapipe in CI): builds (debug), stages and runs (~3 minutes)
+#
+# A/B comparisons of builds, for the few minutes a GPU is lent (one command there for all of them):
+#   scripts/gpu-bench.sh stage-ab LABEL # here: build (release) the working tree as it is now and keep
+#                                       # it as out/gpu-bench/ab/LABEL.gz (~4 MiB: ten builds travel)
+#   scripts/gpu-bench.sh ab OUT_DIR [LABEL…]  # there: each build's gather GPU ms (median of 3 after a
+#                                       # warm-up process) per scene and size, the first build's voxel
+#                                       # march beside them, and whether each build's image equals the
+#                                       # first's; AB_SCENES, AB_SIZES, AB_METHOD, AB_VPLS, AB_VISIBILITY
+#                                       # choose (defaults: 4 scenes, 512 and 1024, uniform, 256, exact)
 #
 # `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
 # (1) the gather's GPU ms by visibility (voxel, exact, hybrid) on every scene of the suite at 256 VPLs
@@ -42,6 +51,85 @@ stage_binary() {
 }
 
 median3() { sort -g | sed -n 2p; }
+
+# Use the staged loader, and NVIDIA's driver where its manifest is (a GPU machine without a system loader).
+use_staged_loader() {
+  export LD_LIBRARY_PATH="$stage/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  local icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+  if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then export VK_DRIVER_FILES="$icd"; fi
+}
+
+# $1 LABEL, $2 cargo profile: the working tree's build, kept compressed for `ab`.
+stage_ab() {
+  local label="$1" profile="$2"
+  [[ "$label" =~ ^[A-Za-z0-9_.-]+$ ]] || { echo "error: a build label is letters, digits, '.', '_' or '-'" >&2; exit 2; }
+  stage_binary "$profile"
+  mkdir -p "$stage/ab"
+  gzip -9 -c "$stage/bin/bounce" >"$stage/ab/$label.gz.tmp"
+  mv "$stage/ab/$label.gz.tmp" "$stage/ab/$label.gz"
+  echo "staged build $label in $stage/ab/$label.gz" >&2
+}
+
+# $1 OUT_DIR, then the labels (default: every staged build). Writes OUT_DIR/ab.md.
+run_ab() {
+  local out="$1"
+  shift
+  local labels=("$@")
+  if [ "${#labels[@]}" -eq 0 ]; then
+    local f
+    for f in "$stage"/ab/*.gz; do [ -e "$f" ] && labels+=("$(basename "$f" .gz)"); done
+  fi
+  [ "${#labels[@]}" -gt 0 ] || { echo "error: no build staged: run 'scripts/gpu-bench.sh stage-ab LABEL' first" >&2; exit 2; }
+  local l
+  for l in "${labels[@]}"; do
+    [ -f "$stage/ab/$l.gz" ] || { echo "error: no staged build '$l' in $stage/ab" >&2; exit 2; }
+  done
+  use_staged_loader
+  mkdir -p "$out/bin"
+  for l in "${labels[@]}"; do
+    gunzip -c "$stage/ab/$l.gz" >"$out/bin/$l"
+    chmod +x "$out/bin/$l"
+  done
+  local scenes sizes
+  read -ra scenes <<<"${AB_SCENES:-sibenik conference clutter cornell-box}"
+  read -ra sizes <<<"${AB_SIZES:-512 1024}"
+  local method="${AB_METHOD:-uniform}" vpls="${AB_VPLS:-256}" vis="${AB_VISIBILITY:-exact}"
+  local md="$out/ab.md" first="${labels[0]}"
+  gather_ms() { # build scene size seed visibility image
+    "$out/bin/$1" render "$here/assets/$2/scene.toml" --width "$3" --height "$3" --component indirect \
+      --method "$method" --vpls "$vpls" --seed "$4" --visibility "$5" --timings --out "$6" 2>/dev/null |
+      awk '$1 == "gather" {print $2}'
+  }
+  {
+    echo "# gpu-bench ab: $(date -u +%Y-%m-%d), $("$out/bin/$first" info | sed -n '1s/, Vulkan.*//p')"
+    echo
+    echo "Gather GPU ms, \`$method\`, $vpls VPLs per pixel, \`--visibility $vis\` (voxel: $first's march),"
+    echo "median of 3 processes (seeds 1–3) after a warm-up one; '=' after a time: the seed-1 image equals $first's."
+    echo
+    printf '| scene | size | voxel |'; for l in "${labels[@]}"; do printf ' %s |' "$l"; done; echo
+    printf '|---|---:|---:|'; for l in "${labels[@]}"; do printf -- '---:|'; done; echo
+  } | tee "$md"
+  local scene size k
+  for scene in "${scenes[@]}"; do
+    for size in "${sizes[@]}"; do
+      gather_ms "$first" "$scene" "$size" 0 voxel "$out/warm.exr" >/dev/null
+      local row voxel
+      voxel="$(for k in 1 2 3; do gather_ms "$first" "$scene" "$size" "$k" voxel "$out/voxel.exr"; done | median3)"
+      row="| $scene | $size | ${voxel:-–} |"
+      for l in "${labels[@]}"; do
+        local ms same=""
+        ms="$(for k in 1 2 3; do gather_ms "$l" "$scene" "$size" "$k" "$vis" "$out/$l-$k.exr"; done | median3)"
+        if [ "$l" != "$first" ] && [ -f "$out/$l-1.exr" ] && [ -f "$out/$first-1.exr" ]; then
+          "$out/bin/$first" compare "$out/$l-1.exr" "$out/$first-1.exr" --json | grep -q '"rmse": 0,' && same=" ="
+        fi
+        row="$row ${ms:-–}$same |"
+      done
+      echo "$row" | tee -a "$md"
+    done
+  done
+  rm -f "$out"/*.exr
+  echo "wrote $md" >&2
+}
 
 # The gather's GPU ms by visibility on each scene, `uniform` at $vpls VPLs per pixel, median of 3 frames
 # (issue 13's cost bound: the default visibility's gather no dearer than the voxel march's).
@@ -152,9 +240,7 @@ run_bench() {
   local scenes=("$@")
   bin="$stage/bin/bounce"
   [ -x "$bin" ] || { echo "error: $bin is missing: run 'scripts/gpu-bench.sh stage' first" >&2; exit 2; }
-  export LD_LIBRARY_PATH="$stage/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-  local icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-  if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then export VK_DRIVER_FILES="$icd"; fi
+  use_staged_loader
   mkdir -p "$out"
   local md="$out/gpu-bench.md"
   local device
@@ -191,12 +277,26 @@ run_bench() {
 case "$mode" in
   stage) stage_binary release ;;
   run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 2048 512,64 sibenik conference ;;
+  stage-ab)
+    [ $# -eq 2 ] || { echo "error: usage: scripts/gpu-bench.sh stage-ab LABEL" >&2; exit 2; }
+    stage_ab "$2" release
+    ;;
+  ab)
+    [ $# -ge 2 ] || { echo "error: usage: scripts/gpu-bench.sh ab OUT_DIR [LABEL…]" >&2; exit 2; }
+    run_ab "${@:2}"
+    ;;
   tiny)
+    # A stage of its own, so that CI's debug build never replaces a staged release build.
+    stage="$here/out/gpu-bench-tiny-stage"
     stage_binary dev
     run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 256 16 sibenik conference
+    # The A/B steps on one build staged under two labels (their images must match).
+    stage_ab tiny-a dev
+    stage_ab tiny-b dev
+    AB_SCENES=cornell-box AB_SIZES=16 AB_VPLS=8 run_ab "${2:-$here/out/gpu-bench-tiny}/ab" tiny-a tiny-b
     ;;
   *)
-    echo "error: usage: scripts/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR]" >&2
+    echo "error: usage: scripts/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR] | stage-ab LABEL | ab OUT_DIR [LABEL…]" >&2
     exit 2
     ;;
 esac
