@@ -2,24 +2,28 @@
 // mis: multiple importance sampling of two strategies for the VPL sum Σ_v c(v) (thesis §7.4), balance
 // heuristic, both strategies' densities in one measure, and unbiased with respect to `all`.
 //
-// The one measure. A VPL v stands for a patch of surface: give it the square Q_v in its tangent plane,
-// centred on it, of area A_v = Δω_v · d_l² / cos α_v (the area its texel sees; d_l the light–VPL
-// distance, α_v the angle at the VPL). Then, exactly,
-//   Σ_v c(v) = Σ_v ∫_{Q_v} F(v, y) dA(y),   F(v, y) = c(v) / A_v,
+// The one measure. A VPL v stands for a patch of surface: give it Q_v, its texel's footprint on its
+// tangent plane (patch_of: a parallelogram centred on it, of area A_v ≈ Δω_v · d_l² / cos α_v, d_l the
+// light–VPL distance, α_v the angle at the VPL). At pixel x only its part in front of x's tangent plane
+// counts: Q_v⁺ = Q_v ∩ {y : (y − x)·n_x > 0}, of area A_v⁺ (front_part). Then, exactly,
+//   Σ_v c(v) = Σ_v ∫_{Q_v⁺} F(v, y) dA(y),   F(v, y) = c(v) / A_v⁺,
 // an integral over pairs (VPL, point of its patch) in area measure, which both strategies sample:
-//   CDF: v from the gbg CDF mixture (probability P_v, shared/sampling.glsl), y uniform in Q_v:
-//        p_c(v, y) = P_v / A_v   (at x, in solid angle: P_v · |y−x|² / (A_v · cos θ_y), the issue's form);
+//   CDF: v from the gbg CDF mixture (probability P_v, shared/sampling.glsl), y uniform in Q_v⁺:
+//        p_c(v, y) = P_v / A_v⁺   (at x, in solid angle: P_v · |y−x|² / (A_v⁺ · cos θ_y), the issue's form);
 //   gathering: a cosine-distributed direction ω from x (cos θ_x / π per steradian); the ray's first hit
 //        (voxel march, or the BVH with EXACT_VISIBILITY), projected into light l's DPRSM and refined
 //        (gathering_texel), names a texel v = T_l(ω); y is where the ray from x meets v's tangent
-//        plane, and the pair counts if y ∈ Q_v:
+//        plane, and the pair counts if y ∈ Q_v (then y ∈ Q_v⁺: the ray leaves x forwards):
 //        p_g(v, y) = [T_l(ω_y) = v] · cos θ_x / π · |cos θ_y| / |y−x|²,   ω_y the direction x → y.
 // p_g is exact, not a model: for a CDF sample the indicator is evaluated by running the same T_l on ω_y
 // (one more march or BVH ray). So VPLs the gathering rays cannot reach (too close to x, behind the
 // ray's 2-cell start, hidden behind a nearer surface) get p_g = 0 and are carried by the CDF alone.
+// Why Q_v⁺ and the footprint (patch_of): a pair no gathering ray can make has weight 1 on the CDF side,
+// c / (n_c P_v), and where gbg's CDF rates a VPL near x low that is a firefly. With the whole patch, a
+// VPL next to a junction (a floor texel beside the wall x is on) had half its patch behind x's plane.
 // Balance heuristic, n_c CDF samples and n_g rays, every sample of either strategy adds
-//   F / (n_c p_c + n_g p_g) = c(v) / (n_c P_v + n_g A_v p_g(v, y)),
-// an unbiased estimate of Σ_v c(v) (P_v > 0 for every VPL through the defensive share; F = 0 outside Q_v).
+//   F / (n_c p_c + n_g p_g) = c(v) / (n_c P_v + n_g A_v⁺ p_g(v, y)),
+// an unbiased estimate of Σ_v c(v) (P_v > 0 for every VPL through the defensive share; F = 0 outside Q_v⁺).
 // c(v) is the shadowed VPL contribution of gather.comp (visibility from x to the VPL itself).
 //
 // MIS_THESIS replaces the weights by the thesis's literal ones, p_g = cos θ sin θ / π (eq. 7.10) against
@@ -54,6 +58,7 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"
 #include "shared/gathering.glsl"
+#include "shared/patch.glsl"
 
 #ifdef PSM_VISIBILITY
 // `--visibility psm` (mis.psm.comp): the n_c CDF samples are the frame's shared set (psm.comp: draws
@@ -70,26 +75,60 @@ layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
 #include "shared/psm.glsl"
 #endif
 
-// Q_v: centre, unit normal, two unit tangents and the side √A_v.
-struct Patch {
-    vec3 c, n, t1, t2;
-    float side;
-};
+// Where the ray from o along d meets the plane through c with normal n (parameter t > 0), or false.
+bool ray_plane(vec3 o, vec3 d, vec3 c, vec3 n, out vec3 p) {
+    float t = dot(c - o, n) / dot(d, n);
+    p = o + d * t;
+    return t > 0.0 && !isinf(t) && !isnan(t);
+}
 
+// Q_v (shared/patch.glsl): the texel's footprint on the VPL's tangent plane, the parallelogram whose edges
+// are where the light's rays through the texel's edge midpoints meet that plane.
 Patch patch_of(uint v, Vpl vpl) {
     uint res = frame.size.w;
     ivec3 t = ivec3(v % res, (v / res) % res, v / (res * res));
     float d_l = texelFetch(vpl_normal, t, 0).w;
     float d_omega = texelFetch(vpl_flux, t, 0).w;
-    vec3 light = lights[uint(t.z) / lm_faces()].position.xyz;
-    // Any positive area keeps the estimator exact; the texel's own footprint makes the two strategies
-    // overlap where they should. The clamp only stops a grazing VPL's patch from growing without bound.
-    float cos_a = max(abs(dot(vpl.normal, normalize(light - vpl.position))), 0.05);
+    uint l = uint(t.z) / lm_faces(), face = uint(t.z) % lm_faces();
+    vec3 light = lights[l].position.xyz;
     Patch q;
     q.c = vpl.position;
     q.n = vpl.normal;
-    tangent_basis(q.n, q.t1, q.t2);
-    q.side = sqrt(max(d_omega * d_l * d_l / cos_a, 1e-30));
+    // Any positive area keeps the estimator exact. The footprint makes T_l(ω_y) = v for nearly every y
+    // in Q_v, so a CDF sample of a VPL near x is also covered by the gathering density (a square of the
+    // same area, turned at random against the texel, left up to half of it to neighbouring texels: a
+    // VPL 0.4 % of Conference's extent from x then got weight 1 at 0.16× the uniform probability, a
+    // firefly of 380× the pixel). The area is capped where the old square's was (cos α ≥ 0.05), so a
+    // grazing VPL's patch cannot grow without bound.
+    float a_max = d_omega * d_l * d_l / 0.05;
+    vec2 uv = (vec2(t.xy) + 0.5) / float(res) * 2.0 - 1.0;
+    float h = 1.0 / float(res); // half a texel in map coordinates
+    vec3 X, Y, Z;
+    lm_axes(l, face, X, Y, Z);
+    mat3 to_world = mat3(X, Y, Z);
+    vec3 p0, p1, p2, p3;
+    bool ok = ray_plane(light, to_world * lm_direction(uv + vec2(h, 0.0)), q.c, q.n, p0)
+           && ray_plane(light, to_world * lm_direction(uv - vec2(h, 0.0)), q.c, q.n, p1)
+           && ray_plane(light, to_world * lm_direction(uv + vec2(0.0, h)), q.c, q.n, p2)
+           && ray_plane(light, to_world * lm_direction(uv - vec2(0.0, h)), q.c, q.n, p3);
+    q.e1 = p0 - p1;
+    q.e2 = p2 - p3;
+    q.area = length(cross(q.e1, q.e2));
+    if (!ok || !(q.area > 1e-30) || isinf(q.area)) {
+        // No footprint (a texel edge's ray misses the plane): the square of the texel's area.
+        vec3 t1, t2;
+        tangent_basis(q.n, t1, t2);
+        float cos_a = max(abs(dot(vpl.normal, normalize(light - vpl.position))), 0.05);
+        float side = sqrt(max(d_omega * d_l * d_l / cos_a, 1e-30));
+        q.e1 = t1 * side;
+        q.e2 = t2 * side;
+        q.area = side * side;
+    } else if (q.area > a_max) {
+        float s = sqrt(a_max / q.area);
+        q.e1 *= s;
+        q.e2 *= s;
+        q.area = a_max;
+    }
     return q;
 }
 
@@ -112,12 +151,6 @@ bool gathering_first_hit(vec3 x, vec3 nx, vec3 d, out vec3 hit) {
 #endif
 }
 
-// Where the ray from x along d meets Q_v's plane (parameter t > 0), or false.
-bool plane_point(vec3 x, vec3 d, Patch q, out vec3 y) {
-    float t = dot(q.c - x, q.n) / dot(d, q.n);
-    y = x + d * t;
-    return t > 0.0 && !isinf(t) && !isnan(t);
-}
 
 // T_l(ω): the texel of light l that the gathering ray from x along unit d names, or NO_VPL; the one
 // map both strategies evaluate, so p_g is the density the rays really have. The first hit's texel,
@@ -130,7 +163,7 @@ uint gathering_texel(vec3 x, vec3 nx, vec3 d, uint l, vec3 hit) {
     for (int i = 0; i < 2 && v != NO_VPL; i++) {
         Vpl vpl = vpl_fetch(v);
         vec3 y;
-        if (!plane_point(x, d, patch_of(v, vpl), y)) break;
+        if (!ray_plane(x, d, vpl.position, vpl.normal, y)) break;
         uint next = texel_at_point(y, l);
         if (next == NO_VPL) break;
         v = next;
@@ -139,14 +172,14 @@ uint gathering_texel(vec3 x, vec3 nx, vec3 d, uint l, vec3 hit) {
 }
 
 // A · p_g(v, y) for y on Q_v (already known to lie in it), given T_l(ω_y) = v holds or not.
-float area_times_gathering_density(vec3 x, vec3 nx, Patch q, vec3 y) {
+float area_times_gathering_density(vec3 x, vec3 nx, Patch q, float area, vec3 y) {
     vec3 w = y - x;
     float d2 = dot(w, w);
     if (!(d2 > 0.0)) return 0.0;
     w *= inversesqrt(d2);
     float cos_x = dot(nx, w);
     if (cos_x <= 0.0) return 0.0;
-    return q.side * q.side * cos_x / PI * abs(dot(q.n, w)) / d2;
+    return area * cos_x / PI * abs(dot(q.n, w)) / d2;
 }
 
 // The thesis's gathering "density" (eq. 7.10) in the direction of VPL v.
@@ -214,9 +247,16 @@ void main() {
                     continue;
                 }
                 Patch q = patch_of(v, vpl);
-                vec2 uy = owen_sobol2(k, seed ^ 0x9B05688Cu) - 0.5;
-                vec3 y = q.c + uy.x * q.side * q.t1 + uy.y * q.side * q.t2;
-                float ap_g = area_times_gathering_density(x, nx, q, y);
+                // y uniform in Q_v⁺(x): F = c / A_v⁺ there, p_c = P_v / A_v⁺ (c > 0 puts v in front of x,
+                // so A_v⁺ > 0).
+                FrontPart f = front_part(q, x, nx);
+                if (!(f.frac > 0.0)) {
+                    sum += c / (n_c * p_v); // rounding only: then no gathering ray names v from x either
+                    continue;
+                }
+                vec2 ab = front_point(f, owen_sobol2(k, seed ^ 0x9B05688Cu));
+                vec3 y = q.c + ab.x * q.e1 + ab.y * q.e2;
+                float ap_g = area_times_gathering_density(x, nx, q, f.frac * q.area, y);
                 if (ap_g > 0.0) {
                     vec3 hit, d = normalize(y - x);
                     uint light = v / (lm_faces() * frame.size.w * frame.size.w);
@@ -236,12 +276,12 @@ void main() {
                     Vpl vpl = vpl_fetch(v);
                     Patch q = patch_of(v, vpl);
                     vec3 y;
-                    if (!plane_point(x, d, q, y)) continue;
-                    vec2 ab = vec2(dot(y - q.c, q.t1), dot(y - q.c, q.t2)) / q.side;
-                    if (any(greaterThan(abs(ab), vec2(0.5)))) continue;
+                    if (!ray_plane(x, d, q.c, q.n, y)) continue;
+                    vec2 ab = patch_coords(q, y);
+                    if (!all(lessThanEqual(abs(ab), vec2(0.5)))) continue;
                     vec3 c = contribution(x, nx, ax, v);
                     if (c == vec3(0.0)) continue;
-                    float ap_g = area_times_gathering_density(x, nx, q, y);
+                    float ap_g = area_times_gathering_density(x, nx, q, front_part(q, x, nx).frac * q.area, y);
                     if (!(ap_g > 0.0)) continue;
                     float p_v = cdf_strategy_prob(v);
                     if (thesis) {

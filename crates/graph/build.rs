@@ -122,6 +122,7 @@ const SHADERS: &[Shader] = &[
     // Kernels used only by the tests.
     file("test/bvh_trace.comp"),
     file("test/cdf_sample.comp"),
+    file("test/front_part.comp"),
     file("test/layout_echo.comp"),
     file("test/owen_sobol.comp"),
     file("test/shadow_queue.comp"),
