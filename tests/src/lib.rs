@@ -77,6 +77,14 @@ pub fn mean(img: &[[f32; 3]]) -> f64 {
     img.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * img.len()).max(1) as f64
 }
 
+/// The mean of independent estimates and its standard error (sample standard deviation / √n), for the
+/// unbiasedness tests' "within 4 standard errors".
+pub fn mean_and_stderr(xs: &[f64]) -> (f64, f64) {
+    let n = xs.len() as f64;
+    let m = xs.iter().sum::<f64>() / n;
+    (m, (xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt())
+}
+
 /// Write `<name>-actual.exr`, `<name>-reference.exr` and `<name>-diff.exr` (|actual − reference|) to
 /// the evidence directory and return the paths, for the failure message.
 pub fn write_evidence(name: &str, actual: &RgbImage, reference: &RgbImage) -> String {

@@ -76,9 +76,7 @@ fn the_shared_vpl_set_is_unbiased() {
             mean(&r.render(&s).unwrap().radiance)
         })
         .collect();
-    let n = means.len() as f64;
-    let m = means.iter().sum::<f64>() / n;
-    let se = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+    let (m, se) = bounce_tests::mean_and_stderr(&means);
     eprintln!("shared set: {m:.5} ± {se:.5} vs all {target:.5} ({:+.2}%)", 100.0 * (m - target) / target);
     assert!((m - target).abs() <= 4.0 * se, "{m} ± {se} vs {target}");
 }
@@ -113,9 +111,7 @@ fn mis_with_a_shared_vpl_set() {
     let target = mean(&all.radiance);
     let means: Vec<f64> =
         (0..32).map(|k| mean(&r.render(&mis(Visibility::PsmExact, 300 + k)).unwrap().radiance)).collect();
-    let n = means.len() as f64;
-    let m = means.iter().sum::<f64>() / n;
-    let se = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+    let (m, se) = bounce_tests::mean_and_stderr(&means);
     eprintln!("mis, shared set, exact: {m:.5} ± {se:.5} vs all {target:.5} ({:+.2}%)", 100.0 * (m - target) / target);
     assert!((m - target).abs() <= 4.0 * se, "{m} ± {se} vs {target}");
     let maps = r.render(&mis(Visibility::Psm, 300)).unwrap();

@@ -74,9 +74,7 @@ fn agrees_with_all(name: &str, r: &mut Renderer) {
     let all = mean(Method::All, 0);
     for &method in METHODS.iter().filter(|m| !matches!(m, Method::All | Method::Reference)) {
         let seeds: Vec<f64> = (0..16).map(|k| mean(method, 100 + k)).collect();
-        let n = seeds.len() as f64;
-        let m = seeds.iter().sum::<f64>() / n;
-        let se = (seeds.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+        let (m, se) = bounce_tests::mean_and_stderr(&seeds);
         assert!(
             (m - all).abs() <= 4.0 * se + 1e-6 * all.abs(),
             "{name}, {}: indirect mean {m:.6} ± {se:.6} vs all {all:.6}",
@@ -316,9 +314,7 @@ fn a_1024_squared_dprsm_and_4096_vpls_per_pixel_agree_with_all() {
     for &method in METHODS.iter().filter(|m| !matches!(m, Method::All | Method::Reference)) {
         let t = std::time::Instant::now();
         let seeds: Vec<f64> = (0..8).map(|k| mean(method, 7 + k)).collect();
-        let n = seeds.len() as f64;
-        let m = seeds.iter().sum::<f64>() / n;
-        let se = (seeds.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+        let (m, se) = bounce_tests::mean_and_stderr(&seeds);
         eprintln!(
             "1024² DPRSM, 4096 VPLs, {}: {m:.5} ± {se:.5} vs all {all:.5} ({:+.2}%) in {:.1} s",
             method.name(),

@@ -301,9 +301,7 @@ fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
                     bounce_tests::mean(&indirect_with(&mut r, s, w, h, res, vox))
                 })
                 .collect();
-            let n = means.len() as f64;
-            let m = means.iter().sum::<f64>() / n;
-            let se = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+            let (m, se) = bounce_tests::mean_and_stderr(&means);
             eprintln!(
                 "mis {weights:?}, {visibility:?} visibility: mean of {seeds} seeds {m:.5} ± {se:.5} vs all {target:.5} ({:+.2}%)",
                 100.0 * (m - target) / target
@@ -316,6 +314,11 @@ fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
     }
 }
 
+/// Two triangles: the quad a, b, c, d.
+fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> [[Vec3; 3]; 2] {
+    [[a, b, c], [a, c, d]]
+}
+
 /// A floor meeting a wall, seen close up, with a coarse DPRSM (8² a face): the floor texels next to the
 /// wall have footprints reaching behind the wall's plane, so at the wall's pixels only their front part
 /// Q_v⁺ counts (glsl/mis.comp). `mis` must still average to `all`: the mean of 64 seeds within 4
@@ -324,7 +327,6 @@ fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
 /// default scene's test above passed both.)
 #[test]
 fn mis_is_unbiased_where_patches_reach_behind_a_junction() {
-    let quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| [[a, b, c], [a, c, d]];
     let v = Vec3::new;
     let mut tris = vec![];
     tris.extend(quad(v(-2.0, 0.0, -1.0), v(2.0, 0.0, -1.0), v(2.0, 0.0, 2.0), v(-2.0, 0.0, 2.0)));
@@ -344,9 +346,7 @@ fn mis_is_unbiased_where_patches_reach_behind_a_junction() {
             bounce_tests::mean(&indirect_with(&mut r, s, w, h, res, vox))
         })
         .collect();
-    let n = means.len() as f64;
-    let m = means.iter().sum::<f64>() / n;
-    let se = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+    let (m, se) = bounce_tests::mean_and_stderr(&means);
     eprintln!(
         "mis at a junction: mean of 64 seeds {m:.5} ± {se:.5} vs all {target:.5} ({:+.2}%)",
         100.0 * (m - target) / target
@@ -484,7 +484,6 @@ fn mis_front_part_is_the_clipped_square_and_its_points_are_uniform() {
 /// Two rooms joined by a door: the light is in the right room, the camera in the left one looking at
 /// its walls, so most VPLs (the right room's) are invisible from every gather point.
 pub fn corner_scene() -> Scene {
-    let quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| [[a, b, c], [a, c, d]];
     let v = Vec3::new;
     let mut tris = vec![];
     // The outer box [−2, 2] × [0, 2] × [−2, 2].
@@ -554,9 +553,7 @@ fn local_has_no_seam_at_region_borders() {
             diffs.push((lum(img[l]) - lum(all[l])) - (lum(img[rr]) - lum(all[rr])));
         }
     }
-    let n = diffs.len() as f64;
-    let m = diffs.iter().sum::<f64>() / n;
-    let se = (diffs.iter().map(|d| (d - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+    let (m, se) = bounce_tests::mean_and_stderr(&diffs);
     eprintln!("local seam: mean error difference across the border {m:.5} ± {se:.5}");
     assert!(m.abs() <= 4.0 * se, "a seam: {m} ± {se}");
 }
