@@ -1,4 +1,8 @@
 #version 460
+#ifdef SHADOW_POOL
+#extension GL_KHR_shader_subgroup_ballot : enable
+#extension GL_KHR_shader_subgroup_arithmetic : enable
+#endif
 // gather: one-bounce indirect radiance at each G-buffer pixel from VPLs, visibility by a voxel march.
 //   L(x) = 1/N Σ_k albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / d² · V(x, v) / p_v
 // GATHER_SAMPLE: N VPLs drawn from the mixture below (p_v its exact discrete probability).
@@ -45,8 +49,17 @@ layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
 
 #if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && !defined(PSM_VISIBILITY)
 // Exact shadow rays from a queue (shared/shadow_queue.glsl): each block of SHADOW_QUEUE samples is drawn
-// first, the rays it needs queued with their weighted contributions, and then traced.
+// first, the rays it needs queued with their weighted contributions, and then traced: by this invocation
+// alone (shadow_queue_trace), or with SHADOW_POOL (`--shadow-rays pool`) by its subgroup's pool
+// (shadow_pool_trace). Both give every ray bvh_occluded_lifted's answer, so the images are the same.
 #define GATHER_QUEUE
+#ifdef SHADOW_POOL
+#define SHADOW_POOL_INVOCATIONS (WG_2D * WG_2D)
+// A pooled ray's key is its VPL: its far end is recomputed from it, the same bits.
+vec3 shadow_pool_end(uint v) {
+    return shadow_end(v, vpl_fetch(v));
+}
+#endif
 #include "shared/shadow_queue.glsl"
 vec3 queue_weight[SHADOW_QUEUE]; // c(x, v) / p_v, the unshadowed contribution
 
@@ -56,46 +69,75 @@ void enqueue(vec3 x, vec3 nx, vec3 ax, uint v, float prob, inout uint n) {
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return;
     queue_weight[n] = c / prob;
+#ifdef SHADOW_POOL
+    shadow_pool_key[n] = v;
+#else
     shadow_queue_end[n] = shadow_end(v, vpl);
+#endif
     n++;
+}
+
+// The gather with exact rays: blocks of SHADOW_QUEUE samples drawn, their rays traced, the visible ones
+// summed in sample order (the sums of a ray per sample, bit for bit). With the pool every invocation of the
+// workgroup runs it, one off the image or on the background with nothing to queue, since the pool needs
+// every invocation of a subgroup at each call.
+vec3 gather_queued(ivec2 px, bool inside) {
+    bool sampled = pc.mode != GATHER_ALL;
+    if (sampled && !(cdf_total_at(0u) > 0.0)) return vec3(0.0); // the same for every invocation
+    ivec2 at = min(px, ivec2(frame.size.xy) - 1);
+    vec4 gp = texelFetch(g_position, at, 0);
+    bool shade = inside && gp.w != 0.0;
+#ifndef SHADOW_POOL
+    if (!shade) return vec3(0.0);
+#endif
+    vec3 x = gp.xyz;
+    vec3 nx = texelFetch(g_normal, at, 0).xyz;
+    vec3 ax = texelFetch(g_albedo, at, 0).rgb;
+    uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+    vec3 o = shadow_origin(x, nx);
+    vec3 sum = vec3(0.0);
+    for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
+        uint n = 0u, top = min(base + SHADOW_QUEUE, pc.last);
+        if (shade) {
+            // Two loops, not one with `sampled ? draw_vpl(…) : k`: llvmpipe runs both sides of a branch
+            // under masks, so the `all` mode would pay for drawing every VPL.
+            if (sampled) {
+                for (uint k = base; k < top; k++) {
+                    float prob;
+                    uint v = draw_vpl(k, seed, prob);
+                    if (prob > 0.0) enqueue(x, nx, ax, v, prob, n);
+                }
+            } else {
+                for (uint v = base; v < top; v++) enqueue(x, nx, ax, v, 1.0, n);
+            }
+        }
+#ifdef SHADOW_POOL
+        uint visible = shadow_pool_trace(o, n);
+#else
+        uint visible = shadow_queue_trace(o, n);
+#endif
+        for (uint j = 0u; j < n; j++)
+            if ((visible & (1u << j)) != 0u) sum += queue_weight[j];
+    }
+    if (sampled) sum /= float(pc.samples);
+    return sum;
 }
 #endif
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
+    bool inside = all(lessThan(px, ivec2(frame.size.xy)));
+#ifdef GATHER_QUEUE
+    vec3 sum = gather_queued(px, inside);
+    if (!inside) return;
+#else
+    if (!inside) return;
     vec4 gp = texelFetch(g_position, px, 0);
     vec3 sum = vec3(0.0);
     if (gp.w != 0.0) {
         vec3 x = gp.xyz;
         vec3 nx = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
-#ifdef GATHER_QUEUE
-        bool sampled = pc.mode != GATHER_ALL;
-        if (!sampled || cdf_total_at(0u) > 0.0) {
-            uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
-            vec3 o = shadow_origin(x, nx);
-            for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
-                // Two loops, not one with `sampled ? draw_vpl(…) : k`: llvmpipe runs both sides of a
-                // branch under masks, so the `all` mode would pay for drawing every VPL.
-                uint n = 0u, top = min(base + SHADOW_QUEUE, pc.last);
-                if (sampled) {
-                    for (uint k = base; k < top; k++) {
-                        float prob;
-                        uint v = draw_vpl(k, seed, prob);
-                        if (prob > 0.0) enqueue(x, nx, ax, v, prob, n);
-                    }
-                } else {
-                    for (uint v = base; v < top; v++) enqueue(x, nx, ax, v, 1.0, n);
-                }
-                // The visible ones, in sample order: the sums of a ray per sample, bit for bit.
-                uint visible = shadow_queue_trace(o, n);
-                for (uint j = 0u; j < n; j++)
-                    if ((visible & (1u << j)) != 0u) sum += queue_weight[j];
-            }
-            if (sampled) sum /= float(pc.samples);
-        }
-#else
         if (pc.mode == GATHER_ALL) {
             for (uint v = pc.first; v < pc.last; v++) sum += contribution(x, nx, ax, v);
         } else if (cdf_total_at(0u) > 0.0) {
@@ -126,8 +168,8 @@ void main() {
 #endif
             sum /= float(pc.samples);
         }
-#endif
     }
+#endif
     if (pc.add_direct != 0u) sum += texelFetch(direct_radiance, px, 0).rgb;
     if (pc.accumulate != 0u) sum += imageLoad(out_radiance, px).rgb;
     imageStore(out_radiance, px, vec4(sum, 1.0));

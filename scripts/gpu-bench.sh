@@ -18,8 +18,9 @@
 #                                       # choose (defaults: 4 scenes, 512 and 1024, uniform, 256, exact)
 #
 # `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
-# (1) the gather's GPU ms by visibility (voxel, exact, hybrid) on every scene of the suite at 256 VPLs
-# per pixel, median of 3 frames (issue 13's cost bound), at 512² and at the 64² of the lavapipe tables;
+# (1) the gather's GPU ms by visibility (voxel, exact, exact with `--shadow-rays pool`, hybrid) on every
+# scene of the suite at 256 VPLs per pixel, median of 3 frames (issue 13's cost bound), at 512² and at
+# the 64² of the lavapipe tables;
 # (2) for Sibenik and Conference the thesis configuration (512², 800 VPLs per pixel; global, local, gbg,
 # mis, ris; the indirect component) with each pass's GPU ms, median of 3 frames with the kept products
 # dropped before each (full frames), shaped like the thesis's Tables 7.1 and 7.2; (3) the equal-time
@@ -140,21 +141,25 @@ vis_table() {
     echo
     echo "## Gather GPU ms by visibility (uniform, $vpls VPLs per pixel, ${size}², DPRSM ${dprsm}², median of 3 frames)"
     echo
-    echo "| scene | voxel | exact | hybrid | exact ÷ voxel |"
-    echo "|---|---:|---:|---:|---:|"
+    echo "| scene | voxel | exact | exact, pool | hybrid | exact ÷ voxel | pool ÷ voxel |"
+    echo "|---|---:|---:|---:|---:|---:|---:|"
   } | tee -a "$md"
   local scene v
   for scene in "$@"; do
     local toml="$here/assets/$scene/scene.toml"
     declare -A ms=()
-    for v in voxel exact hybrid; do
+    # `pool`: the exact rays with --shadow-rays pool (the same images; empty where the device lacks it).
+    for v in voxel exact pool hybrid; do
+      local args=(--visibility "$v")
+      [ "$v" = pool ] && args=(--visibility exact --shadow-rays pool)
       ms[$v]="$(for k in 1 2 3; do "$bin" render "$toml" --width "$size" --height "$size" --component indirect \
         --dprsm-res "$dprsm" --shadow-res "$shadow" --method uniform --vpls "$vpls" --seed "$k" \
-        --visibility "$v" --timings --out "$out/vis-$scene-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
+        "${args[@]}" --timings --out "$out/vis-$scene-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
     done
-    local ratio="–"
+    local ratio="–" pratio="–"
     [ -n "${ms[voxel]}" ] && [ -n "${ms[exact]}" ] && ratio="$(awk -v e="${ms[exact]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
-    echo "| $scene | ${ms[voxel]:-–} | ${ms[exact]:-–} | ${ms[hybrid]:-–} | $ratio |" | tee -a "$md"
+    [ -n "${ms[voxel]}" ] && [ -n "${ms[pool]}" ] && pratio="$(awk -v e="${ms[pool]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
+    echo "| $scene | ${ms[voxel]:-–} | ${ms[exact]:-–} | ${ms[pool]:-–} | ${ms[hybrid]:-–} | $ratio | $pratio |" | tee -a "$md"
     unset ms
   done
 }

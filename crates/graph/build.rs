@@ -62,6 +62,8 @@ const SHADERS: &[Shader] = &[
     // (the exact rays traced only through the voxel grid's occupied cells).
     file("gather.comp"),
     variant("gather.exact.comp", "gather.comp", &["EXACT_VISIBILITY"]),
+    // `--shadow-rays pool`: the exact rays shared by a subgroup (glsl/shared/shadow_queue.glsl).
+    variant("gather.exact_pool.comp", "gather.comp", &["EXACT_VISIBILITY", "SHADOW_POOL"]),
     variant("gather.psm.comp", "gather.comp", &["PSM_VISIBILITY"]),
     variant("gather.psm_exact.comp", "gather.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
     variant("gather.hybrid.comp", "gather.comp", &["HYBRID_VISIBILITY"]),
@@ -126,6 +128,7 @@ const SHADERS: &[Shader] = &[
     file("test/layout_echo.comp"),
     file("test/owen_sobol.comp"),
     file("test/shadow_queue.comp"),
+    variant("test/shadow_queue.pool.comp", "test/shadow_queue.comp", &["SHADOW_POOL"]),
     file("test/voxel_march.comp"),
     file("test/voxel_rcp.comp"),
 ];

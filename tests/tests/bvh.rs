@@ -693,14 +693,28 @@ struct QueueOut {
 /// checked against the CPU reference by the tests above.
 #[test]
 fn the_shadow_queue_answers_every_ray_as_one_occlusion_test_does() {
+    check_shadow_queue(&TestGpu::new(), "shadow_queue", bounce_graph::shaders::SHADOW_QUEUE_COMP);
+}
+
+/// The same for the gather's `--shadow-rays pool` (`shadow_pool_trace`): rays handed between the lanes
+/// of a subgroup come back to the invocation that queued them, each with its own answer, including in
+/// the last workgroup, where invocations past the last queue take part with no rays.
+#[test]
+fn the_subgroup_pool_answers_every_ray_as_one_occlusion_test_does() {
     let gpu = TestGpu::new();
+    bounce_graph::passes::gather::pool_support(&gpu).expect("lavapipe runs the pool");
+    check_shadow_queue(&gpu, "shadow_pool", bounce_graph::shaders::SHADOW_QUEUE_POOL_COMP);
+}
+
+fn check_shadow_queue(gpu: &TestGpu, name: &'static str, kernel: &[u8]) {
     let mut rng = Rng(0xB0A7_0009);
     let mesh = Mesh::new(sphere_with_soup(24, 32, 300, &mut rng));
     let vertices = mesh.vertices();
     let flat = FlatBvh::new(&Bvh::from_vertices(&vertices), &vertices);
-    let bvh = GpuBvh::upload(&gpu, &flat).unwrap();
+    let bvh = GpuBvh::upload(gpu, &flat).unwrap();
     // Each invocation traces its queue twice; its loops must stay under llvmpipe's limit (65535).
-    let loops = 2 * QUEUE as u32 * (bvh.max_iterations_occluded() + 1) + 4;
+    let m = bvh.max_iterations_occluded();
+    let loops = 2 * QUEUE as u32 * (m + 1) + m + 4;
     assert!(loops < 65535, "the test's mesh is too large for one invocation: {loops} loop iterations");
     let queues: Vec<QueueIn> = (0..1200)
         .map(|k| {
@@ -720,12 +734,12 @@ fn the_shadow_queue_answers_every_ray_as_one_occlusion_test_does() {
         .collect();
     let mut bindings = GpuBvh::bindings().to_vec();
     bindings.extend([Binding::storage_buffer(T_IN), Binding::storage_buffer(T_OUT)]);
-    let spirv = bounce_graph::spirv(bounce_graph::shaders::SHADOW_QUEUE_COMP);
-    let p = ComputePipeline::new(&gpu, "shadow_queue", &spirv, &bindings, 0, &[]).unwrap();
+    let spirv = bounce_graph::spirv(kernel);
+    let p = ComputePipeline::new(gpu, name, &spirv, &bindings, 0, &[]).unwrap();
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let inb = Buffer::with_data(&gpu, "queues", storage, bytemuck::cast_slice(&queues)).unwrap();
+    let inb = Buffer::with_data(gpu, "queues", storage, bytemuck::cast_slice(&queues)).unwrap();
     let size = (std::mem::size_of::<QueueOut>() * queues.len()) as u64;
-    let outb = Buffer::new(&gpu, &BufferDesc::storage("answers", size)).unwrap();
+    let outb = Buffer::new(gpu, &BufferDesc::storage("answers", size)).unwrap();
     gpu.submit(|cmd| {
         let w = bvh.writes(DescriptorWrites::new()).storage_buffer(T_IN, &inb).storage_buffer(T_OUT, &outb);
         p.dispatch(cmd, &w, &[], [queues.len() as u32, 1, 1], [bounce_graph::bindings::WG_1D, 1, 1]);
@@ -741,7 +755,7 @@ fn the_shadow_queue_answers_every_ray_as_one_occlusion_test_does() {
         visible += a.queued.count_ones();
         blocked += n as u32 - a.queued.count_ones();
     }
-    eprintln!("shadow queue: {visible} rays visible, {blocked} blocked, bound {loops} loop iterations");
+    eprintln!("{name}: {visible} rays visible, {blocked} blocked, bound {loops} loop iterations");
     assert!(visible > 2000 && blocked > 2000, "visible {visible}, blocked {blocked}: the scene should mix both");
 }
 

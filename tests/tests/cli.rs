@@ -388,6 +388,18 @@ fn bad_inputs_give_one_line_and_exit_2() {
             vec!["--method", "ris", "--picks", "9"],
             "--picks",
         ),
+        (
+            "a ray pool without exact rays",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--visibility", "voxel", "--shadow-rays", "pool"],
+            "--shadow-rays pool",
+        ),
+        (
+            "an unknown ray scheduling",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--shadow-rays", "stack"],
+            "--shadow-rays",
+        ),
     ];
     for (name, files, args, must) in cases {
         let dir = d.join(name.replace(' ', "-"));

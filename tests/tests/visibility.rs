@@ -1,6 +1,6 @@
-//! `--visibility hybrid` (glsl/shared/hybrid.glsl, the default): a march through a grid of triangle lists
+//! `--visibility hybrid` (glsl/shared/hybrid.glsl): a march through a grid of triangle lists
 //! (crates/graph/src/bvh/cells.rs) that tests each entered cell's own triangles. It must give
-//! `--visibility exact`'s answer, so every GPU test compares it with exact, per pixel, on the stress scenes of scripts/make-scenes.py, where the plain voxel march
+//! `--visibility exact`'s answer (the default), so every GPU test compares it with exact, per pixel, on the stress scenes of scripts/make-scenes.py, where the plain voxel march
 //! (`--visibility voxel`) goes measurably wrong: each test also checks that the voxel march does differ
 //! there, so the scene really exposes the cause. Sizes are tiny (24², DPRSM 16², 32 cells).
 //!
@@ -10,7 +10,7 @@
 //! contribution, orders of magnitude above `PIXEL_TOL`.
 
 use bounce_graph::camera::Camera;
-use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, Visibility};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, ShadowRays, Visibility};
 use bounce_graph::scene::{point_light, Scene};
 use bounce_tests::TestGpu;
 use glam::Vec3;
@@ -85,6 +85,29 @@ fn hybrid_sampled_and_mis_are_exact() {
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     for method in [Method::Uniform, Method::Mis] {
         hybrid_matches_exact("clutter", &mut r, method);
+    }
+}
+
+/// `--shadow-rays pool` (the gather's exact rays shared by a subgroup) renders the queue's images: the
+/// same samples and the same answers, so bit for bit where both fit one dispatch (40 samples), and
+/// within PIXEL_TOL for `all`, whose dispatches the two loop bounds split at other VPLs. The image is
+/// 27 × 21, so the last workgroups hold invocations off the image, which the pool still needs.
+#[test]
+fn the_subgroup_pool_renders_the_queues_images() {
+    let scene = stress_scene("clutter");
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    for (method, vpls) in [(Method::Uniform, 40), (Method::All, 16)] {
+        let s = FrameSettings { width: 27, height: 21, vpls, ..settings(method, Visibility::Exact) };
+        let queue = render(&mut r, &s);
+        let pool = render(&mut r, &FrameSettings { shadow_rays: ShadowRays::Pool, ..s });
+        assert!(bounce_tests::mean(&queue) > 0.0, "{method:?}: the indirect image is black");
+        if method == Method::Uniform {
+            assert!(queue == pool, "{method:?}: the pool's image differs from the queue's");
+        } else {
+            let worst = worst_pixel(&pool, &queue);
+            assert!(worst <= PIXEL_TOL, "{method:?}: the pool differs from the queue by {worst:.3e} at a pixel");
+        }
     }
 }
 

@@ -12,7 +12,7 @@
 use bounce_device::GpuOptions;
 use bounce_graph::frame::{
     Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, ReferenceEstimator, RisSettings, RisSource,
-    Visibility, VplKernel,
+    ShadowRays, Visibility, VplKernel,
 };
 use bounce_graph::scene::Scene;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -129,6 +129,15 @@ pub const VISIBILITIES: Choices<Visibility> = Choices(&[
         "hybrid",
         Visibility::Hybrid,
         "Exact's answer: a march through a grid of triangle lists, testing each cell's own triangles",
+    ),
+]);
+
+pub const SHADOW_RAYS: Choices<ShadowRays> = Choices(&[
+    ("queue", ShadowRays::Queue, "Default. Each invocation traces its own rays back to back"),
+    (
+        "pool",
+        ShadowRays::Pool,
+        "A subgroup's invocations share their rays (needs subgroup ballot and arithmetic operations)",
     ),
 ]);
 
@@ -289,6 +298,9 @@ pub struct FrameArgs {
     /// Visibility of the VPL gather.
     #[arg(long, value_parser = VISIBILITIES, default_value = "exact")]
     pub visibility: Visibility,
+    /// How the gather's exact shadow rays are spread over a subgroup's lanes (the same images).
+    #[arg(long, value_parser = SHADOW_RAYS, default_value = "queue")]
+    pub shadow_rays: ShadowRays,
     /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
     #[arg(long, default_value_t = 256)]
     pub psm_res: u32,
@@ -370,6 +382,7 @@ impl FrameArgs {
             spp: self.spp.unwrap_or(DEFAULT_SPP),
             reference_estimator: self.reference_estimator,
             visibility: self.visibility,
+            shadow_rays: self.shadow_rays,
             psm_res: self.psm_res,
             light_map: match self.light_map {
                 LightMap::Rsm { .. } => LightMap::Rsm { fov_deg: self.rsm_fov },

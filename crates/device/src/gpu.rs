@@ -100,6 +100,8 @@ pub struct Shared {
     pub properties: vk::PhysicalDeviceProperties,
     pub name: String,
     pub timestamp_valid_bits: u32,
+    /// The subgroup operations compute shaders may use (empty where compute shaders have none).
+    pub compute_subgroup_ops: vk::SubgroupFeatureFlags,
     /// Loop iterations one shader invocation may run before the driver cuts its loops short, where the
     /// driver has such a limit: llvmpipe (lavapipe) stops every loop of an invocation after 65535
     /// iterations *in total*, silently (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`). Passes whose invocations
@@ -260,6 +262,7 @@ struct Picked {
     properties: vk::PhysicalDeviceProperties,
     queue_family: u32,
     timestamp_valid_bits: u32,
+    compute_subgroup_ops: vk::SubgroupFeatureFlags,
     loop_iteration_limit: Option<u32>,
 }
 
@@ -314,8 +317,21 @@ fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
         properties,
         queue_family,
         timestamp_valid_bits: qfs[queue_family as usize].timestamp_valid_bits,
+        compute_subgroup_ops: compute_subgroup_ops(instance, physical),
         loop_iteration_limit: (driver.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(65535),
     })
+}
+
+/// The subgroup operations of compute shaders on `pd` (Vulkan 1.1's subgroup properties).
+fn compute_subgroup_ops(instance: &ash::Instance, pd: vk::PhysicalDevice) -> vk::SubgroupFeatureFlags {
+    let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub);
+    unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+    if sub.supported_stages.contains(vk::ShaderStageFlags::COMPUTE) {
+        sub.supported_operations
+    } else {
+        vk::SubgroupFeatureFlags::empty()
+    }
 }
 
 /// The logical device with the features and extensions bounce uses (and the swapchain's if asked).
@@ -387,6 +403,8 @@ impl Gpu {
                     ("maxPushConstantsSize", l.max_push_constants_size.to_string()),
                     ("timestampPeriod (ns)", l.timestamp_period.to_string()),
                     ("timestampValidBits (queue 0)", ts_bits.to_string()),
+                    ("maxComputeSharedMemorySize", l.max_compute_shared_memory_size.to_string()),
+                    ("subgroup operations in compute shaders", format!("{:?}", compute_subgroup_ops(&instance, pd))),
                 ],
                 features: vec![
                     ("dynamicRendering", v13.dynamic_rendering != 0),
@@ -495,6 +513,7 @@ impl Gpu {
             name: device_name(&picked.properties),
             properties: picked.properties,
             timestamp_valid_bits: picked.timestamp_valid_bits,
+            compute_subgroup_ops: picked.compute_subgroup_ops,
             loop_iteration_limit: picked.loop_iteration_limit,
             push_descriptor,
             debug_utils,

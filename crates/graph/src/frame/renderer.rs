@@ -11,7 +11,9 @@
 use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
 use super::recipe::{build_frame, seed32, RecipeInputs};
-use super::settings::{reject, Component, FrameSettings, LightMap, Method, RisSettings, SettingsError, Visibility};
+use super::settings::{
+    reject, Component, FrameSettings, LightMap, Method, RisSettings, SettingsError, ShadowRays, Visibility,
+};
 use crate::bindings::HYBRID_MAX_TESTS;
 use crate::bvh::cells::{CellLists, GpuCells};
 use crate::bvh::GpuBvh;
@@ -390,6 +392,12 @@ impl RenderContext {
         let grid_march = dims.x + dims.y + dims.z + 3;
         // A shadow ray's (exact: the threaded any-hit walk) and a first-hit ray's (MIS's gathering rays).
         let occlusion = match (&self.bvh, s.visibility) {
+            // The exact gather's pool (glsl/shared/shadow_queue.glsl): a block of SHADOW_QUEUE rays loops
+            // at most SHADOW_QUEUE · (M + 1) + M times, per VPL M + 1 + M / SHADOW_QUEUE.
+            (Some(b), Visibility::Exact) if s.shadow_rays == ShadowRays::Pool => {
+                let m = b.max_iterations_occluded();
+                m + 1 + m.div_ceil(crate::bindings::SHADOW_QUEUE)
+            }
             (Some(b), Visibility::Exact | Visibility::PsmExact) => b.max_iterations_occluded(),
             _ => self.trace_iterations(s).unwrap_or(grid_march),
         };
@@ -581,6 +589,7 @@ impl RenderContext {
             dprsm_res: s.dprsm_res,
             vpl_faces: s.light_map.faces(),
             vpls_per_dispatch: self.vpls_per_dispatch(s),
+            shadow_pool: s.shadow_rays == ShadowRays::Pool,
         }
     }
 

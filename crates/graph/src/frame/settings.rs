@@ -175,6 +175,21 @@ impl Default for RisSettings {
     }
 }
 
+/// How the gather's exact shadow rays are spread over a subgroup's lanes (`--shadow-rays`). Every ray
+/// gets the same answer either way, so the images are the same, bit for bit; only the time differs
+/// (BENCHMARKS.md, "The gather's shadow rays shared by a subgroup").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowRays {
+    /// Each invocation walks its own queued rays back to back (`glsl/shared/shadow_queue.glsl`): the
+    /// faster on lavapipe's large scenes.
+    #[default]
+    Queue,
+    /// A subgroup's invocations share their rays through shared memory, so a lane whose ray is done
+    /// takes the next one whoever queued it (`shadow_pool_trace`): the lanes stay busy to the end of a
+    /// block. Needs subgroup ballot and arithmetic in compute shaders.
+    Pool,
+}
+
 /// How the VPL gather tests visibility.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Visibility {
@@ -182,8 +197,9 @@ pub enum Visibility {
     /// cluttered rooms, seams at junctions).
     Voxel,
     /// The default: shadow rays against the triangles (BVH); gbg's importance rays and mis's gathering
-    /// rays hit the real surfaces. On lavapipe it costs no more than the voxel march on the small scenes
-    /// and 3.5× on Sibenik (BENCHMARKS.md), with no visibility bias.
+    /// rays hit the real surfaces, with no visibility bias. The gather's rays cost 0.4–0.8× the voxel
+    /// march on lavapipe's small scenes and 1.25–1.6× on Sibenik and Conference; on an H200 0.2–0.3×,
+    /// and 0.97–1.12× on the large two (BENCHMARKS.md).
     Exact,
     /// Per-VPL paraboloid shadow maps (thesis ch. 6) for a shared set of `vpls` VPLs per frame
     /// (`passes/psm.rs`).
@@ -392,6 +408,8 @@ pub struct FrameSettings {
     /// limit, at most 64). The image does not depend on it.
     pub reference_chunk: Option<std::num::NonZeroU32>,
     pub visibility: Visibility,
+    /// How the gather's exact shadow rays are scheduled (`Visibility::Exact` only; the same images).
+    pub shadow_rays: ShadowRays,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
     /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
@@ -432,6 +450,7 @@ impl Default for FrameSettings {
             reference_estimator: ReferenceEstimator::Mis,
             reference_chunk: None,
             visibility: Visibility::Exact,
+            shadow_rays: ShadowRays::Queue,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
@@ -462,6 +481,19 @@ impl FrameSettings {
                 self.sample_offset,
                 self.spp
             );
+        }
+        Ok(())
+    }
+
+    /// `--shadow-rays pool`: the gather's exact rays, on a device that has what the pool needs.
+    fn validate_shadow_rays(&self, gpu: &Gpu) -> Result<(), SettingsError> {
+        if self.shadow_rays == ShadowRays::Pool {
+            if self.visibility != Visibility::Exact {
+                reject!("--shadow-rays pool schedules the gather's exact shadow rays: it needs --visibility exact");
+            }
+            if let Err(what) = crate::passes::gather::pool_support(gpu) {
+                reject!("--shadow-rays pool needs {what}, which {} lacks", gpu.name);
+            }
         }
         Ok(())
     }
@@ -576,6 +608,7 @@ impl FrameSettings {
                 );
             }
         }
+        self.validate_shadow_rays(gpu)?;
         self.validate_ris(gpu)?;
         self.validate_samples()?;
         if !(1..=1024).contains(&self.voxels) {

@@ -10,7 +10,9 @@
 //! per-invocation queue (`glsl/shared/shadow_queue.glsl`): each block of 32 samples is drawn first and
 //! its rays walked back to back, so a SIMD lane whose ray is done starts its next at once instead of
 //! waiting for the vector's longest (the same answers and sums, bit for bit; 5–20 % less gather time on
-//! lavapipe, BENCHMARKS.md). Modes:
+//! lavapipe, BENCHMARKS.md). `--shadow-rays pool` shares the queues of a subgroup's invocations, so a
+//! lane whose ray is done takes the next ray whoever queued it (`shadow_pool_trace`; the same images;
+//! a variant of its own, made where the device has the subgroup operations it needs). Modes:
 //! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
 //! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
 //!   (converged) VPL estimate, against which every sampling method is judged.
@@ -49,7 +51,32 @@ pub struct Gather {
     psm: ComputePipeline,
     /// The `--visibility psm-exact` variant (the shared set with exact rays; binds the BVH).
     psm_exact: ComputePipeline,
+    /// The exact variant with `--shadow-rays pool` (the gather's own shader only, where the device can
+    /// run it: [`pool_support`]).
+    pool: Option<ComputePipeline>,
     sampler: Sampler,
+}
+
+/// Shared memory of the pool (`glsl/shared/shadow_queue.glsl`): per invocation SHADOW_QUEUE entries
+/// (a uvec2 each), its ray origin (a vec3, 16 bytes with padding) and its answer bits.
+pub const POOL_SHARED_BYTES: u32 = WG_2D * WG_2D * (8 * SHADOW_QUEUE + 16 + 4);
+
+/// Whether `gpu` can run `--shadow-rays pool`, else what it lacks: subgroup ballot and arithmetic in
+/// compute shaders, and [`POOL_SHARED_BYTES`] of shared memory.
+pub fn pool_support(gpu: &Gpu) -> Result<(), String> {
+    let need =
+        vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::BALLOT | vk::SubgroupFeatureFlags::ARITHMETIC;
+    if !gpu.compute_subgroup_ops.contains(need) {
+        return Err(format!(
+            "subgroup ballot and arithmetic operations in compute shaders (it has {:?})",
+            gpu.compute_subgroup_ops
+        ));
+    }
+    let shared = gpu.limits().max_compute_shared_memory_size;
+    if shared < POOL_SHARED_BYTES {
+        return Err(format!("{POOL_SHARED_BYTES} bytes of compute shared memory (it has {shared})"));
+    }
+    Ok(())
 }
 
 /// One shader in its three per-pixel visibility variants (`voxel.glsl`'s march; `EXACT_VISIBILITY`, which
@@ -185,11 +212,18 @@ impl GatherInputs {
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         use shaders::*;
-        Self::with_shaders(
+        let mut gather = Self::with_shaders(
             gpu,
             "gather",
             [GATHER_COMP, GATHER_EXACT_COMP, GATHER_PSM_COMP, GATHER_PSM_EXACT_COMP, GATHER_HYBRID_COMP],
-        )
+        )?;
+        if pool_support(gpu).is_ok() {
+            let (mut bindings, push) = Self::bindings();
+            bindings.extend(crate::bvh::GpuBvh::bindings());
+            gather.pool =
+                Some(ComputePipeline::new(gpu, "gather", &crate::spirv(GATHER_EXACT_POOL_COMP), &bindings, push, &[])?);
+        }
+        Ok(gather)
     }
 
     fn bindings() -> (Vec<Binding>, u32) {
@@ -213,7 +247,7 @@ impl Gather {
         b.extend(crate::bvh::GpuBvh::bindings());
         let psm_exact = ComputePipeline::new(gpu, name, &crate::spirv(psm_exact), &b, push, &[])?;
         let vis = VisibilityVariants::new(gpu, name, [spirv, exact, hybrid], bindings, push)?;
-        Ok(Gather { name, vis, psm, psm_exact, sampler: Sampler::nearest(gpu)? })
+        Ok(Gather { name, vis, psm, psm_exact, pool: None, sampler: Sampler::nearest(gpu)? })
     }
 
     /// The shader variant of the frame's visibility, with what it binds besides the common set.
@@ -236,6 +270,9 @@ impl Gather {
                     self.sampler.raw,
                 ),
             ),
+            (None, Some(bvh)) if f.shadow_pool && f.cells.is_none() && self.pool.is_some() => {
+                (self.pool.as_ref().expect("checked"), bvh.writes(writes))
+            }
             (None, _) => self.vis.pick(&f, writes),
         }
     }

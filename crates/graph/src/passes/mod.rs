@@ -84,6 +84,9 @@ pub struct FrameInputs<'a> {
     /// VPLs one gather dispatch may evaluate per pixel, so that no invocation exceeds the driver's loop
     /// iteration limit (`Gpu::loop_iteration_limit`); `u32::MAX` where there is none.
     pub vpls_per_dispatch: u32,
+    /// The gather's exact rays go to its subgroup's pool (`--shadow-rays pool`), not one queue per
+    /// invocation.
+    pub shadow_pool: bool,
 }
 
 use crate::bindings::*;
