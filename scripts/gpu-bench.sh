@@ -20,7 +20,7 @@
 # `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
 # (1) the gather's GPU ms by visibility (voxel, exact, exact with `--shadow-rays pool`, hybrid) on every
 # scene of the suite at 256 VPLs per pixel, median of 3 frames (issue 13's cost bound), at 512² and at
-# the 64² of the lavapipe tables;
+# the 64² of the lavapipe tables, '=' marking where the pool's image equals exact's;
 # (2) for Sibenik and Conference the thesis configuration (512², 800 VPLs per pixel; global, local, gbg,
 # mis, ris; the indirect component) with each pass's GPU ms, median of 3 frames with the kept products
 # dropped before each (full frames), shaped like the thesis's Tables 7.1 and 7.2; (3) the equal-time
@@ -156,10 +156,16 @@ vis_table() {
         --dprsm-res "$dprsm" --shadow-res "$shadow" --method uniform --vpls "$vpls" --seed "$k" \
         "${args[@]}" --timings --out "$out/vis-$scene-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
     done
-    local ratio="–" pratio="–"
+    # The pool must render exact's image (the last frame, seed 3, of each): '=' where it does.
+    local ratio="–" pratio="–" same=""
+    if [ -n "${ms[pool]}" ]; then
+      same=" ≠"
+      "$bin" compare "$out/vis-$scene-pool.exr" "$out/vis-$scene-exact.exr" --json 2>/dev/null |
+        grep -q '"rmse": 0,' && same=" ="
+    fi
     [ -n "${ms[voxel]}" ] && [ -n "${ms[exact]}" ] && ratio="$(awk -v e="${ms[exact]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
     [ -n "${ms[voxel]}" ] && [ -n "${ms[pool]}" ] && pratio="$(awk -v e="${ms[pool]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
-    echo "| $scene | ${ms[voxel]:-–} | ${ms[exact]:-–} | ${ms[pool]:-–} | ${ms[hybrid]:-–} | $ratio | $pratio |" | tee -a "$md"
+    echo "| $scene | ${ms[voxel]:-–} | ${ms[exact]:-–} | ${ms[pool]:-–}$same | ${ms[hybrid]:-–} | $ratio | $pratio |" | tee -a "$md"
     unset ms
   done
 }

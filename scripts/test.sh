@@ -18,6 +18,8 @@ cargo run -q -p bounce -- render assets/cornell-box/scene.toml --width 128 --hei
 # The GPU benchmark's steps, end to end at a tiny size on this device (scripts/gpu-bench.sh).
 ./scripts/gpu-bench.sh tiny "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny" >/dev/null
 grep -q "## conference: equal time" "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny/gpu-bench.md"
+# Its visibility table: the subgroup pool timed, and its image equal to the exact queue's ('=').
+grep -Eq '^\| sibenik \| [0-9.]+ \| [0-9.]+ \| [0-9.]+ = \|' "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny/gpu-bench.md"
 # Its A/B table: one build under two labels, so the second's image must equal the first's ('=').
 grep -Eq '^\| cornell-box \| 16 \| [0-9.]+ \| [0-9.]+ \| [0-9.]+ = \|$' "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny/ab/ab.md"
 log="$(mktemp)"
