@@ -15,19 +15,6 @@
 
 vec3 shadow_queue_end[SHADOW_QUEUE];
 
-// Starts the walk of the shadow ray o → o + d (bvh_occluded_lifted's window) in the state both traces keep:
-// false, starting nothing, for a ray the walk refuses ("no hit", as bvh_any_hit answers).
-bool shadow_walk_start(vec3 o, vec3 d, inout BvhRay r, inout int i, inout uint steps, inout bool done,
-                       inout bool hit) {
-    if (!bvh_usable_ray(o, d, BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS)) return false;
-    r = bvh_make_ray(o, d);
-    i = 0;
-    steps = 0u;
-    done = false;
-    hit = false;
-    return true;
-}
-
 // Bit j set: the shadow ray o → shadow_queue_end[j] (j < n ≤ SHADOW_QUEUE) is not occluded.
 uint shadow_queue_trace(vec3 o, uint n) {
     int end = textureSize(bvh_threaded) / 3;
@@ -39,11 +26,17 @@ uint shadow_queue_trace(vec3 o, uint n) {
     while (tracing || next < n) {
         if (!tracing) {
             current = next++;
-            tracing = shadow_walk_start(o, shadow_queue_end[current] - o, r, i, steps, done, hit);
-            if (!tracing) {
+            vec3 d = shadow_queue_end[current] - o;
+            if (!bvh_usable_ray(o, d, tmin, tmax)) {
                 visible |= 1u << current; // "no hit", as bvh_any_hit answers
                 continue;
             }
+            r = bvh_make_ray(o, d);
+            i = 0;
+            steps = 0u;
+            done = false;
+            hit = false;
+            tracing = true;
         }
         bvh_thread_steps(r, tmin, tmax, end, i, steps, done, hit);
         // Exhausted after BVH_MAX_STEPS records: "no hit", as bvh_any_hit answers.
@@ -111,9 +104,17 @@ uint shadow_pool_trace(vec3 o, uint n) {
             uvec2 e = shadow_pool[base + g];
             ticket = e.y;
             vec3 from = shadow_pool_origin[e.y >> 5];
-            tracing = shadow_walk_start(from, shadow_pool_end(e.x) - from, r, i, steps, done, hit);
-            // A ray the walk refuses: "no hit", as bvh_any_hit answers.
-            if (!tracing) atomicOr(shadow_pool_visible[e.y >> 5], 1u << (e.y & 31u));
+            vec3 d = shadow_pool_end(e.x) - from;
+            if (bvh_usable_ray(from, d, tmin, tmax)) {
+                r = bvh_make_ray(from, d);
+                i = 0;
+                steps = 0u;
+                done = false;
+                hit = false;
+                tracing = true;
+            } else {
+                atomicOr(shadow_pool_visible[e.y >> 5], 1u << (e.y & 31u)); // "no hit", as bvh_any_hit answers
+            }
         }
         bvh_thread_steps(r, tmin, tmax, end, i, steps, done, hit);
         // Exhausted after BVH_MAX_STEPS records: "no hit", as bvh_any_hit answers.
