@@ -50,6 +50,32 @@ impl Drop for TestGpu {
     }
 }
 
+/// Runs a test kernel of `glsl/test/` (its SPIR-V from `bounce_graph::shaders`) that reads `inputs` at
+/// `B_TEST_IN` and writes `out_len` values at `B_TEST_OUT`, one invocation per input in groups of
+/// `WG_1D`, and returns what it wrote.
+pub fn run_test_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
+    gpu: &Gpu,
+    name: &str,
+    spirv: &[u8],
+    inputs: &[I],
+    out_len: usize,
+) -> Vec<O> {
+    use bounce_device::{sync::Access, vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites};
+    use bounce_graph::bindings::{B_TEST_IN, B_TEST_OUT, WG_1D};
+    let bindings = [Binding::storage_buffer(B_TEST_IN), Binding::storage_buffer(B_TEST_OUT)];
+    let p = ComputePipeline::new(gpu, name, &bounce_graph::spirv(spirv), &bindings, 0, &[]).unwrap();
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let inb = Buffer::with_data(gpu, &format!("{name} in"), storage, bytemuck::cast_slice(inputs)).unwrap();
+    let bytes = (std::mem::size_of::<O>() * out_len) as u64;
+    let outb = Buffer::new(gpu, &BufferDesc::storage(format!("{name} out"), bytes)).unwrap();
+    gpu.submit(|cmd| {
+        let w = DescriptorWrites::new().storage_buffer(B_TEST_IN, &inb).storage_buffer(B_TEST_OUT, &outb);
+        p.dispatch(cmd, &w, &[], [inputs.len() as u32, 1, 1], [WG_1D, 1, 1]);
+    })
+    .unwrap();
+    bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap())
+}
+
 /// The workspace root (tests run with the tests crate as working directory).
 pub fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()

@@ -226,30 +226,11 @@ fn progressive_reference_frames_are_one_sequence() {
 /// per 1/2^m interval; and other seeds (pixels) give other points.
 #[test]
 fn the_sample_points_are_stratified_in_every_power_of_two_prefix() {
-    use bounce_device::sync::Access;
-    use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites};
-    use bounce_graph::bindings::{B_TEST_IN, B_TEST_OUT, WG_1D};
     let gpu = TestGpu::new();
     let (n, seeds) = (1024u32, [0u32, 1, 0x2545F491, 0xdeadbeef]);
     let inputs: Vec<[u32; 2]> = seeds.iter().flat_map(|&s| (0..n).map(move |i| [i, s])).collect();
-    let p = ComputePipeline::new(
-        &gpu,
-        "owen_sobol",
-        &bounce_graph::spirv(bounce_graph::shaders::OWEN_SOBOL_COMP),
-        &[Binding::storage_buffer(B_TEST_IN), Binding::storage_buffer(B_TEST_OUT)],
-        0,
-        &[],
-    )
-    .unwrap();
-    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let inb = Buffer::with_data(&gpu, "owen_sobol in", storage, bytemuck::cast_slice(&inputs)).unwrap();
-    let outb = Buffer::new(&gpu, &BufferDesc::storage("owen_sobol out", 16 * inputs.len() as u64)).unwrap();
-    gpu.submit(|cmd| {
-        let w = DescriptorWrites::new().storage_buffer(B_TEST_IN, &inb).storage_buffer(B_TEST_OUT, &outb);
-        p.dispatch(cmd, &w, &[], [inputs.len() as u32, 1, 1], [WG_1D, 1, 1]);
-    })
-    .unwrap();
-    let got: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());
+    let shader = bounce_graph::shaders::OWEN_SOBOL_COMP;
+    let got: Vec<[f32; 4]> = bounce_tests::run_test_kernel(&gpu, "owen_sobol", shader, &inputs, inputs.len());
     // Bit for bit the CPU twin's, whose Sobol dimension 1 loops over its direction numbers.
     for (q, &[i, s]) in got.iter().zip(&inputs) {
         let [x, y] = bounce_oracles::cpu_sobol::owen_sobol2(i, s);

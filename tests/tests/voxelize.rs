@@ -695,24 +695,8 @@ fn gpu_reciprocal_has_the_cpu_bits_and_is_accurate() {
         let s = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
         s * m * 2f32.powi(e)
     }));
-    let p = ComputePipeline::new(
-        &gpu,
-        "voxel_rcp",
-        &bounce_graph::spirv(bounce_graph::shaders::VOXEL_RCP_COMP),
-        &[Binding::storage_buffer(T_IN), Binding::storage_buffer(T_OUT)],
-        0,
-        &[],
-    )
-    .unwrap();
-    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let inb = Buffer::with_data(&gpu, "rcp in", storage, bytemuck::cast_slice(&inputs)).unwrap();
-    let outb = Buffer::new(&gpu, &BufferDesc::storage("rcp out", 4 * inputs.len() as u64)).unwrap();
-    gpu.submit(|cmd| {
-        let w = DescriptorWrites::new().storage_buffer(T_IN, &inb).storage_buffer(T_OUT, &outb);
-        p.dispatch(cmd, &w, &[], [inputs.len() as u32, 1, 1], [bounce_graph::bindings::WG_1D, 1, 1]);
-    })
-    .unwrap();
-    let got: Vec<f32> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());
+    let shader = bounce_graph::shaders::VOXEL_RCP_COMP;
+    let got: Vec<f32> = bounce_tests::run_test_kernel(&gpu, "voxel_rcp", shader, &inputs, inputs.len());
     let mut worst = 0.0f64;
     for (&c, &g) in inputs.iter().zip(&got) {
         let r = cpu_voxel::rcp(c);

@@ -288,20 +288,8 @@ fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
         let target = bounce_tests::mean(&all);
         for weights in [MisWeights::Consistent, MisWeights::Thesis] {
             let seeds = if weights == MisWeights::Consistent { 64 } else { 8 };
-            let means: Vec<f64> = (0..seeds)
-                .map(|k| {
-                    let s = FrameSettings {
-                        method: Method::Mis,
-                        mis_weights: weights,
-                        seed: 5000 + k,
-                        vpls: 8,
-                        gather_rays: 16,
-                        ..base.clone()
-                    };
-                    bounce_tests::mean(&indirect_with(&mut r, s, w, h, res, vox))
-                })
-                .collect();
-            let (m, se) = bounce_tests::mean_and_stderr(&means);
+            let s = FrameSettings { mis_weights: weights, ..base.clone() };
+            let (m, se) = mis_seed_mean(&mut r, &s, 5000..5000 + seeds, (w, h, res, vox));
             eprintln!(
                 "mis {weights:?}, {visibility:?} visibility: mean of {seeds} seeds {m:.5} ± {se:.5} vs all {target:.5} ({:+.2}%)",
                 100.0 * (m - target) / target
@@ -312,6 +300,23 @@ fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
             }
         }
     }
+}
+
+/// The image means of `mis` renders of `base` (8 VPLs, 16 gathering rays) for each seed of `seeds` at
+/// (width, height, DPRSM resolution, voxels) `size`: their mean and its standard error.
+fn mis_seed_mean(
+    r: &mut Renderer,
+    base: &FrameSettings,
+    seeds: std::ops::Range<u64>,
+    (w, h, res, vox): (u32, u32, u32, u32),
+) -> (f64, f64) {
+    let means: Vec<f64> = seeds
+        .map(|seed| {
+            let s = FrameSettings { method: Method::Mis, seed, vpls: 8, gather_rays: 16, ..base.clone() };
+            bounce_tests::mean(&indirect_with(r, s, w, h, res, vox))
+        })
+        .collect();
+    bounce_tests::mean_and_stderr(&means)
 }
 
 /// Two triangles: the quad a, b, c, d.
@@ -340,13 +345,7 @@ fn mis_is_unbiased_where_patches_reach_behind_a_junction() {
     let base = FrameSettings { clamp: 0.01, visibility: Visibility::Exact, ..FrameSettings::default() };
     let all = indirect_with(&mut r, FrameSettings { method: Method::All, ..base.clone() }, w, h, res, vox);
     let target = bounce_tests::mean(&all);
-    let means: Vec<f64> = (0..64)
-        .map(|k| {
-            let s = FrameSettings { method: Method::Mis, seed: 7000 + k, vpls: 8, gather_rays: 16, ..base.clone() };
-            bounce_tests::mean(&indirect_with(&mut r, s, w, h, res, vox))
-        })
-        .collect();
-    let (m, se) = bounce_tests::mean_and_stderr(&means);
+    let (m, se) = mis_seed_mean(&mut r, &base, 7000..7064, (w, h, res, vox));
     eprintln!(
         "mis at a junction: mean of 64 seeds {m:.5} ± {se:.5} vs all {target:.5} ({:+.2}%)",
         100.0 * (m - target) / target
@@ -401,9 +400,6 @@ fn polygon_moments(p: &[[f64; 2]]) -> (f64, [f64; 2], [f64; 3]) {
 /// cases (cuts parallel to an edge, through a corner, missing the square, taking all of it).
 #[test]
 fn mis_front_part_is_the_clipped_square_and_its_points_are_uniform() {
-    use bounce_device::sync::Access;
-    use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites};
-    use bounce_graph::bindings::{B_TEST_IN, B_TEST_OUT, WG_1D};
     let mut rng = bounce_tests::Rng(0xF00D_5EED);
     let mut cases: Vec<[f32; 4]> = vec![
         [0.3, 0.0, 0.0, 0.0],   // parallel: all in front
@@ -418,24 +414,8 @@ fn mis_front_part_is_the_clipped_square_and_its_points_are_uniform() {
     ];
     cases.extend((0..300).map(|_| [rng.range(-1.2, 1.2), rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), 0.0]));
     let gpu = TestGpu::new();
-    let p = ComputePipeline::new(
-        &gpu,
-        "front_part",
-        &bounce_graph::spirv(bounce_graph::shaders::FRONT_PART_COMP),
-        &[Binding::storage_buffer(B_TEST_IN), Binding::storage_buffer(B_TEST_OUT)],
-        0,
-        &[],
-    )
-    .unwrap();
-    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let inb = Buffer::with_data(&gpu, "front_part in", storage, bytemuck::cast_slice(&cases)).unwrap();
-    let outb = Buffer::new(&gpu, &BufferDesc::storage("front_part out", 4 * 2049 * cases.len() as u64)).unwrap();
-    gpu.submit(|cmd| {
-        let w = DescriptorWrites::new().storage_buffer(B_TEST_IN, &inb).storage_buffer(B_TEST_OUT, &outb);
-        p.dispatch(cmd, &w, &[], [cases.len() as u32, 1, 1], [WG_1D, 1, 1]);
-    })
-    .unwrap();
-    let got: Vec<f32> = bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap());
+    let shader = bounce_graph::shaders::FRONT_PART_COMP;
+    let got: Vec<f32> = bounce_tests::run_test_kernel(&gpu, "front_part", shader, &cases, 2049 * cases.len());
     let (mut checked, mut worst_mean, mut worst_cell) = (0, 0.0f64, 0.0f64);
     for (q, c) in cases.iter().enumerate() {
         let s = [c[0] as f64, c[1] as f64, c[2] as f64];
