@@ -270,9 +270,11 @@ impl Gather {
                     self.sampler.raw,
                 ),
             ),
-            (None, Some(bvh)) if f.shadow_pool && f.cells.is_none() && self.pool.is_some() => {
-                (self.pool.as_ref().expect("checked"), bvh.writes(writes))
-            }
+            (None, Some(bvh)) if f.shadow_pool && f.cells.is_none() => match &self.pool {
+                Some(pool) => (pool, bvh.writes(writes)),
+                // `mis` shares this pass's recording and has no pool variant.
+                None => self.vis.pick(&f, writes),
+            },
             (None, _) => self.vis.pick(&f, writes),
         }
     }
