@@ -11,6 +11,9 @@
 # A/B comparisons of builds, for the few minutes a GPU is lent (one command there for all of them):
 #   scripts/gpu-bench.sh stage-ab LABEL # here: build (release) the working tree as it is now and keep
 #                                       # it as out/gpu-bench/ab/LABEL.gz (~4 MiB: ten builds travel)
+#   scripts/gpu-bench.sh stage-experiments  # here, in a clean working tree: stage-ab it as `head` and,
+#                                       # for each docs/experiments/*.patch that applies, the tree with
+#                                       # that patch as the patch's name (each applied, built, reverted)
 #   scripts/gpu-bench.sh ab OUT_DIR [LABEL…]  # there: each build's gather GPU ms (median of 3 after a
 #                                       # warm-up process) per scene and size, the first build's voxel
 #                                       # march beside them, and whether each build's image equals the
@@ -69,6 +72,32 @@ stage_ab() {
   gzip -9 -c "$stage/bin/bounce" >"$stage/ab/$label.gz.tmp"
   mv "$stage/ab/$label.gz.tmp" "$stage/ab/$label.gz"
   echo "staged build $label in $stage/ab/$label.gz" >&2
+}
+
+# The working tree as `head`, and with each experiment patch that applies to it (docs/experiments/).
+stage_experiments() {
+  cd "$here"
+  if ! git diff --quiet || ! git diff --cached --quiet; then
+    echo "error: stage-experiments applies patches to the working tree: commit or stash its changes first" >&2
+    exit 2
+  fi
+  stage_ab head release
+  local p label
+  for p in docs/experiments/*.patch; do
+    [ -e "$p" ] || continue
+    label="$(basename "$p" .patch)"
+    if ! git apply --check "$p" 2>/dev/null; then
+      echo "skipping $label: it does not apply to this tree" >&2
+      continue
+    fi
+    git apply "$p"
+    # Whatever happens to the build, the patch comes out again.
+    trap "git apply -R '$p'" EXIT
+    stage_ab "$label" release
+    git apply -R "$p"
+    trap - EXIT
+  done
+  echo "there: scripts/gpu-bench.sh ab OUT_DIR (every staged build; AB_SIZES=1024 halves the time)" >&2
 }
 
 # $1 OUT_DIR, then the labels (default: every staged build). Writes OUT_DIR/ab.md.
@@ -292,6 +321,7 @@ case "$mode" in
     [ $# -eq 2 ] || { echo "error: usage: scripts/gpu-bench.sh stage-ab LABEL" >&2; exit 2; }
     stage_ab "$2" release
     ;;
+  stage-experiments) stage_experiments ;;
   ab)
     [ $# -ge 2 ] || { echo "error: usage: scripts/gpu-bench.sh ab OUT_DIR [LABEL…]" >&2; exit 2; }
     run_ab "${@:2}"
@@ -307,7 +337,7 @@ case "$mode" in
     AB_SCENES=cornell-box AB_SIZES=16 AB_VPLS=8 run_ab "${2:-$here/out/gpu-bench-tiny}/ab" tiny-a tiny-b
     ;;
   *)
-    echo "error: usage: scripts/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR] | stage-ab LABEL | ab OUT_DIR [LABEL…]" >&2
+    echo "error: usage: scripts/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR] | stage-ab LABEL | stage-experiments | ab OUT_DIR [LABEL…]" >&2
     exit 2
     ;;
 esac
