@@ -82,19 +82,20 @@ stage_experiments() {
     exit 2
   fi
   stage_ab head release
-  local p label
-  for p in docs/experiments/*.patch; do
-    [ -e "$p" ] || continue
-    label="$(basename "$p" .patch)"
-    if ! git apply --check "$p" 2>/dev/null; then
-      echo "skipping $label: it does not apply to this tree" >&2
+  # Names of their own: stage_ab sources setup.sh, whose loop variable would overwrite a `p`.
+  local experiment_patch experiment_label
+  for experiment_patch in docs/experiments/*.patch; do
+    [ -e "$experiment_patch" ] || continue
+    experiment_label="$(basename "$experiment_patch" .patch)"
+    if ! git apply --check "$experiment_patch" 2>/dev/null; then
+      echo "skipping $experiment_label: it does not apply to this tree" >&2
       continue
     fi
-    git apply "$p"
+    git apply "$experiment_patch"
     # Whatever happens to the build, the patch comes out again.
-    trap "git apply -R '$p'" EXIT
-    stage_ab "$label" release
-    git apply -R "$p"
+    trap "git apply -R '$experiment_patch'" EXIT
+    stage_ab "$experiment_label" release
+    git apply -R "$experiment_patch"
     trap - EXIT
   done
   echo "there: scripts/gpu-bench.sh ab OUT_DIR (every staged build; AB_SIZES=1024 halves the time)" >&2
