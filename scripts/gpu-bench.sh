@@ -108,7 +108,11 @@ run_ab() {
   local labels=("$@")
   if [ "${#labels[@]}" -eq 0 ]; then
     local f
-    for f in "$stage"/ab/*.gz; do [ -e "$f" ] && labels+=("$(basename "$f" .gz)"); done
+    # `head` (stage-experiments' unpatched build) first: the others are compared with it.
+    [ -f "$stage/ab/head.gz" ] && labels+=(head)
+    for f in "$stage"/ab/*.gz; do
+      [ -e "$f" ] && [ "$(basename "$f" .gz)" != head ] && labels+=("$(basename "$f" .gz)")
+    done
   fi
   [ "${#labels[@]}" -gt 0 ] || { echo "error: no build staged: run 'scripts/gpu-bench.sh stage-ab LABEL' first" >&2; exit 2; }
   local l
