@@ -194,3 +194,51 @@ pub fn closed_box(center: glam::Vec3, half: f32) -> Vec<[glam::Vec3; 3]> {
     ];
     faces.iter().flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]]).collect()
 }
+
+/// The cells of `spec`'s grid that the segment a → b crosses, in order, each with the parameter interval
+/// (t in [0, 1]) it spends there: a DDA (Amanatides–Woo) in f64, for the measuring tools' structures
+/// over a grid (`march-length`'s occupied runs, `cell-bvhs`). The segment is taken to start inside the
+/// grid (its first cell is clamped to it) and ends where it leaves.
+pub fn grid_cells_along(
+    spec: &bounce_graph::passes::voxelize::VoxelGridSpec,
+    a: glam::DVec3,
+    b: glam::DVec3,
+) -> Vec<(glam::IVec3, f64, f64)> {
+    use glam::{DVec3, IVec3};
+    let (origin, cell, dims) = (spec.origin.as_dvec3(), spec.cell as f64, spec.dims.as_ivec3());
+    let (ga, gb) = ((a - origin) / cell, (b - origin) / cell);
+    let d = gb - ga;
+    let mut c = ga.floor().as_ivec3().clamp(IVec3::ZERO, dims - 1);
+    let (mut next, mut delta) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::INFINITY));
+    for k in 0..3 {
+        if d[k] != 0.0 {
+            next[k] = (if d[k] > 0.0 { c[k] as f64 + 1.0 } else { c[k] as f64 } - ga[k]) / d[k];
+            delta[k] = 1.0 / d[k].abs();
+        }
+    }
+    let (mut t, mut out) = (0.0f64, Vec::new());
+    loop {
+        // The axis whose cell wall comes first (the last of equals, as the shaders' marches).
+        let k = if next.x < next.y {
+            if next.x < next.z {
+                0
+            } else {
+                2
+            }
+        } else if next.y < next.z {
+            1
+        } else {
+            2
+        };
+        out.push((c, t, next[k].min(1.0)));
+        if next[k] >= 1.0 {
+            return out;
+        }
+        t = next[k];
+        next[k] += delta[k];
+        c[k] += if d[k] > 0.0 { 1 } else { -1 };
+        if c[k] < 0 || c[k] >= dims[k] {
+            return out;
+        }
+    }
+}

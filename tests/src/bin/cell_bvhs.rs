@@ -201,9 +201,10 @@ impl CellBvhs {
     /// Grid steps, records read and the answer for the segment a → b.
     fn walk(&self, a: DVec3, b: DVec3) -> (u64, u64, bool) {
         let (mut steps, mut records) = (0u64, 0u64);
-        for (ci, t0, t1) in self.cells_along(a, b) {
+        let dims = self.spec.dims;
+        for (c, t0, t1) in bounce_tests::grid_cells_along(&self.spec, a, b) {
             steps += 1;
-            let cell = &self.cells[ci];
+            let cell = &self.cells[(c.x as u32 + dims.x * (c.y as u32 + dims.y * c.z as u32)) as usize];
             if cell.is_empty() {
                 continue;
             }
@@ -214,36 +215,6 @@ impl CellBvhs {
             }
         }
         (steps, records, false)
-    }
-
-    /// The cells the segment a → b crosses, in order, with their parameter intervals (a DDA in f64).
-    fn cells_along(&self, a: DVec3, b: DVec3) -> Vec<(usize, f64, f64)> {
-        let dims = self.spec.dims.as_ivec3();
-        let (origin, cell) = (self.spec.origin.as_dvec3(), self.spec.cell as f64);
-        let (ga, gb) = ((a - origin) / cell, (b - origin) / cell);
-        let d = gb - ga;
-        let mut c = ga.floor().as_ivec3().clamp(IVec3::ZERO, dims - 1);
-        let (mut next, mut delta) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::INFINITY));
-        for k in 0..3 {
-            if d[k] != 0.0 {
-                next[k] = (if d[k] > 0.0 { c[k] as f64 + 1.0 } else { c[k] as f64 } - ga[k]) / d[k];
-                delta[k] = 1.0 / d[k].abs();
-            }
-        }
-        let (mut t, mut out) = (0.0f64, Vec::new());
-        loop {
-            let k = (0..3).fold(0, |m, k| if next[k] < next[m] { k } else { m });
-            out.push(((c.x + dims.x * (c.y + dims.y * c.z)) as usize, t, next[k].min(1.0)));
-            if next[k] >= 1.0 {
-                return out;
-            }
-            t = next[k];
-            next[k] += delta[k];
-            c[k] += if d[k] > 0.0 { 1 } else { -1 };
-            if c[k] < 0 || c[k] >= dims[k] {
-                return out;
-            }
-        }
     }
 
     /// The cells' records as one threaded array under a hierarchy of boxes over the cells.

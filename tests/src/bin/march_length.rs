@@ -21,7 +21,7 @@ use bounce_graph::bvh::{Bvh, FlatBvh};
 use bounce_graph::passes::voxelize;
 use bounce_graph::scene::Scene;
 use bounce_oracles::{cpu_cells, cpu_threaded, cpu_voxel};
-use glam::{DVec3, IVec3, Vec3};
+use glam::{DVec3, Vec3};
 
 fn main() -> anyhow::Result<()> {
     let path = std::env::args().nth(1).map_or_else(bounce_tests::default_scene, Into::into);
@@ -138,49 +138,18 @@ fn main() -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The parameter intervals of the segment a → b that lie in occupied cells of `grid` (a DDA in f64,
-/// each run widened by 1e-6 against rounding), merged where they touch.
+/// The parameter intervals of the segment a → b that lie in occupied cells of `grid`, each widened by
+/// 1e-6 against rounding, merged where they touch.
 fn occupied_runs(spec: &voxelize::VoxelGridSpec, grid: &cpu_voxel::CpuGrid, a: DVec3, b: DVec3) -> Vec<(f64, f64)> {
-    let (origin, cell, dims) = (spec.origin.as_dvec3(), spec.cell as f64, spec.dims.as_ivec3());
-    let (ga, gb) = ((a - origin) / cell, (b - origin) / cell);
-    let d = gb - ga;
-    let mut c = ga.floor().as_ivec3().clamp(IVec3::ZERO, dims - 1);
-    let (mut next, mut delta) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::INFINITY));
-    for k in 0..3 {
-        if d[k] != 0.0 {
-            let edge = if d[k] > 0.0 { c[k] as f64 + 1.0 } else { c[k] as f64 };
-            next[k] = (edge - ga[k]) / d[k];
-            delta[k] = 1.0 / d[k].abs();
-        }
-    }
-    let (mut t, mut runs) = (0.0f64, Vec::<(f64, f64)>::new());
-    loop {
-        let k = if next.x < next.y {
-            if next.x < next.z {
-                0
-            } else {
-                2
-            }
-        } else if next.y < next.z {
-            1
-        } else {
-            2
-        };
+    let mut runs = Vec::<(f64, f64)>::new();
+    for (c, t0, t1) in bounce_tests::grid_cells_along(spec, a, b) {
         if grid.occupied(c) {
-            let (t0, t1) = (t - 1e-6, next[k].min(1.0) + 1e-6);
+            let (t0, t1) = (t0 - 1e-6, t1 + 1e-6);
             match runs.last_mut() {
                 Some(last) if last.1 >= t0 => last.1 = t1,
                 _ => runs.push((t0, t1)),
             }
         }
-        if next[k] >= 1.0 {
-            return runs;
-        }
-        t = next[k];
-        next[k] += delta[k];
-        c[k] += if d[k] > 0.0 { 1 } else { -1 };
-        if c[k] < 0 || c[k] >= dims[k] {
-            return runs;
-        }
     }
+    runs
 }
