@@ -98,6 +98,10 @@ stage_experiments() {
     git apply -R "$experiment_patch"
     trap - EXIT
   done
+  # `run` uses the staged binary: the head build again, not the last patched one.
+  gunzip -c "$stage/ab/head.gz" >"$stage/bin/bounce.tmp"
+  chmod +x "$stage/bin/bounce.tmp"
+  mv "$stage/bin/bounce.tmp" "$stage/bin/bounce"
   echo "there: scripts/gpu-bench.sh ab OUT_DIR (every staged build; AB_SIZES=1024 halves the time)" >&2
 }
 
