@@ -55,8 +55,9 @@ fn main() -> anyhow::Result<()> {
     }
     let v = visible.max(1) as f64;
     println!(
-        "threaded BVH ({} records): {:.1} records per ray, {:.1} per visible ray ({visible} of {} visible)",
+        "threaded BVH ({} records, {} levels): {:.1} records per ray, {:.1} per visible ray ({visible} of {} visible)",
         threaded.len(),
+        flat.height,
         records as f64 / n,
         visible_records as f64 / v,
         pairs.len()
