@@ -218,7 +218,7 @@ pub fn grid_cells_along(
     }
     let (mut t, mut out) = (0.0f64, Vec::new());
     loop {
-        // The axis whose cell wall comes first (the last of equals, as the shaders' marches).
+        // The axis whose cell wall comes first.
         let k = if next.x < next.y {
             if next.x < next.z {
                 0

@@ -18,7 +18,7 @@
 //!
 //!     cargo run --release -p bounce-tests --bin cell-bvhs -- scene.toml [--gather] G [G …]
 
-use bounce_graph::bvh::cells::tri_box_overlap;
+use bounce_graph::bvh::cells::{for_each_cell, CELL_MARGIN};
 use bounce_graph::bvh::query::BvhView;
 use bounce_graph::bvh::{Bvh, FlatBvh, GpuBvhTri, GpuThreadRec, NO_TRI, THREAD_TRI};
 use bounce_graph::passes::voxelize::{self, VoxelGridSpec};
@@ -26,11 +26,11 @@ use bounce_graph::scene::Scene;
 use bounce_graph::shader_types::Vertex;
 use bounce_oracles::cpu_threaded;
 use bounce_tests::Rng;
-use glam::{DVec3, IVec3, UVec3, Vec3};
+use glam::{DVec3, UVec3, Vec3};
 use std::path::Path;
 
-/// Triangles within this share of a cell of it are listed in it (as `--visibility hybrid`'s lists).
-const MARGIN: f64 = 1.0 / 64.0;
+/// Triangles within this share of a cell of it are listed in it (`--visibility hybrid`'s rule).
+const MARGIN: f64 = CELL_MARGIN;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -160,17 +160,7 @@ impl CellBvhs {
         let mut lists: Vec<Vec<&GpuBvhTri>> = vec![Vec::new(); (dims.x * dims.y * dims.z) as usize];
         for t in flat.tris.iter().filter(|t| t.tri != NO_TRI) {
             let v = t.positions().map(|p| (p.as_dvec3() - origin) / cell);
-            let lo = (v[0].min(v[1]).min(v[2]) - MARGIN).floor().as_ivec3().max(IVec3::ZERO);
-            let hi = (v[0].max(v[1]).max(v[2]) + MARGIN).floor().as_ivec3().min(dims.as_ivec3() - 1);
-            for z in lo.z..=hi.z {
-                for y in lo.y..=hi.y {
-                    for x in lo.x..=hi.x {
-                        if tri_box_overlap(&v, IVec3::new(x, y, z).as_dvec3() + 0.5, 0.5 + MARGIN) {
-                            lists[(x as u32 + dims.x * (y as u32 + dims.y * z as u32)) as usize].push(t);
-                        }
-                    }
-                }
-            }
+            for_each_cell(&v, dims, |c| lists[(c.x + dims.x * (c.y + dims.y * c.z)) as usize].push(t));
         }
         let cells = lists
             .iter()

@@ -114,8 +114,9 @@ impl CellLists {
 
 /// Calls `f` with every cell of the grid `dims` whose box, grown by [`CELL_MARGIN`], meets the triangle
 /// `v` (grid units). The triangle's extent along its dominant normal axis is cut per column of cells,
-/// so a large sloped triangle costs its area in cells, not its bounding box's volume.
-fn for_each_cell(v: &[DVec3; 3], dims: UVec3, mut f: impl FnMut(UVec3)) {
+/// so a large sloped triangle costs its area in cells, not its bounding box's volume. (Also the
+/// membership rule of the `cell-bvhs` measuring tool's grid.)
+pub fn for_each_cell(v: &[DVec3; 3], dims: UVec3, mut f: impl FnMut(UVec3)) {
     let n = (v[1] - v[0]).cross(v[2] - v[0]);
     if !v.iter().all(|p| p.is_finite()) || n.length_squared() == 0.0 {
         return;
