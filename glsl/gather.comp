@@ -60,6 +60,15 @@ vec3 shadow_pool_end(uint v) {
     return shadow_end(v, vpl_fetch(v));
 }
 #endif
+#ifndef SHADOW_POOL
+// The queue's rays skip their ends' empty balls (pc.end_balls; passes/end_balls.rs): the same answers.
+#define SHADOW_QUEUE_WINDOWS
+#include "shared/end_balls.glsl"
+layout(set = 0, binding = B_END_BALL_PIXELS) uniform sampler2D end_ball_pixels;
+layout(set = 0, binding = B_END_BALL_VPLS) uniform sampler2DArray end_ball_vpls;
+vec3 ray_origin;   // x lifted (shadow_origin)
+vec4 pixel_ball;   // x's ball (0: none)
+#endif
 #include "shared/shadow_queue.glsl"
 vec3 queue_weight[SHADOW_QUEUE]; // c(x, v) / p_v, the unshadowed contribution
 
@@ -72,7 +81,16 @@ void enqueue(vec3 x, vec3 nx, vec3 ax, uint v, float prob, inout uint n) {
 #ifdef SHADOW_POOL
     shadow_pool_key[n] = v;
 #else
-    shadow_queue_end[n] = shadow_end(v, vpl);
+    vec3 e = shadow_end(v, vpl);
+    shadow_queue_end[n] = e;
+    vec2 w = vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
+    if (pc.end_balls != 0u) {
+        uint res = frame.size.w;
+        vec4 vpl_ball = texelFetch(end_ball_vpls, ivec3(v % res, (v / res) % res, v / (res * res)), 0);
+        w.x = max(w.x, end_ball_exit(ray_origin, e, x, pixel_ball));
+        w.y = min(w.y, 1.0 - end_ball_exit(e, ray_origin, vpl.position, vpl_ball));
+    }
+    shadow_queue_window[n] = w;
 #endif
     n++;
 }
@@ -95,6 +113,10 @@ vec3 gather_queued(ivec2 px, bool inside) {
     vec3 ax = texelFetch(g_albedo, at, 0).rgb;
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
     vec3 o = shadow_origin(x, nx);
+#ifndef SHADOW_POOL
+    ray_origin = o;
+    pixel_ball = pc.end_balls != 0u ? texelFetch(end_ball_pixels, at, 0) : vec4(0.0);
+#endif
     vec3 sum = vec3(0.0);
     for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
         uint n = 0u, top = min(base + SHADOW_QUEUE, pc.last);

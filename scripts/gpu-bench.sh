@@ -21,7 +21,8 @@
 #                                       # choose (defaults: 4 scenes, 512 and 1024, uniform, 256, exact)
 #
 # `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
-# (1) the gather's GPU ms by visibility (voxel, exact, exact with `--shadow-rays pool`, hybrid) on every
+# (1) the gather's GPU ms by visibility (voxel, exact, exact with `--shadow-rays pool`, hybrid, exact
+# walking whole segments with `--end-balls off`, and the end balls' own passes) on every
 # scene of the suite at 256 VPLs per pixel, median of 3 frames (issue 13's cost bound), at 512² and at
 # the 64² of the lavapipe tables, '=' marking where the pool's image equals exact's;
 # (2) for Sibenik and Conference the thesis configuration (512², 800 VPLs per pixel; global, local, gbg,
@@ -179,21 +180,27 @@ vis_table() {
     echo
     echo "## Gather GPU ms by visibility (uniform, $vpls VPLs per pixel, ${size}², DPRSM ${dprsm}², median of 3 frames)"
     echo
-    echo "| scene | voxel | exact | exact, pool | hybrid | exact ÷ voxel | pool ÷ voxel |"
-    echo "|---|---:|---:|---:|---:|---:|---:|"
+    echo "| scene | voxel | exact | exact, pool | hybrid | exact ÷ voxel | pool ÷ voxel | exact, whole segments | end balls |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|"
   } | tee -a "$md"
   local scene v
   for scene in "$@"; do
     local toml="$here/assets/$scene/scene.toml"
     declare -A ms=()
     # `pool`: the exact rays with --shadow-rays pool (the same images; empty where the device lacks it).
-    for v in voxel exact pool hybrid; do
+    # `whole`: the exact rays walking whole segments (--end-balls off, the same images); `end balls`: the
+    # two passes that make exact's balls, once per G-buffer and VPL set (not part of the gather's ms).
+    for v in voxel exact pool hybrid whole; do
       local args=(--visibility "$v")
       [ "$v" = pool ] && args=(--visibility exact --shadow-rays pool)
+      [ "$v" = whole ] && args=(--visibility exact --end-balls off)
       ms[$v]="$(for k in 1 2 3; do "$bin" render "$toml" --width "$size" --height "$size" --component indirect \
         --dprsm-res "$dprsm" --shadow-res "$shadow" --method uniform --vpls "$vpls" --seed "$k" \
         "${args[@]}" --timings --out "$out/vis-$scene-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
     done
+    ms[balls]="$("$bin" render "$toml" --width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" \
+      --shadow-res "$shadow" --method uniform --vpls "$vpls" --visibility exact --timings --out "$out/vis-$scene-balls.exr" \
+      2>/dev/null | awk '$1 ~ /^end_balls/ {s += $2} END {if (NR) printf "%.2f", s}')"
     # The pool must render exact's image (the last frame, seed 3, of each): '=' where it does.
     local ratio="–" pratio="–" same=""
     if [ -n "${ms[pool]}" ]; then
@@ -203,7 +210,7 @@ vis_table() {
     fi
     [ -n "${ms[voxel]}" ] && [ -n "${ms[exact]}" ] && ratio="$(awk -v e="${ms[exact]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
     [ -n "${ms[voxel]}" ] && [ -n "${ms[pool]}" ] && pratio="$(awk -v e="${ms[pool]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
-    echo "| $scene | ${ms[voxel]:-–} | ${ms[exact]:-–} | ${ms[pool]:-–}$same | ${ms[hybrid]:-–} | $ratio | $pratio |" | tee -a "$md"
+    echo "| $scene | ${ms[voxel]:-–} | ${ms[exact]:-–} | ${ms[pool]:-–}$same | ${ms[hybrid]:-–} | $ratio | $pratio | ${ms[whole]:-–} | ${ms[balls]:-–} |" | tee -a "$md"
     unset ms
   done
 }

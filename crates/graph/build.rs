@@ -60,6 +60,9 @@ const SHADERS: &[Shader] = &[
     // instead of the voxel march), `psm` (the frame's shared VPL set and its shadow maps), `psm-exact`
     // (the shared set with exact shadow rays: the reference for the maps' own visibility error) and `hybrid`
     // (the exact rays traced only through the voxel grid's occupied cells).
+    // end_balls: each exact shadow ray's ends' empty balls, per pixel and (END_BALLS_VPLS) per VPL.
+    file("end_balls.comp"),
+    variant("end_balls.vpls.comp", "end_balls.comp", &["END_BALLS_VPLS"]),
     file("gather.comp"),
     variant("gather.exact.comp", "gather.comp", &["EXACT_VISIBILITY"]),
     // `--shadow-rays pool`: the exact rays shared by a subgroup (glsl/shared/shadow_queue.glsl).

@@ -132,6 +132,19 @@ const float BVH_SHADOW_EPS = 1e-4;
 #define CELL_DENSITY 16
 #define HYBRID_MAX_TESTS 96
 
+// ---- end_balls (passes/end_balls.rs, shared/end_balls.glsl): each shadow-ray end's empty half-ball ------
+// The pass reads the G-buffer (B_GATHER_G*) or the VPL images (B_VPL_*) and writes B_END_BALL_OUT; the
+// exact gather reads the pixels' balls at B_END_BALL_PIXELS and the VPLs' at B_END_BALL_VPLS.
+#define B_END_BALL_OUT 49
+#define B_END_BALL_PIXELS 50
+#define B_END_BALL_VPLS 51
+// Records one ball's walk may read (shared/end_balls.glsl); a walk that has not finished by then gives no
+// ball (radius 0), so this only bounds the pass's time and loop count, never an answer.
+#define END_BALL_MAX_STEPS 4096
+// The largest radius a ball is given, as a share of the scene diagonal (BENCHMARKS.md: larger ones cost the
+// walk more records than they save the rays).
+const float END_BALL_MAX_RADIUS = 0.03;
+
 // ---- reference: the exact one-bounce integrator --------------------------------------------------------
 #define B_REF_SQ 28
 

@@ -14,11 +14,17 @@
 #define BOUNCE_SHADOW_QUEUE_GLSL
 
 vec3 shadow_queue_end[SHADOW_QUEUE];
+#ifdef SHADOW_QUEUE_WINDOWS
+// With SHADOW_QUEUE_WINDOWS the caller also gives each ray the part of the segment to walk, (tmin, tmax)
+// within (BVH_LIFTED_EPS, 1 − BVH_LIFTED_EPS): the gather leaves out its ends' empty balls
+// (shared/end_balls.glsl), which changes no answer. An empty window is "not occluded" at once.
+vec2 shadow_queue_window[SHADOW_QUEUE];
+#endif
 
 // Bit j set: the shadow ray o → shadow_queue_end[j] (j < n ≤ SHADOW_QUEUE) is not occluded.
 uint shadow_queue_trace(vec3 o, uint n) {
     int end = textureSize(bvh_threaded) / 3;
-    const float tmin = BVH_LIFTED_EPS, tmax = 1.0 - BVH_LIFTED_EPS;
+    float tmin = BVH_LIFTED_EPS, tmax = 1.0 - BVH_LIFTED_EPS;
     uint visible = 0u, next = 0u, current = 0u, steps = 0u;
     bool tracing = false, done = false, hit = false;
     BvhRay r;
@@ -27,6 +33,10 @@ uint shadow_queue_trace(vec3 o, uint n) {
         if (!tracing) {
             current = next++;
             vec3 d = shadow_queue_end[current] - o;
+#ifdef SHADOW_QUEUE_WINDOWS
+            tmin = shadow_queue_window[current].x;
+            tmax = shadow_queue_window[current].y;
+#endif
             if (!bvh_usable_ray(o, d, tmin, tmax)) {
                 visible |= 1u << current; // "no hit", as bvh_any_hit answers
                 continue;

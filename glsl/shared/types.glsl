@@ -62,7 +62,7 @@ struct GatherPush {
     uint face_mode;   // FACE_RR: faces in proportion to their importance; FACE_UNIFORM: equally
     uint cdf_len;     // floats per CDF section
     uint rays;        // mis: gathering rays per pixel (n_g)
-    uint pad0;
+    uint end_balls;   // 1: the exact gather's rays skip their ends' empty balls (B_END_BALL_PIXELS/_VPLS)
     uint pad1;
     uint pad2;
 };

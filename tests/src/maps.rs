@@ -33,3 +33,39 @@ pub fn render_vpls(r: &Renderer, s: &FrameSettings) -> Result<[Vec<[f32; 4]>; 3]
     let read = |h: &Handle<Image>| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&done.read_image(h)?)) };
     Ok([read(&v.position)?, read(&v.normal)?, read(&v.flux)?])
 }
+
+/// The end balls (`passes/end_balls.rs`) with the ends they belong to, RGBA32F per texel: per pixel the
+/// G-buffer position, normal and ball; per VPL texel (layer after layer) the VPL position and ball.
+pub struct EndBallMaps {
+    pub g_position: Vec<[f32; 4]>,
+    pub g_normal: Vec<[f32; 4]>,
+    pub pixels: Vec<[f32; 4]>,
+    pub vpl_position: Vec<[f32; 4]>,
+    pub vpls: Vec<[f32; 4]>,
+}
+
+/// The G-buffer, the VPL maps and both end-ball passes, alone in a graph (settings with exact visibility,
+/// and the renderer's BVH built: `Renderer::bvh`).
+pub fn render_end_balls(r: &Renderer, s: &FrameSettings) -> Result<EndBallMaps> {
+    r.check(s)?;
+    let uniforms = r.uniform_buffer(s)?;
+    let f = r.frame_inputs(s, &uniforms);
+    let Some(bvh) = f.bvh else { anyhow::bail!("end balls need --visibility exact") };
+    let mut g = Graph::new(&r.gpu);
+    let gb = r.passes.gbuffer.add(&mut g, f);
+    let v = r.passes.dprsm.add(&mut g, f);
+    let pixels = r.passes.end_balls.add_pixels(&mut g, f, bvh, &gb);
+    let vpls = r.passes.end_balls.add_vpls(&mut g, f, bvh, &v);
+    for h in [&gb.position, &gb.normal, &pixels, &v.position, &vpls] {
+        g.export(h);
+    }
+    let done = g.execute()?;
+    let read = |h: &Handle<Image>| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&done.read_image(h)?)) };
+    Ok(EndBallMaps {
+        g_position: read(&gb.position)?,
+        g_normal: read(&gb.normal)?,
+        pixels: read(&pixels)?,
+        vpl_position: read(&v.position)?,
+        vpls: read(&vpls)?,
+    })
+}

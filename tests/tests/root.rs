@@ -6,6 +6,7 @@ mod cdf;
 mod cli;
 mod direct;
 mod dprsm;
+mod end_balls;
 mod fuzz_corpus;
 mod graph;
 mod images;

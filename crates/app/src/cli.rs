@@ -301,6 +301,10 @@ pub struct FrameArgs {
     /// How the gather's exact shadow rays are spread over a subgroup's lanes (the same images).
     #[arg(long, value_parser = SHADOW_RAYS, default_value = "queue")]
     pub shadow_rays: ShadowRays,
+    /// The gather's exact shadow rays (--shadow-rays queue) skip the empty half-ball around each of their
+    /// ends, found once per pixel and per VPL: `on` or `off` (the same images; off walks whole segments).
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub end_balls: bool,
     /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
     #[arg(long, default_value_t = 256)]
     pub psm_res: u32,
@@ -383,6 +387,7 @@ impl FrameArgs {
             reference_estimator: self.reference_estimator,
             visibility: self.visibility,
             shadow_rays: self.shadow_rays,
+            end_balls: self.end_balls,
             psm_res: self.psm_res,
             light_map: match self.light_map {
                 LightMap::Rsm { .. } => LightMap::Rsm { fov_deg: self.rsm_fov },

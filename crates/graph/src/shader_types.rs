@@ -111,7 +111,9 @@ pub struct GatherPush {
     pub face_mode: u32,
     pub cdf_len: u32,
     pub rays: u32,
-    pub pad: [u32; 3],
+    /// 1: the exact gather's rays skip their ends' empty balls (set by the gather pass where they are bound).
+    pub end_balls: u32,
+    pub pad: [u32; 2],
 }
 const _: () = assert!(size_of::<GatherPush>() == 64);
 

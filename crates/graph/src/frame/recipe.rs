@@ -6,6 +6,7 @@
 //!   dprsm_depth ──┐           │            │ (kept per shadow resolution)
 //!   gbuffer ──────┴─ direct ──┤            │ (kept per camera and size)
 //!                             ├ importance → cdf_reduce (kept per CDF key; `uniform`'s in its own slot)
+//!                             ├ end_balls (per pixel, per VPL: kept with the G-buffer, the VPLs; exact gather)
 //!                             └ [psm_select → psm] → gather | mis | reference → radiance (temporal)
 //! ```
 //!
@@ -20,6 +21,7 @@ use super::settings::{Component, FaceMode, FrameSettings, Method, MisWeights, Ri
 use crate::bindings::*;
 use crate::graph::{Graph, Handle};
 use crate::passes::cdf_reduce::CdfReduce;
+use crate::passes::end_balls::EndBallImages;
 use crate::passes::gather::GatherInputs;
 use crate::passes::importance::{ImportanceKind, ImportanceParams};
 use crate::passes::reference::ReferenceIo;
@@ -108,6 +110,13 @@ pub fn build_frame<'a>(
         Cdf { importance: imp.importance, cdf: r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections) }
     });
     let mut inputs = GatherInputs::new(&gbuffer, &vpls, voxels, cdf.importance, cdf.cdf, combined);
+    if s.uses_end_balls() {
+        let bvh = f.bvh.expect("exact visibility binds the BVH (the renderer builds it first)");
+        inputs.ends = Some(EndBallImages {
+            pixels: g.cached("end_balls.pixels", &k.gbuffer, |g| r.end_balls.add_pixels(g, f, bvh, &gbuffer)),
+            vpls: g.cached("end_balls.vpls", &k.vpls, |g| r.end_balls.add_vpls(g, f, bvh, &vpls)),
+        });
+    }
     let push = gather_push(s, f, p, chunk);
     if s.visibility.shared_set() {
         // One shared VPL set (and its shadow maps) for every pixel: passes/psm.rs. Under `mis` it is the

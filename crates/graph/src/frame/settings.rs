@@ -410,6 +410,9 @@ pub struct FrameSettings {
     pub visibility: Visibility,
     /// How the gather's exact shadow rays are scheduled (`Visibility::Exact` only; the same images).
     pub shadow_rays: ShadowRays,
+    /// The gather's exact rays from the queue skip their ends' empty balls (`passes/end_balls.rs`; the
+    /// same images, fewer BVH records per ray).
+    pub end_balls: bool,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
     /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
@@ -451,6 +454,7 @@ impl Default for FrameSettings {
             reference_chunk: None,
             visibility: Visibility::Exact,
             shadow_rays: ShadowRays::Queue,
+            end_balls: true,
             shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
@@ -460,6 +464,16 @@ impl Default for FrameSettings {
 }
 
 impl FrameSettings {
+    /// Whether the frame's gather uses end balls: `end_balls` with the exact queue, for the methods the
+    /// gather pass records (not mis, ris or the reference, whose rays do not take them).
+    pub fn uses_end_balls(&self) -> bool {
+        self.end_balls
+            && self.visibility == Visibility::Exact
+            && self.shadow_rays == ShadowRays::Queue
+            && self.component != Component::Direct
+            && !matches!(self.method, Method::Mis | Method::Ris | Method::Reference)
+    }
+
     /// The method whose CDF and source mixture the frame samples: `Method::Ris`'s source, else the
     /// method itself.
     pub fn sampling_method(&self) -> Method {

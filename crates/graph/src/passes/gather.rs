@@ -100,6 +100,8 @@ impl VisibilityVariants {
         let [voxel, exact, hybrid] = spirv;
         let voxel = ComputePipeline::new(gpu, name, &crate::spirv(voxel), &bindings, push, &[])?;
         bindings.extend(crate::bvh::GpuBvh::bindings());
+        // Only the gather's exact variant reads the end balls; the others' layouts may hold them unused.
+        bindings.extend(crate::passes::end_balls::gather_bindings());
         let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
         bindings.extend(crate::bvh::cells::GpuCells::bindings());
         let hybrid = ComputePipeline::new(gpu, name, &crate::spirv(hybrid), &bindings, push, &[])?;
@@ -148,6 +150,8 @@ pub struct GatherInputs {
     pub direct: Option<Handle<Image>>,
     /// `--visibility psm`/`psm-exact`: the frame's shared VPL set and (psm) its shadow maps.
     pub psm: Option<crate::passes::psm::PsmOut>,
+    /// The exact gather's end balls (`--end-balls on`): its rays skip them.
+    pub ends: Option<crate::passes::end_balls::EndBallImages>,
 }
 
 impl GatherInputs {
@@ -171,6 +175,7 @@ impl GatherInputs {
             cdf,
             direct,
             psm: None,
+            ends: None,
         }
     }
 
@@ -207,6 +212,21 @@ impl GatherInputs {
         };
         w.storage_buffer(B_IMPORTANCE, ctx.buffer(&self.importance)).texel_view(B_CDF, ctx.buffer(&self.cdf))
     }
+}
+
+/// The end balls' writes and the push's `end_balls`: the balls when the frame has them, else stand-ins of
+/// the same view types (the G-buffer normal, the VPL normals), which the shader then does not read.
+fn end_ball_writes(
+    ctx: &PassContext,
+    i: &GatherInputs,
+    w: DescriptorWrites,
+    s: vk::Sampler,
+) -> (DescriptorWrites, u32) {
+    let (pixels, vpls, on) = match &i.ends {
+        Some(e) => (e.pixels, e.vpls, 1),
+        None => (i.g_normal, i.vpl_normal, 0),
+    };
+    (w.sampled_image(B_END_BALL_PIXELS, ctx.image(&pixels), s).sampled_image(B_END_BALL_VPLS, ctx.image(&vpls), s), on)
 }
 
 impl Gather {
@@ -257,8 +277,8 @@ impl Gather {
         f: FrameInputs,
         i: &GatherInputs,
         writes: DescriptorWrites,
-    ) -> (&ComputePipeline, DescriptorWrites) {
-        match (&i.psm, f.bvh) {
+    ) -> (&ComputePipeline, DescriptorWrites, u32) {
+        let (pipeline, writes) = match (&i.psm, f.bvh) {
             (Some(p), Some(bvh)) => {
                 (&self.psm_exact, bvh.writes(writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views))))
             }
@@ -275,8 +295,15 @@ impl Gather {
                 // `mis` shares this pass's recording and has no pool variant.
                 None => self.vis.pick(&f, writes),
             },
-            (None, _) => self.vis.pick(&f, writes),
-        }
+            (None, Some(_)) => {
+                // The exact (and hybrid) layouts hold the end balls' bindings.
+                let (writes, on) = end_ball_writes(ctx, i, writes, self.sampler.raw);
+                let (pipeline, writes) = self.vis.pick(&f, writes);
+                return (pipeline, writes, on);
+            }
+            (None, None) => self.vis.pick(&f, writes),
+        };
+        (pipeline, writes, 0)
     }
 
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
@@ -300,6 +327,9 @@ impl Gather {
         for h in i.buffers() {
             b = b.read(&h, Access::ComputeRead);
         }
+        if let Some(e) = &i.ends {
+            b = b.read(&e.pixels, Access::ComputeRead).read(&e.vpls, Access::ComputeRead);
+        }
         if let Some(p) = &i.psm {
             b = b.read(&p.views, Access::ComputeRead);
             if f.bvh.is_none() {
@@ -321,13 +351,13 @@ impl Gather {
                 .sampling_writes(&f, ctx, s)
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            let (pipeline, writes) = self.variant(ctx, f, &i, writes);
+            let (pipeline, writes, end_balls) = self.variant(ctx, f, &i, writes);
             for (first, last) in super::dispatch_ranges(push.first, push.last, f.vpls_per_dispatch) {
                 if first != push.first {
                     // The next chunk adds to what the previous one stored.
                     ctx.serialize(&o);
                 }
-                let p = push.chunk(first, last);
+                let p = GatherPush { end_balls, ..push.chunk(first, last) };
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
             }
         });

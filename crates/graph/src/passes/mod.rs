@@ -4,6 +4,7 @@
 pub mod cdf_reduce;
 pub mod direct;
 pub mod dprsm;
+pub mod end_balls;
 pub mod gather;
 pub mod gbuffer;
 pub mod importance;
@@ -23,6 +24,7 @@ pub struct Passes {
     pub gbuffer: gbuffer::GBuffer,
     pub dprsm: dprsm::Dprsm,
     pub direct: direct::Direct,
+    pub end_balls: end_balls::EndBalls,
     pub voxelize: voxelize::Voxelize,
     pub importance: importance::Importance,
     pub cdf_reduce: cdf_reduce::CdfReduce,
@@ -44,6 +46,7 @@ impl Passes {
             gbuffer: gbuffer::GBuffer::new(gpu, textured).context("creating the gbuffer pass")?,
             dprsm: dprsm::Dprsm::new(gpu, textured).context("creating the dprsm pass")?,
             direct: direct::Direct::new(gpu).context("creating the direct pass")?,
+            end_balls: end_balls::EndBalls::new(gpu).context("creating the end_balls pass")?,
             voxelize: voxelize::Voxelize::new(gpu).context("creating the voxelize pass")?,
             importance: importance::Importance::new(gpu).context("creating the importance pass")?,
             cdf_reduce: cdf_reduce::CdfReduce::new(gpu).context("creating the cdf_reduce pass")?,

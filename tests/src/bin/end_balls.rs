@@ -1,0 +1,256 @@
+//! Records per exact shadow ray with and without the end balls (`crates/graph/src/passes/end_balls.rs`):
+//! the CPU twin of the threaded walk (`bounce_oracles::cpu_threaded`) on the gather's pairs of a 64²
+//! view (each pixel's first hit to 8 of 1,024 VPLs, the first light's first hits in uniform directions,
+//! as `cell-bvhs --gather`), with each end's plane its triangle's. It prints the radii's medians, the
+//! records one ball costs by the threaded walk for a few caps on the radius, and the records per ray
+//! (all, visible) walking whole segments against skipping both balls and only the pixel's. Every
+//! clipped walk's answer is checked against the whole segment's. `CAP=c` caps the radii at c × the
+//! scene diagonal (default: the renderer's, END_BALL_MAX_RADIUS); like the renderer it subtracts one lift.
+//! (Here each end is lifted along its face normal, the renderer lifts x along its shading normal.) Figures: BENCHMARKS.md, first section.
+//!
+//!     cargo run --release -p bounce-tests --bin end-balls -- scene.toml
+
+use bounce_graph::bvh::query::BvhView;
+use bounce_graph::bvh::{Bvh, FlatBvh, GpuBvhNode, GpuBvhTri};
+use bounce_graph::scene::Scene;
+use bounce_oracles::cpu_threaded;
+use bounce_tests::Rng;
+use glam::{DVec3, Vec3};
+use std::path::Path;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(path) = args.first() else { anyhow::bail!("usage: end-balls scene.toml") };
+    let scene = Scene::load(Path::new(path))?;
+    let flat = FlatBvh::new(&Bvh::new(&scene), &scene.vertices);
+    let threaded = flat.threaded();
+    let view = BvhView { nodes: &flat.nodes, tris: &flat.tris };
+    let diag = (scene.bounds_max - scene.bounds_min).length();
+    let lift = |x: Vec3| (1e-5 * diag).max(x.abs().max_element() / 262144.0);
+    let cam = &scene.camera;
+    // (point, geometric normal facing the viewer)
+    let mut pixels = Vec::new();
+    for k in 0..64 * 64 {
+        let d = cam.ray_dir(k % 64, k / 64, 64, 64);
+        if let Some((t, i)) = view.closest(cam.eye, d, 1e-4, f32::MAX) {
+            let n = normal(&flat.tris[i]);
+            let n = if n.dot(d) > 0.0 { -n } else { n };
+            pixels.push((cam.eye + d * t, n));
+        }
+    }
+    let light = Vec3::from_slice(&scene.lights[0].position[..3]);
+    let mut rng = Rng(7);
+    let mut vpls = Vec::new();
+    for _ in 0..100_000 {
+        let d = rng.unit();
+        if let Some((t, i)) = view.closest(light, d, 1e-4, f32::MAX) {
+            let n = normal(&flat.tris[i]);
+            let n = if n.dot(d) > 0.0 { -n } else { n };
+            vpls.push((light + d * t, n));
+        }
+        if vpls.len() == 1024 {
+            break;
+        }
+    }
+    let t0 = std::time::Instant::now();
+    let rx: Vec<f64> = pixels.iter().map(|&(x, n)| free_radius(&view, x, n, lift(x) / 16.0)).collect();
+    let cap: f64 = std::env::var("CAP")
+        .ok()
+        .and_then(|c| c.parse().ok())
+        .unwrap_or(bounce_graph::bindings::END_BALL_MAX_RADIUS as f64)
+        * diag as f64;
+    let rx: Vec<f64> = rx.iter().map(|r| r.min(cap)).collect();
+    let ry: Vec<f64> = vpls.iter().map(|&(y, n)| free_radius(&view, y, n, lift(y) / 16.0).min(cap)).collect();
+    println!("radii in {:.1} s", t0.elapsed().as_secs_f64());
+    let med = |v: &[f64]| {
+        let mut s = v.to_vec();
+        s.sort_by(f64::total_cmp);
+        s[s.len() / 2]
+    };
+    for rmax_frac in [0.01f64, 0.03, 0.1, 1.0] {
+        let (mut recs, mut maxr, mut same) = (0u64, 0u32, 0usize);
+        for (k, &(x, n)) in pixels.iter().enumerate() {
+            let (r, c) = threaded_radius(&threaded, x, n, lift(x) / 16.0, rmax_frac * diag as f64);
+            recs += c as u64;
+            maxr = maxr.max(c);
+            if (r - rx[k].min(rmax_frac * diag as f64)).abs() <= 1e-9 * diag as f64 {
+                same += 1;
+            }
+        }
+        println!(
+            "rmax {rmax_frac} diag: threaded ball query {:.1} records (max {maxr}), {same}/{} equal",
+            recs as f64 / pixels.len() as f64,
+            pixels.len()
+        );
+    }
+    println!("median r: pixels {:.3}, vpls {:.3}, diag {:.1}", med(&rx), med(&ry), diag);
+    let mut xonly = 0u64;
+    let (mut rays, mut full, mut clipped, mut none_needed, mut vis, mut vis_full, mut vis_clip) =
+        (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
+    for (pi, &(x, nx)) in pixels.iter().enumerate() {
+        for _ in 0..8 {
+            let vi = rng.below(vpls.len() as u32) as usize;
+            let (y, ny) = vpls[vi];
+            if nx.dot(y - x) <= 0.0 || ny.dot(x - y) <= 0.0 {
+                continue;
+            }
+            rays += 1;
+            let o = (x + nx * lift(x)).as_dvec3();
+            let e = (y + (light - y).normalize() * lift(y)).as_dvec3();
+            let (lo, hi) = (1e-6, 1.0 - 1e-6);
+            let w = cpu_threaded::walk(&threaded, o, e, lo, hi);
+            full += w.records as u64;
+            let t1 = skip(o, e, x.as_dvec3(), nx.as_dvec3(), rx[pi] - lift(x) as f64, lift(x) as f64 / 8.0);
+            let t2 = 1.0 - skip(e, o, y.as_dvec3(), ny.as_dvec3(), ry[vi] - lift(y) as f64, lift(y) as f64 / 8.0);
+            let (a, b) = (t1.max(lo), t2.min(hi));
+            let c = if a >= b {
+                none_needed += 1;
+                cpu_threaded::WalkCount::default()
+            } else {
+                cpu_threaded::walk_clipped(&threaded, o, e, a, b, &[(a, b)])
+            };
+            anyhow::ensure!(c.occluded == w.occluded, "answers differ at pixel {pi}");
+            let cx = cpu_threaded::walk_clipped(&threaded, o, e, t1.max(lo), hi, &[(t1.max(lo), hi)]);
+            anyhow::ensure!(cx.occluded == w.occluded, "answers differ at pixel {pi}");
+            xonly += cx.records as u64;
+            clipped += c.records as u64;
+            if !w.occluded {
+                vis += 1;
+                vis_full += w.records as u64;
+                vis_clip += c.records as u64;
+            }
+        }
+    }
+    let n = rays as f64;
+    println!(
+        "{rays} rays ({vis} visible, {none_needed} need no walk): records per ray {:.1} -> {:.1}; per visible ray {:.1} -> {:.1}",
+        full as f64 / n,
+        clipped as f64 / n,
+        vis_full as f64 / vis as f64,
+        vis_clip as f64 / vis as f64
+    );
+    println!("pixel end only: {:.1}", xonly as f64 / n);
+    Ok(())
+}
+
+fn normal(t: &GpuBvhTri) -> Vec3 {
+    let [a, b, c] = t.positions();
+    (b - a).cross(c - a).normalize()
+}
+
+/// The parameter along a → b (from a's side) up to which the segment lies in p's empty half-ball.
+fn skip(a: DVec3, b: DVec3, p: DVec3, n: DVec3, r: f64, margin: f64) -> f64 {
+    let (ha, hb) = (n.dot(a - p), n.dot(b - p));
+    if ha <= margin || hb <= margin || r <= 0.0 {
+        return 0.0;
+    }
+    let r = r * (1.0 - 1e-4);
+    let d = b - a;
+    let f = a - p;
+    let (qa, qb, qc) = (d.dot(d), 2.0 * f.dot(d), f.dot(f) - r * r);
+    if qc >= 0.0 {
+        return 0.0;
+    }
+    let disc = qb * qb - 4.0 * qa * qc;
+    ((-qb + disc.sqrt()) / (2.0 * qa)).clamp(0.0, 1.0)
+}
+
+/// Distance from p to the nearest triangle with a vertex more than tau above p's plane.
+fn free_radius(view: &BvhView, p: Vec3, n: Vec3, tau: f32) -> f64 {
+    let (p, n, tau) = (p.as_dvec3(), n.as_dvec3(), tau as f64);
+    let mut best = f64::INFINITY;
+    let mut stack = vec![0u32];
+    while let Some(i) = stack.pop() {
+        let nd: GpuBvhNode = view.nodes[i as usize];
+        let (lo, hi) = (Vec3::from(nd.lo).as_dvec3(), Vec3::from(nd.hi).as_dvec3());
+        let q = p.clamp(lo, hi);
+        if (q - p).length() >= best {
+            continue;
+        }
+        // Highest point of the box above the plane.
+        let top = DVec3::new(
+            if n.x > 0.0 { hi.x } else { lo.x },
+            if n.y > 0.0 { hi.y } else { lo.y },
+            if n.z > 0.0 { hi.z } else { lo.z },
+        );
+        if n.dot(top - p) <= tau {
+            continue;
+        }
+        if nd.is_leaf() {
+            for k in nd.first..nd.first + nd.count {
+                let v = view.tris[k as usize].positions().map(|v| v.as_dvec3());
+                if v.iter().all(|&v| n.dot(v - p) <= tau) {
+                    continue;
+                }
+                best = best.min(dist_tri(p, v[0], v[1], v[2]));
+            }
+        } else {
+            stack.push(nd.first);
+            stack.push(nd.first + 1);
+        }
+    }
+    best
+}
+
+fn threaded_radius(recs: &[bounce_graph::bvh::GpuThreadRec], p: Vec3, n: Vec3, tau: f32, rmax: f64) -> (f64, u32) {
+    let (p, n, tau) = (p.as_dvec3(), n.as_dvec3(), tau as f64);
+    let mut best = rmax;
+    let (mut i, mut count) = (0usize, 0u32);
+    while i < recs.len() {
+        let r = &recs[i];
+        count += 1;
+        let (a, b, c) = (Vec3::from(r.a).as_dvec3(), Vec3::from(r.b).as_dvec3(), Vec3::from(r.c).as_dvec3());
+        if r.link == bounce_graph::bvh::THREAD_TRI {
+            if [a, b, c].iter().any(|&v| n.dot(v - p) > tau) {
+                best = best.min(dist_tri(p, a, b, c));
+            }
+            i += 1;
+        } else {
+            let q = p.clamp(a, b);
+            let top = DVec3::new(
+                if n.x > 0.0 { b.x } else { a.x },
+                if n.y > 0.0 { b.y } else { a.y },
+                if n.z > 0.0 { b.z } else { a.z },
+            );
+            i = if (q - p).length() < best && n.dot(top - p) > tau { i + 1 } else { r.link as usize };
+        }
+    }
+    (best, count)
+}
+
+/// Ericson, Real-Time Collision Detection 5.1.5.
+fn dist_tri(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (p - a).length();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (p - b).length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (p - (a + ab * v)).length();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (p - c).length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (p - (a + ac * w)).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (p - (b + (c - b) * w)).length();
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (p - (a + ab * v + ac * w)).length()
+}
