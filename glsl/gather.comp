@@ -63,9 +63,8 @@ vec3 shadow_pool_end(uint v) {
 #ifndef SHADOW_POOL
 // The queue's rays skip their ends' empty balls (pc.end_balls; passes/end_balls.rs): the same answers.
 #define SHADOW_QUEUE_WINDOWS
+#define END_BALLS_READ
 #include "shared/end_balls.glsl"
-layout(set = 0, binding = B_END_BALL_PIXELS) uniform sampler2D end_ball_pixels;
-layout(set = 0, binding = B_END_BALL_VPLS) uniform sampler2DArray end_ball_vpls;
 vec3 ray_origin;   // x lifted (shadow_origin)
 vec4 pixel_ball;   // x's ball (0: none)
 #endif
@@ -83,14 +82,9 @@ void enqueue(vec3 x, vec3 nx, vec3 ax, uint v, float prob, inout uint n) {
 #else
     vec3 e = shadow_end(v, vpl);
     shadow_queue_end[n] = e;
-    vec2 w = vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
-    if (pc.end_balls != 0u) {
-        uint res = frame.size.w;
-        vec4 vpl_ball = texelFetch(end_ball_vpls, ivec3(v % res, (v / res) % res, v / (res * res)), 0);
-        w.x = max(w.x, end_ball_exit(ray_origin, e, x, pixel_ball));
-        w.y = min(w.y, 1.0 - end_ball_exit(e, ray_origin, vpl.position, vpl_ball));
-    }
-    shadow_queue_window[n] = w;
+    shadow_queue_window[n] = pc.end_balls != 0u
+        ? end_ball_window(ray_origin, e, x, pixel_ball, vpl.position, end_ball_of_vpl(v))
+        : vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
 #endif
     n++;
 }

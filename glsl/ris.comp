@@ -91,6 +91,10 @@ layout(std430, set = 0, binding = B_RIS_POOL) writeonly buffer RisPool { vec4 po
 // The shade's shadow rays from a queue (shared/shadow_queue.glsl): a block's rays are queued first, traced,
 // and then the block's reservoirs are shaded in order with their answers.
 #define SHADE_QUEUE
+// The queue's rays skip their ends' empty balls (pc.end_balls; passes/end_balls.rs): the same answers.
+#define SHADOW_QUEUE_WINDOWS
+#define END_BALLS_READ
+#include "shared/end_balls.glsl"
 #include "shared/shadow_queue.glsl"
 #endif
 
@@ -677,14 +681,20 @@ void main() {
         uvec2 counts = state.xy, siblings = state.zw;
 #ifdef SHADE_QUEUE
         vec3 o = shadow_origin(x, nx);
+        vec4 pixel_ball = pc.end_balls != 0u ? texelFetch(end_ball_pixels, px, 0) : vec4(0.0);
         for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
             uint top = min(base + SHADOW_QUEUE, pc.last), n = 0u;
             for (uint layer = base; layer < top; layer++) {
                 Reservoir r = res_in[res_index(px, layer)];
                 if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
                 Vpl vpl = vpl_fetch(r.vpl);
-                if (vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2) != vec3(0.0))
-                    shadow_queue_end[n++] = shadow_end(r.vpl, vpl);
+                if (vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2) != vec3(0.0)) {
+                    vec3 e = shadow_end(r.vpl, vpl);
+                    shadow_queue_end[n] = e;
+                    shadow_queue_window[n++] = pc.end_balls != 0u
+                        ? end_ball_window(o, e, x, pixel_ball, vpl.position, end_ball_of_vpl(r.vpl))
+                        : vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
+                }
             }
             uint visible = shadow_queue_trace(o, n), ray = 0u;
 #else

@@ -39,6 +39,25 @@ float end_ball_exit(vec3 a, vec3 b, vec3 p, vec4 ball) {
     return clamp(t, 0.0, 1.0);
 }
 
+#ifdef END_BALLS_READ
+// The balls as a shadow-ray queue reads them (the gather's and ris's shade, with SHADOW_QUEUE_WINDOWS):
+// per G-buffer pixel and per VPL texel (passes/end_balls.rs), 0 where there is none.
+layout(set = 0, binding = B_END_BALL_PIXELS) uniform sampler2D end_ball_pixels;
+layout(set = 0, binding = B_END_BALL_VPLS) uniform sampler2DArray end_ball_vpls;
+
+vec4 end_ball_of_vpl(uint v) {
+    uint res = frame.size.w;
+    return texelFetch(end_ball_vpls, ivec3(v % res, (v / res) % res, v / (res * res)), 0);
+}
+
+// The part of the shadow ray o → e to walk, for shadow_queue_window: (BVH_LIFTED_EPS, 1 − BVH_LIFTED_EPS)
+// less the ball (x_ball) around x, o's surface point, and the ball (y_ball) around y, e's.
+vec2 end_ball_window(vec3 o, vec3 e, vec3 x, vec4 x_ball, vec3 y, vec4 y_ball) {
+    return vec2(max(BVH_LIFTED_EPS, end_ball_exit(o, e, x, x_ball)),
+                min(1.0 - BVH_LIFTED_EPS, 1.0 - end_ball_exit(e, o, y, y_ball)));
+}
+#endif
+
 #ifdef END_BALLS_PASS
 // Distance from p to triangle (a, b, c): its closest point by Voronoi regions (Ericson, Real-Time Collision
 // Detection, 5.1.5).

@@ -7,8 +7,8 @@
 //!   ball (a ray's ends lie more than 2τ above it when the ball is used).
 //! - The plane is the end's triangle's: the G-buffer's triangle for a pixel (turned to its shading
 //!   normal), and for a VPL a triangle that contains it (turned to the light).
-//! - The exact gather's images with the balls and without are the same, bit for bit, on the stress
-//!   scenes and the Cornell box, sampled and `all`.
+//! - The exact gather's and ris's images with the balls and without are the same, bit for bit, on the
+//!   stress scenes and the Cornell box, sampled, `all` and `ris`.
 
 use bounce_graph::bindings::END_BALL_MAX_RADIUS;
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, Visibility};
@@ -141,7 +141,7 @@ fn end_ball_radii_match_the_cpu_twin() {
     }
 }
 
-/// The exact gather with the balls and without: the same images, bit for bit.
+/// The exact gather and ris's shade with the balls and without: the same images, bit for bit.
 #[test]
 fn end_balls_change_no_image() {
     let gpu = TestGpu::new();
@@ -152,7 +152,7 @@ fn end_balls_change_no_image() {
         "assets/clutter/scene.toml",
     ] {
         let scene = Scene::load(&bounce_tests::workspace().join(path)).unwrap();
-        for method in [Method::Uniform, Method::All] {
+        for method in [Method::Uniform, Method::All, Method::Ris] {
             let s = FrameSettings { method, vpls: 32, all_tile: 512, ..settings(32, 16) };
             let on = Renderer::new(&gpu, &scene).unwrap().render(&s).unwrap();
             assert!(on.ran.contains(&"end_balls.pixels") && on.ran.contains(&"end_balls.vpls"), "{:?}", on.ran);

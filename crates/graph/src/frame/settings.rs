@@ -410,8 +410,8 @@ pub struct FrameSettings {
     pub visibility: Visibility,
     /// How the gather's exact shadow rays are scheduled (`Visibility::Exact` only; the same images).
     pub shadow_rays: ShadowRays,
-    /// The gather's exact rays from the queue skip their ends' empty balls (`passes/end_balls.rs`; the
-    /// same images, fewer BVH records per ray).
+    /// The exact rays from the queue (the gather's, ris's shade's) skip their ends' empty balls
+    /// (`passes/end_balls.rs`; the same images, fewer BVH records per ray).
     pub end_balls: bool,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
@@ -464,14 +464,14 @@ impl Default for FrameSettings {
 }
 
 impl FrameSettings {
-    /// Whether the frame's gather uses end balls: `end_balls` with the exact queue, for the methods the
-    /// gather pass records (not mis, ris or the reference, whose rays do not take them).
+    /// Whether the frame's shadow rays use end balls: `end_balls` with the exact queue, for the gather's
+    /// methods and ris's shade (not mis or the reference, whose rays do not take them).
     pub fn uses_end_balls(&self) -> bool {
         self.end_balls
             && self.visibility == Visibility::Exact
             && self.shadow_rays == ShadowRays::Queue
             && self.component != Component::Direct
-            && !matches!(self.method, Method::Mis | Method::Ris | Method::Reference)
+            && !matches!(self.method, Method::Mis | Method::Reference)
     }
 
     /// The method whose CDF and source mixture the frame samples: `Method::Ris`'s source, else the

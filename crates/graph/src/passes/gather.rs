@@ -193,6 +193,11 @@ impl GatherInputs {
         v
     }
 
+    /// The end balls' images, when the frame has them.
+    pub fn end_ball_images(&self) -> Vec<Handle<Image>> {
+        self.ends.iter().flat_map(|e| [e.pixels, e.vpls]).collect()
+    }
+
     pub fn buffers(&self) -> Vec<Handle<Buffer>> {
         self.voxels.into_iter().chain([self.importance, self.cdf]).collect()
     }
@@ -214,9 +219,10 @@ impl GatherInputs {
     }
 }
 
-/// The end balls' writes and the push's `end_balls`: the balls when the frame has them, else stand-ins of
-/// the same view types (the G-buffer normal, the VPL normals), which the shader then does not read.
-fn end_ball_writes(
+/// The end balls' writes and the push's `end_balls`, for a layout that holds their bindings (the exact and
+/// hybrid variants): the balls when the frame has them, else stand-ins of the same view types (the
+/// G-buffer normal, the VPL normals), which the shader then does not read.
+pub(crate) fn end_ball_writes(
     ctx: &PassContext,
     i: &GatherInputs,
     w: DescriptorWrites,
@@ -327,8 +333,8 @@ impl Gather {
         for h in i.buffers() {
             b = b.read(&h, Access::ComputeRead);
         }
-        if let Some(e) = &i.ends {
-            b = b.read(&e.pixels, Access::ComputeRead).read(&e.vpls, Access::ComputeRead);
+        for h in i.end_ball_images() {
+            b = b.read(&h, Access::ComputeRead);
         }
         if let Some(p) = &i.psm {
             b = b.read(&p.views, Access::ComputeRead);

@@ -650,6 +650,9 @@ impl Ris {
         if let Some(d) = &i.direct {
             b = b.read(d, Access::ComputeRead);
         }
+        for h in i.end_ball_images() {
+            b = b.read(&h, Access::ComputeRead);
+        }
         b.overwrite(out, Access::ComputeWrite).record(move |ctx| {
             let direct = match (&i.direct, push.add_direct) {
                 (Some(d), 1) => ctx.image(d),
@@ -663,10 +666,15 @@ impl Ris {
                 .storage_buffer(B_RIS_CV, ctx.buffer(&hc))
                 .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            // The gather's visibility variants, chosen and bound as the gather's.
+            // The gather's visibility variants, chosen and bound as the gather's (with the end balls where
+            // the layout has them: exact and hybrid).
+            let (writes, end_balls) = match f.bvh {
+                Some(_) => super::gather::end_ball_writes(ctx, &i, writes, self.sampler.raw),
+                None => (writes, 0),
+            };
             let (pipeline, writes) = self.shade.pick(&f, writes);
             // All reservoirs of a pixel, accumulated over dispatches as the gather's samples.
-            let whole = GatherPush { first: 0, last: ris.reservoirs, accumulate: 0, ..push };
+            let whole = GatherPush { first: 0, last: ris.reservoirs, accumulate: 0, end_balls, ..push };
             for (first, last) in super::dispatch_ranges(0, ris.reservoirs, f.vpls_per_dispatch) {
                 if first > 0 {
                     // The next reservoirs add to what the previous dispatch stored (image and counts).
