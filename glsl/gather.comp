@@ -53,18 +53,28 @@ layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
 // alone (shadow_queue_trace), or with SHADOW_POOL (`--shadow-rays pool`) by its subgroup's pool
 // (shadow_pool_trace). Both give every ray bvh_occluded_lifted's answer, so the images are the same.
 #define GATHER_QUEUE
+// The rays skip their ends' empty balls (pc.end_balls; passes/end_balls.rs): the same answers.
+#define SHADOW_QUEUE_WINDOWS
+#define END_BALLS_READ
+#include "shared/end_balls.glsl"
 #ifdef SHADOW_POOL
 #define SHADOW_POOL_INVOCATIONS (WG_2D * WG_2D)
 // A pooled ray's key is its VPL: its far end is recomputed from it, the same bits.
 vec3 shadow_pool_end(uint v) {
     return shadow_end(v, vpl_fetch(v));
 }
-#endif
-#ifndef SHADOW_POOL
-// The queue's rays skip their ends' empty balls (pc.end_balls; passes/end_balls.rs): the same answers.
-#define SHADOW_QUEUE_WINDOWS
-#define END_BALLS_READ
-#include "shared/end_balls.glsl"
+// The owners' x and pixel balls, for the lane that traces their rays (written before shadow_pool_trace,
+// whose barrier makes them visible).
+shared vec4 pool_x[SHADOW_POOL_INVOCATIONS];
+shared vec4 pool_ball[SHADOW_POOL_INVOCATIONS];
+// The window of the owner's ray from `from` to `e`, VPL v's (see shadow_queue.glsl).
+vec2 shadow_pool_window(uint v, uint owner, vec3 from, vec3 e) {
+    if (pc.end_balls == 0u) return vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
+    uint res = frame.size.w;
+    vec3 y = texelFetch(vpl_position, ivec3(v % res, (v / res) % res, v / (res * res)), 0).xyz;
+    return end_ball_window(from, e, pool_x[owner].xyz, pool_ball[owner], y, end_ball_of_vpl(v));
+}
+#else
 vec3 ray_origin;   // x lifted (shadow_origin)
 vec4 pixel_ball;   // x's ball (0: none)
 #endif
@@ -107,9 +117,13 @@ vec3 gather_queued(ivec2 px, bool inside) {
     vec3 ax = texelFetch(g_albedo, at, 0).rgb;
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
     vec3 o = shadow_origin(x, nx);
-#ifndef SHADOW_POOL
+    vec4 ball = pc.end_balls != 0u ? texelFetch(end_ball_pixels, at, 0) : vec4(0.0);
+#ifdef SHADOW_POOL
+    pool_x[gl_LocalInvocationIndex] = vec4(x, 0.0);
+    pool_ball[gl_LocalInvocationIndex] = ball;
+#else
     ray_origin = o;
-    pixel_ball = pc.end_balls != 0u ? texelFetch(end_ball_pixels, at, 0) : vec4(0.0);
+    pixel_ball = ball;
 #endif
     vec3 sum = vec3(0.0);
     for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {

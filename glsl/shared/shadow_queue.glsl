@@ -16,8 +16,10 @@
 vec3 shadow_queue_end[SHADOW_QUEUE];
 #ifdef SHADOW_QUEUE_WINDOWS
 // With SHADOW_QUEUE_WINDOWS the caller also gives each ray the part of the segment to walk, (tmin, tmax)
-// within (BVH_LIFTED_EPS, 1 − BVH_LIFTED_EPS): the gather leaves out its ends' empty balls
-// (shared/end_balls.glsl), which changes no answer. An empty window is "not occluded" at once.
+// within (BVH_LIFTED_EPS, 1 − BVH_LIFTED_EPS): the gather and ris's shade leave out the rays' ends' empty
+// balls (shared/end_balls.glsl), which changes no answer. An empty window is "not occluded" at once. The
+// queue reads shadow_queue_window; the pool asks vec2 shadow_pool_window(key, owner, from, end), which the
+// includer defines.
 vec2 shadow_queue_window[SHADOW_QUEUE];
 #endif
 
@@ -62,8 +64,9 @@ uint shadow_queue_trace(vec3 o, uint n) {
 // The queue shared by a subgroup (the gather's exact rays with `--shadow-rays pool`). Needs
 // GL_KHR_shader_subgroup_ballot and _arithmetic, enabled by the includer, and before the include:
 // SHADOW_POOL_INVOCATIONS (the workgroup's invocations) and vec3 shadow_pool_end(uint key), the far end of a
-// queued ray from the caller's key. Shared memory: 8 · SHADOW_QUEUE + 16 bytes per invocation
-// (GatherPool::SHARED_BYTES in passes/gather.rs checks the device's limit).
+// queued ray from the caller's key. Shared memory: 8 · SHADOW_QUEUE + 20 bytes per invocation, plus what the
+// includer keeps for shadow_pool_window (the gather: 32; POOL_SHARED_BYTES in passes/gather.rs checks the
+// device's limit).
 //
 // Why: with a queue per invocation, a SIMD vector still waits at the end of every block for its lane with the
 // most steps in all, and the lanes of a vector differ: on Sibenik and Conference the lanes were busy 72 % of
@@ -99,7 +102,7 @@ uint shadow_pool_trace(vec3 o, uint n) {
     subgroupBarrier();
 
     int end = textureSize(bvh_threaded) / 3;
-    const float tmin = BVH_LIFTED_EPS, tmax = 1.0 - BVH_LIFTED_EPS;
+    float tmin = BVH_LIFTED_EPS, tmax = 1.0 - BVH_LIFTED_EPS;
     uint taken = 0u, ticket = 0u, steps = 0u;
     bool tracing = false, done = true, hit = false;
     BvhRay r;
@@ -114,7 +117,13 @@ uint shadow_pool_trace(vec3 o, uint n) {
             uvec2 e = shadow_pool[base + g];
             ticket = e.y;
             vec3 from = shadow_pool_origin[e.y >> 5];
-            vec3 d = shadow_pool_end(e.x) - from;
+            vec3 far_end = shadow_pool_end(e.x);
+            vec3 d = far_end - from;
+#ifdef SHADOW_QUEUE_WINDOWS
+            vec2 window = shadow_pool_window(e.x, e.y >> 5, from, far_end);
+            tmin = window.x;
+            tmax = window.y;
+#endif
             // The start of a walk, as in shadow_queue_trace. Written out twice on purpose: one function
             // with the ray as an inout parameter made the queue 3–6 % slower on lavapipe, where its
             // copies run at every loop iteration under masks.

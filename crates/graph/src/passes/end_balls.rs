@@ -12,8 +12,8 @@
 //! A segment whose two ends lie more than 2τ above the plane meets no triangle inside that ball (its
 //! height is linear along it, and the triangles there lie at or below τ), so the walk may start where
 //! the segment leaves the ball: the same answer, fewer records. `glsl/shared/end_balls.glsl` states the
-//! rule, its margins against rounding, and the exit parameter; the exact gather's queue and ris's shade
-//! apply it at both ends (`--end-balls`, on by default; not the pool, mis or the reference). The ray's own ends are lifted off their surfaces along the shading
+//! rule, its margins against rounding, and the exit parameter; the exact gather (its queue and its pool)
+//! and ris's shade apply it at both ends (`--end-balls`, on by default; not mis or the reference). The ray's own ends are lifted off their surfaces along the shading
 //! normal (x) and toward the light (a VPL), so the condition fails, and the ball is not used, only for
 //! rays that leave at a grazing angle.
 //!

@@ -58,8 +58,9 @@ pub struct Gather {
 }
 
 /// Shared memory of the pool (`glsl/shared/shadow_queue.glsl`): per invocation SHADOW_QUEUE entries
-/// (a uvec2 each), its ray origin (a vec3, 16 bytes with padding) and its answer bits.
-pub const POOL_SHARED_BYTES: u32 = WG_2D * WG_2D * (8 * SHADOW_QUEUE + 16 + 4);
+/// (a uvec2 each), its ray origin (a vec3, 16 bytes with padding), its answer bits, and (`gather.comp`)
+/// its x and pixel ball for the end balls' windows (two vec4).
+pub const POOL_SHARED_BYTES: u32 = WG_2D * WG_2D * (8 * SHADOW_QUEUE + 16 + 4 + 32);
 
 /// Whether `gpu` can run `--shadow-rays pool`, else what it lacks: subgroup ballot and arithmetic in
 /// compute shaders, and [`POOL_SHARED_BYTES`] of shared memory.
@@ -246,6 +247,7 @@ impl Gather {
         if pool_support(gpu).is_ok() {
             let (mut bindings, push) = Self::bindings();
             bindings.extend(crate::bvh::GpuBvh::bindings());
+            bindings.extend(crate::passes::end_balls::gather_bindings());
             gather.pool =
                 Some(ComputePipeline::new(gpu, "gather", &crate::spirv(GATHER_EXACT_POOL_COMP), &bindings, push, &[])?);
         }
@@ -296,15 +298,14 @@ impl Gather {
                     self.sampler.raw,
                 ),
             ),
-            (None, Some(bvh)) if f.shadow_pool && f.cells.is_none() => match &self.pool {
-                Some(pool) => (pool, bvh.writes(writes)),
-                // `mis` shares this pass's recording and has no pool variant.
-                None => self.vis.pick(&f, writes),
-            },
-            (None, Some(_)) => {
-                // The exact (and hybrid) layouts hold the end balls' bindings.
+            (None, Some(bvh)) => {
+                // The exact, hybrid and pool layouts hold the end balls' bindings.
                 let (writes, on) = end_ball_writes(ctx, i, writes, self.sampler.raw);
-                let (pipeline, writes) = self.vis.pick(&f, writes);
+                let (pipeline, writes) = match &self.pool {
+                    Some(pool) if f.shadow_pool && f.cells.is_none() => (pool, bvh.writes(writes)),
+                    // `mis` shares this pass's recording and has no pool variant.
+                    _ => self.vis.pick(&f, writes),
+                };
                 return (pipeline, writes, on);
             }
             (None, None) => self.vis.pick(&f, writes),
