@@ -36,6 +36,12 @@
 #if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
 #include "shared/bvh.glsl"
 #endif
+#if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && !defined(PSM_VISIBILITY)
+// The shadow rays of contribution() skip their ends' empty balls (pc.end_balls; passes/end_balls.rs):
+// the same answers.
+#define END_BALLS_READ
+#include "shared/end_balls.glsl"
+#endif
 #ifdef HYBRID_VISIBILITY
 #include "shared/hybrid.glsl"
 #endif
@@ -213,6 +219,9 @@ void main() {
         vec3 x = gp.xyz;
         vec3 nx = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
+#ifdef END_BALLS_READ
+        if (pc.end_balls != 0u) contribution_x_ball = texelFetch(end_ball_pixels, px, 0);
+#endif
         // Stratified per pixel (shared/owen_sobol.glsl): CDF sample k is point k of draw_vpl's sets and
         // of the patch set, gathering ray j point j of the ray set; the pixel's seed decorrelates
         // neighbours, and progressive frames (seed, seed + 1, …) are independent scrambles.

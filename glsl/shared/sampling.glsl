@@ -115,6 +115,11 @@ uint draw_vpl(uint k, uint seed, out float prob) {
 // `*.hybrid.comp` variants, `--visibility hybrid`) the same shadow ray, traced only through the grid's
 // occupied cells (shared/hybrid.glsl): the same answer.
 // contribution_of takes VPL v's data already fetched (ris's shade reads its flux too).
+#if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && defined(END_BALLS_READ)
+// With the end balls read (mis.exact), x's ball for contribution_of's shadow ray: the caller sets it per
+// pixel; 0 (no ball) leaves the VPL's ball alone to shorten the ray.
+vec4 contribution_x_ball = vec4(0.0);
+#endif
 #if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
 // The shadow ray's ends: x lifted along its normal, and VPL v lifted towards its light.
 vec3 shadow_origin(vec3 x, vec3 nx) {
@@ -133,6 +138,14 @@ vec3 contribution_of(vec3 x, vec3 nx, vec3 ax, uint v, Vpl vpl) {
 #ifdef HYBRID_VISIBILITY
     return hybrid_occluded_lifted(shadow_origin(x, nx), shadow_end(v, vpl)) ? vec3(0.0) : c;
 #else
+#ifdef END_BALLS_READ
+    if (pc.end_balls != 0u) {
+        // bvh_occluded_lifted's ray, walked only between its ends' balls (the same answer).
+        vec3 o = shadow_origin(x, nx), e = shadow_end(v, vpl);
+        vec2 w = end_ball_window(o, e, x, contribution_x_ball, vpl.position, end_ball_of_vpl(v));
+        return bvh_any_hit(o, e - o, w.x, w.y) ? vec3(0.0) : c;
+    }
+#endif
     return bvh_occluded_lifted(shadow_origin(x, nx), shadow_end(v, vpl)) ? vec3(0.0) : c;
 #endif
 #else

@@ -301,7 +301,7 @@ pub struct FrameArgs {
     /// How the gather's exact shadow rays are spread over a subgroup's lanes (the same images).
     #[arg(long, value_parser = SHADOW_RAYS, default_value = "queue")]
     pub shadow_rays: ShadowRays,
-    /// The exact shadow rays of the gather and of ris's shade skip the empty half-ball around each of
+    /// The exact shadow rays of the gather, mis and ris's shade skip the empty half-ball around each of
     /// their ends, found once per pixel and per VPL: `on` or `off` (the same images; off walks whole
     /// segments).
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]

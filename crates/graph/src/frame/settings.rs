@@ -410,7 +410,7 @@ pub struct FrameSettings {
     pub visibility: Visibility,
     /// How the gather's exact shadow rays are scheduled (`Visibility::Exact` only; the same images).
     pub shadow_rays: ShadowRays,
-    /// The exact rays of the gather (queue or pool) and of ris's shade skip their ends' empty balls
+    /// The exact shadow rays of the gather (queue or pool), mis and ris's shade skip their ends' empty balls
     /// (`passes/end_balls.rs`; the same images, fewer BVH records per ray).
     pub end_balls: bool,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
@@ -465,12 +465,13 @@ impl Default for FrameSettings {
 
 impl FrameSettings {
     /// Whether the frame's shadow rays use end balls: `end_balls` with exact visibility, for the gather's
-    /// methods (queue or pool) and ris's shade (not mis or the reference, whose rays do not take them).
+    /// methods (queue or pool), mis's shadow rays and ris's shade (not the reference, whose rays have no
+    /// VPL end).
     pub fn uses_end_balls(&self) -> bool {
         self.end_balls
             && self.visibility == Visibility::Exact
             && self.component != Component::Direct
-            && !matches!(self.method, Method::Mis | Method::Reference)
+            && self.method != Method::Reference
     }
 
     /// The method whose CDF and source mixture the frame samples: `Method::Ris`'s source, else the

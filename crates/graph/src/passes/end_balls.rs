@@ -12,8 +12,9 @@
 //! A segment whose two ends lie more than 2τ above the plane meets no triangle inside that ball (its
 //! height is linear along it, and the triangles there lie at or below τ), so the walk may start where
 //! the segment leaves the ball: the same answer, fewer records. `glsl/shared/end_balls.glsl` states the
-//! rule, its margins against rounding, and the exit parameter; the exact gather (its queue and its pool)
-//! and ris's shade apply it at both ends (`--end-balls`, on by default; not mis or the reference). The ray's own ends are lifted off their surfaces along the shading
+//! rule, its margins against rounding, and the exit parameter; the exact shadow rays of the gather (its
+//! queue and its pool), mis and ris's shade apply it at both ends (`--end-balls`, on by default; not the
+//! reference's, which have no VPL end). The ray's own ends are lifted off their surfaces along the shading
 //! normal (x) and toward the light (a VPL), so the condition fails, and the ball is not used, only for
 //! rays that leave at a grazing angle.
 //!
@@ -28,7 +29,7 @@
 //! enters a box only if it is nearer than the nearest blocking triangle so far and reaches more than τ
 //! above the plane; a walk that has not finished after END_BALL_MAX_STEPS records gives no ball.
 //! Dispatch: ⌈W/8⌉ × ⌈H/8⌉ (× layers) groups of 8×8. `tests/tests/end_balls.rs` checks the radii against
-//! a CPU twin, and the gather's and ris's images with and without the balls.
+//! a CPU twin, and the gather's, mis's and ris's images with and without the balls.
 
 use super::FrameInputs;
 use crate::bindings::*;
