@@ -242,3 +242,36 @@ pub fn grid_cells_along(
         }
     }
 }
+
+/// The gather's shadow-ray ends in a 64² view of `scene`, for the measuring tools (`cell-bvhs --gather`,
+/// `end-balls`): each pixel's first hit, and the first light's first hits in up to 1,024 uniform directions
+/// (the VPLs, drawn with `Rng(7)`), each with the unit normal of the triangle hit, turned toward the ray
+/// that found it. Also the generator, to draw the pairs from it next.
+pub type SurfacePoint = (glam::Vec3, glam::Vec3);
+pub fn gather_ends(
+    scene: &bounce_graph::scene::Scene,
+    flat: &bounce_graph::bvh::FlatBvh,
+) -> (Vec<SurfacePoint>, Vec<SurfacePoint>, Rng) {
+    let view = bounce_graph::bvh::query::BvhView { nodes: &flat.nodes, tris: &flat.tris };
+    let hit = |o: glam::Vec3, d: glam::Vec3| {
+        view.closest(o, d, 1e-4, f32::MAX).map(|(t, i)| {
+            let [a, b, c] = flat.tris[i].positions();
+            let n = (b - a).cross(c - a).normalize();
+            (o + d * t, if n.dot(d) > 0.0 { -n } else { n })
+        })
+    };
+    let cam = &scene.camera;
+    let pixels = (0..64 * 64).filter_map(|k| hit(cam.eye, cam.ray_dir(k % 64, k / 64, 64, 64))).collect();
+    let light = glam::Vec3::from_slice(&scene.lights[0].position[..3]);
+    let mut rng = Rng(7);
+    let mut vpls = Vec::new();
+    for _ in 0..100_000 {
+        if let Some(v) = hit(light, rng.unit()) {
+            vpls.push(v);
+        }
+        if vpls.len() == 1024 {
+            break;
+        }
+    }
+    (pixels, vpls, rng)
+}

@@ -19,7 +19,6 @@
 //!     cargo run --release -p bounce-tests --bin cell-bvhs -- scene.toml [--gather] G [G …]
 
 use bounce_graph::bvh::cells::{for_each_cell, CELL_MARGIN};
-use bounce_graph::bvh::query::BvhView;
 use bounce_graph::bvh::{Bvh, FlatBvh, GpuBvhTri, GpuThreadRec, NO_TRI, THREAD_TRI};
 use bounce_graph::passes::voxelize::{self, VoxelGridSpec};
 use bounce_graph::scene::Scene;
@@ -118,26 +117,9 @@ fn surface_pairs(scene: &Scene) -> Vec<(DVec3, DVec3)> {
 /// The gather's shadow rays of a 64² view: each pixel's first hit, to 8 of 1,024 VPLs (the first light's
 /// first hits in uniform directions).
 fn gather_pairs(scene: &Scene, flat: &FlatBvh) -> Vec<(DVec3, DVec3)> {
-    let view = BvhView { nodes: &flat.nodes, tris: &flat.tris };
-    let cam = &scene.camera;
-    let pixels: Vec<Vec3> = (0..64 * 64)
-        .filter_map(|k| {
-            let d = cam.ray_dir(k % 64, k / 64, 64, 64);
-            view.closest(cam.eye, d, 1e-4, f32::MAX).map(|(t, _)| cam.eye + d * t)
-        })
-        .collect();
-    let light = Vec3::from_slice(&scene.lights[0].position[..3]);
-    let mut rng = Rng(7);
-    let mut vpls = Vec::new();
-    for _ in 0..100_000 {
-        let d = rng.unit();
-        if let Some((t, _)) = view.closest(light, d, 1e-4, f32::MAX) {
-            vpls.push(light + d * t);
-        }
-        if vpls.len() == 1024 {
-            break;
-        }
-    }
+    let (pixels, vpls, mut rng) = bounce_tests::gather_ends(scene, flat);
+    let pixels: Vec<Vec3> = pixels.iter().map(|p| p.0).collect();
+    let vpls: Vec<Vec3> = vpls.iter().map(|v| v.0).collect();
     let mut pairs = Vec::with_capacity(pixels.len() * 8);
     for x in &pixels {
         for _ in 0..8.min(vpls.len()) {

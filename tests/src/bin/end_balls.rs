@@ -6,15 +6,15 @@
 //! (all, visible) walking whole segments against skipping both balls and only the pixel's. Every
 //! clipped walk's answer is checked against the whole segment's. `CAP=c` caps the radii at c × the
 //! scene diagonal (default: the renderer's, END_BALL_MAX_RADIUS); like the renderer it subtracts one lift.
-//! (Here each end is lifted along its face normal, the renderer lifts x along its shading normal.) Figures: BENCHMARKS.md, first section.
+//! (Here each end is lifted along its face normal, the renderer lifts x along its shading normal.)
+//! Figures: BENCHMARKS.md, first section.
 //!
 //!     cargo run --release -p bounce-tests --bin end-balls -- scene.toml
 
 use bounce_graph::bvh::query::BvhView;
-use bounce_graph::bvh::{Bvh, FlatBvh, GpuBvhNode, GpuBvhTri};
+use bounce_graph::bvh::{Bvh, FlatBvh, GpuBvhNode};
 use bounce_graph::scene::Scene;
 use bounce_oracles::cpu_threaded;
-use bounce_tests::Rng;
 use glam::{DVec3, Vec3};
 use std::path::Path;
 
@@ -27,31 +27,8 @@ fn main() -> anyhow::Result<()> {
     let view = BvhView { nodes: &flat.nodes, tris: &flat.tris };
     let diag = (scene.bounds_max - scene.bounds_min).length();
     let lift = |x: Vec3| (1e-5 * diag).max(x.abs().max_element() / 262144.0);
-    let cam = &scene.camera;
-    // (point, geometric normal facing the viewer)
-    let mut pixels = Vec::new();
-    for k in 0..64 * 64 {
-        let d = cam.ray_dir(k % 64, k / 64, 64, 64);
-        if let Some((t, i)) = view.closest(cam.eye, d, 1e-4, f32::MAX) {
-            let n = normal(&flat.tris[i]);
-            let n = if n.dot(d) > 0.0 { -n } else { n };
-            pixels.push((cam.eye + d * t, n));
-        }
-    }
+    let (pixels, vpls, mut rng) = bounce_tests::gather_ends(&scene, &flat);
     let light = Vec3::from_slice(&scene.lights[0].position[..3]);
-    let mut rng = Rng(7);
-    let mut vpls = Vec::new();
-    for _ in 0..100_000 {
-        let d = rng.unit();
-        if let Some((t, i)) = view.closest(light, d, 1e-4, f32::MAX) {
-            let n = normal(&flat.tris[i]);
-            let n = if n.dot(d) > 0.0 { -n } else { n };
-            vpls.push((light + d * t, n));
-        }
-        if vpls.len() == 1024 {
-            break;
-        }
-    }
     let t0 = std::time::Instant::now();
     let rx: Vec<f64> = pixels.iter().map(|&(x, n)| free_radius(&view, x, n, lift(x) / 16.0)).collect();
     let cap: f64 = std::env::var("CAP")
@@ -131,11 +108,6 @@ fn main() -> anyhow::Result<()> {
     );
     println!("pixel end only: {:.1}", xonly as f64 / n);
     Ok(())
-}
-
-fn normal(t: &GpuBvhTri) -> Vec3 {
-    let [a, b, c] = t.positions();
-    (b - a).cross(c - a).normalize()
 }
 
 /// The parameter along a → b (from a's side) up to which the segment lies in p's empty half-ball.
