@@ -8,8 +8,10 @@
 // need a ray), and shadow_queue_trace walks them one after another per lane: a lane whose ray is done takes its
 // next one at the next group of BVH_THREAD_UNROLL steps, so the vector waits only at the end of the queue, for
 // the lane with the most steps in all. Each answer is bvh_occluded_lifted's, with its bound of BVH_MAX_STEPS
-// records per ray (the same walk, step for step), so an image does not change, bit for bit; the loop runs at
-// most GpuBvh::max_iterations_occluded iterations per ray, the bound the callers' dispatches are sized by.
+// records per ray (the same walk, step for step; with SHADOW_QUEUE_WINDOWS the same walk over a shorter part
+// of the segment, which drops records and never an answer), so an image does not change, bit for bit; the
+// loop runs at most GpuBvh::max_iterations_occluded iterations per ray, the bound the callers' dispatches are
+// sized by.
 #ifndef BOUNCE_SHADOW_QUEUE_GLSL
 #define BOUNCE_SHADOW_QUEUE_GLSL
 
