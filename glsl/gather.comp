@@ -69,10 +69,9 @@ shared vec4 pool_x[SHADOW_POOL_INVOCATIONS];
 shared vec4 pool_ball[SHADOW_POOL_INVOCATIONS];
 // The window of the owner's ray from `from` to `e`, VPL v's (see shadow_queue.glsl).
 vec2 shadow_pool_window(uint v, uint owner, vec3 from, vec3 e) {
-    if (pc.end_balls == 0u) return vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
     uint res = frame.size.w;
     vec3 y = texelFetch(vpl_position, ivec3(v % res, (v / res) % res, v / (res * res)), 0).xyz;
-    return end_ball_window(from, e, pool_x[owner].xyz, pool_ball[owner], y, end_ball_of_vpl(v));
+    return end_ball_window(from, e, pool_x[owner].xyz, pool_ball[owner], v, y);
 }
 #else
 vec3 ray_origin;   // x lifted (shadow_origin)
@@ -92,9 +91,7 @@ void enqueue(vec3 x, vec3 nx, vec3 ax, uint v, float prob, inout uint n) {
 #else
     vec3 e = shadow_end(v, vpl);
     shadow_queue_end[n] = e;
-    shadow_queue_window[n] = pc.end_balls != 0u
-        ? end_ball_window(ray_origin, e, x, pixel_ball, vpl.position, end_ball_of_vpl(v))
-        : vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
+    shadow_queue_window[n] = end_ball_window(ray_origin, e, x, pixel_ball, v, vpl.position);
 #endif
     n++;
 }
@@ -117,7 +114,7 @@ vec3 gather_queued(ivec2 px, bool inside) {
     vec3 ax = texelFetch(g_albedo, at, 0).rgb;
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
     vec3 o = shadow_origin(x, nx);
-    vec4 ball = pc.end_balls != 0u ? texelFetch(end_ball_pixels, at, 0) : vec4(0.0);
+    vec4 ball = end_ball_of_pixel(at);
 #ifdef SHADOW_POOL
     pool_x[gl_LocalInvocationIndex] = vec4(x, 0.0);
     pool_ball[gl_LocalInvocationIndex] = ball;

@@ -36,12 +36,6 @@
 #if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
 #include "shared/bvh.glsl"
 #endif
-#if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && !defined(PSM_VISIBILITY)
-// The shadow rays of contribution() skip their ends' empty balls (pc.end_balls; passes/end_balls.rs):
-// the same answers.
-#define END_BALLS_READ
-#include "shared/end_balls.glsl"
-#endif
 #ifdef HYBRID_VISIBILITY
 #include "shared/hybrid.glsl"
 #endif
@@ -60,6 +54,12 @@ layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 
+#if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && !defined(PSM_VISIBILITY)
+// The shadow rays of contribution() skip their ends' empty balls (pc.end_balls; passes/end_balls.rs):
+// the same answers.
+#define END_BALLS_READ
+#include "shared/end_balls.glsl"
+#endif
 #include "shared/cdf.glsl"
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"
@@ -220,7 +220,7 @@ void main() {
         vec3 nx = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
 #ifdef END_BALLS_READ
-        if (pc.end_balls != 0u) contribution_x_ball = texelFetch(end_ball_pixels, px, 0);
+        contribution_x_ball = end_ball_of_pixel(px);
 #endif
         // Stratified per pixel (shared/owen_sobol.glsl): CDF sample k is point k of draw_vpl's sets and
         // of the patch set, gathering ray j point j of the ray set; the pixel's seed decorrelates

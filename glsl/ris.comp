@@ -681,7 +681,7 @@ void main() {
         uvec2 counts = state.xy, siblings = state.zw;
 #ifdef SHADE_QUEUE
         vec3 o = shadow_origin(x, nx);
-        vec4 pixel_ball = pc.end_balls != 0u ? texelFetch(end_ball_pixels, px, 0) : vec4(0.0);
+        vec4 pixel_ball = end_ball_of_pixel(px);
         for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
             uint top = min(base + SHADOW_QUEUE, pc.last), n = 0u;
             for (uint layer = base; layer < top; layer++) {
@@ -691,9 +691,7 @@ void main() {
                 if (vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2) != vec3(0.0)) {
                     vec3 e = shadow_end(r.vpl, vpl);
                     shadow_queue_end[n] = e;
-                    shadow_queue_window[n++] = pc.end_balls != 0u
-                        ? end_ball_window(o, e, x, pixel_ball, vpl.position, end_ball_of_vpl(r.vpl))
-                        : vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
+                    shadow_queue_window[n++] = end_ball_window(o, e, x, pixel_ball, r.vpl, vpl.position);
                 }
             }
             uint visible = shadow_queue_trace(o, n), ray = 0u;

@@ -40,8 +40,9 @@ float end_ball_exit(vec3 a, vec3 b, vec3 p, vec4 ball) {
 }
 
 #ifdef END_BALLS_READ
-// The balls as a shadow-ray queue reads them (the gather's and ris's shade, with SHADOW_QUEUE_WINDOWS):
-// per G-buffer pixel and per VPL texel (passes/end_balls.rs), 0 where there is none.
+// The balls as the shadow rays read them (the gather, ris's shade, mis): per G-buffer pixel and per VPL
+// texel (passes/end_balls.rs), 0 where there is none. The includer's push constants `pc` (a GatherPush) say
+// whether they are bound (pc.end_balls; stand-ins otherwise, never read).
 layout(set = 0, binding = B_END_BALL_PIXELS) uniform sampler2D end_ball_pixels;
 layout(set = 0, binding = B_END_BALL_VPLS) uniform sampler2DArray end_ball_vpls;
 
@@ -50,11 +51,18 @@ vec4 end_ball_of_vpl(uint v) {
     return texelFetch(end_ball_vpls, ivec3(v % res, (v / res) % res, v / (res * res)), 0);
 }
 
-// The part of the shadow ray o → e to walk, for shadow_queue_window: (BVH_LIFTED_EPS, 1 − BVH_LIFTED_EPS)
-// less the ball (x_ball) around x, o's surface point, and the ball (y_ball) around y, e's.
-vec2 end_ball_window(vec3 o, vec3 e, vec3 x, vec4 x_ball, vec3 y, vec4 y_ball) {
-    return vec2(max(BVH_LIFTED_EPS, end_ball_exit(o, e, x, x_ball)),
-                min(1.0 - BVH_LIFTED_EPS, 1.0 - end_ball_exit(e, o, y, y_ball)));
+// Pixel px's ball, 0 when the balls are off.
+vec4 end_ball_of_pixel(ivec2 px) {
+    return pc.end_balls != 0u ? texelFetch(end_ball_pixels, px, 0) : vec4(0.0);
+}
+
+// The part of the shadow ray o → e to walk (a window for bvh_any_hit or shadow_queue_window): with the balls
+// off, bvh_occluded_lifted's (BVH_LIFTED_EPS, 1 − BVH_LIFTED_EPS); with them on, that less x's ball (x_ball,
+// x the surface point o was lifted from) and VPL v's (y its unlifted position, e lifted from it).
+vec2 end_ball_window(vec3 o, vec3 e, vec3 x, vec4 x_ball, uint v, vec3 y) {
+    vec2 w = vec2(BVH_LIFTED_EPS, 1.0 - BVH_LIFTED_EPS);
+    if (pc.end_balls == 0u) return w;
+    return vec2(max(w.x, end_ball_exit(o, e, x, x_ball)), min(w.y, 1.0 - end_ball_exit(e, o, y, end_ball_of_vpl(v))));
 }
 #endif
 

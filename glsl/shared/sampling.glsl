@@ -139,14 +139,13 @@ vec3 contribution_of(vec3 x, vec3 nx, vec3 ax, uint v, Vpl vpl) {
     return hybrid_occluded_lifted(shadow_origin(x, nx), shadow_end(v, vpl)) ? vec3(0.0) : c;
 #else
 #ifdef END_BALLS_READ
-    if (pc.end_balls != 0u) {
-        // bvh_occluded_lifted's ray, walked only between its ends' balls (the same answer).
-        vec3 o = shadow_origin(x, nx), e = shadow_end(v, vpl);
-        vec2 w = end_ball_window(o, e, x, contribution_x_ball, vpl.position, end_ball_of_vpl(v));
-        return bvh_any_hit(o, e - o, w.x, w.y) ? vec3(0.0) : c;
-    }
-#endif
+    // bvh_occluded_lifted's ray, walked only between its ends' balls (the same answer).
+    vec3 o = shadow_origin(x, nx), e = shadow_end(v, vpl);
+    vec2 w = end_ball_window(o, e, x, contribution_x_ball, v, vpl.position);
+    return bvh_any_hit(o, e - o, w.x, w.y) ? vec3(0.0) : c;
+#else
     return bvh_occluded_lifted(shadow_origin(x, nx), shadow_end(v, vpl)) ? vec3(0.0) : c;
+#endif
 #endif
 #else
     return c * voxel_visibility(x, nx, vpl.position, vpl.normal);

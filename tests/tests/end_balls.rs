@@ -13,39 +13,9 @@
 use bounce_graph::bindings::END_BALL_MAX_RADIUS;
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, Visibility};
 use bounce_graph::scene::Scene;
+use bounce_oracles::cpu_end_balls::{lift, point_triangle_distance, radius as twin_radius};
 use bounce_tests::TestGpu;
 use glam::DVec3;
-
-/// `surface_lift` (glsl/shared/common.glsl) in f64.
-fn lift(p: DVec3, diag: f64) -> f64 {
-    (1e-5 * diag).max(p.abs().max_element() / 262144.0)
-}
-
-/// The twin: distance from p to the nearest triangle with a vertex more than `tau` above the plane (p, n).
-fn twin_radius(tris: &[[DVec3; 3]], p: DVec3, n: DVec3, tau: f64) -> f64 {
-    tris.iter()
-        .filter(|t| t.iter().any(|&v| n.dot(v - p) > tau))
-        .map(|t| point_triangle_distance(p, t))
-        .fold(f64::INFINITY, f64::min)
-}
-
-/// Distance from p to a triangle: the nearest of its interior (when p projects inside) and its edges.
-fn point_triangle_distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
-    let [a, b, c] = *t;
-    let n = (b - a).cross(c - a);
-    let inside = [(a, b), (b, c), (c, a)].iter().all(|&(u, v)| (v - u).cross(p - u).dot(n) >= 0.0);
-    if inside && n.length_squared() > 0.0 {
-        return (p - a).dot(n).abs() / n.length();
-    }
-    [(a, b), (b, c), (c, a)]
-        .iter()
-        .map(|&(u, v)| {
-            let e = v - u;
-            let s = if e.length_squared() > 0.0 { ((p - u).dot(e) / e.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-            (p - (u + e * s)).length()
-        })
-        .fold(f64::INFINITY, f64::min)
-}
 
 fn settings(w: u32, dprsm_res: u32) -> FrameSettings {
     FrameSettings {

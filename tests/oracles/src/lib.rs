@@ -8,6 +8,7 @@
 //! - [`cpu_voxel`]: the CPU twin of the voxelizer and the voxel march (same f32 operations in the same
 //!   order, so the results are bit-identical).
 //! - [`cpu_threaded`]: the CPU twin of the shadow rays' stackless walk over the threaded BVH.
+//! - [`cpu_end_balls`]: the CPU twin of the shadow rays' end-ball radii.
 //! - [`cpu_cdf`]: the CPU twin of `cdf_reduce` and of the CDF sampling (same f32 operations).
 //! - [`cpu_sobol`]: the CPU twin of the stratified sample points (Owen-scrambled Sobol).
 //! - [`scene_fuzz`]: the scene loader's robustness contract as one function, shared by the fuzz target
@@ -17,6 +18,7 @@
 
 pub mod cpu_cdf;
 pub mod cpu_cells;
+pub mod cpu_end_balls;
 pub mod cpu_ref;
 pub mod cpu_sobol;
 pub mod cpu_threaded;

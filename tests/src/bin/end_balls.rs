@@ -14,6 +14,7 @@
 use bounce_graph::bvh::query::BvhView;
 use bounce_graph::bvh::{Bvh, FlatBvh, GpuBvhNode};
 use bounce_graph::scene::Scene;
+use bounce_oracles::cpu_end_balls::point_triangle_distance;
 use bounce_oracles::cpu_threaded;
 use glam::{DVec3, Vec3};
 use std::path::Path;
@@ -154,7 +155,7 @@ fn free_radius(view: &BvhView, p: Vec3, n: Vec3, tau: f32) -> f64 {
                 if v.iter().all(|&v| n.dot(v - p) <= tau) {
                     continue;
                 }
-                best = best.min(dist_tri(p, v[0], v[1], v[2]));
+                best = best.min(point_triangle_distance(p, &v));
             }
         } else {
             stack.push(nd.first);
@@ -174,7 +175,7 @@ fn threaded_radius(recs: &[bounce_graph::bvh::GpuThreadRec], p: Vec3, n: Vec3, t
         let (a, b, c) = (Vec3::from(r.a).as_dvec3(), Vec3::from(r.b).as_dvec3(), Vec3::from(r.c).as_dvec3());
         if r.link == bounce_graph::bvh::THREAD_TRI {
             if [a, b, c].iter().any(|&v| n.dot(v - p) > tau) {
-                best = best.min(dist_tri(p, a, b, c));
+                best = best.min(point_triangle_distance(p, &[a, b, c]));
             }
             i += 1;
         } else {
@@ -188,41 +189,4 @@ fn threaded_radius(recs: &[bounce_graph::bvh::GpuThreadRec], p: Vec3, n: Vec3, t
         }
     }
     (best, count)
-}
-
-/// Ericson, Real-Time Collision Detection 5.1.5.
-fn dist_tri(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return (p - a).length();
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return (p - b).length();
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return (p - (a + ab * v)).length();
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return (p - c).length();
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return (p - (a + ac * w)).length();
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (p - (b + (c - b) * w)).length();
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    (p - (a + ab * v + ac * w)).length()
 }
