@@ -285,30 +285,68 @@ float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint t
 // as at most ⌈min(BVH_MAX_STEPS, records + 1) / BVH_THREAD_UNROLL⌉ iterations
 // (GpuBvh::max_iterations_occluded): more shadow rays fit in one dispatch.
 //
-// Record k is texels 3k (a.xyz, link), 3k + 1 (b.xyz, -) and 3k + 2 (c.xyz, -) of a uvec4 texel buffer: a box
-// (a = lo, b = hi, link = the first record after its subtree) or a triangle (its vertices, link =
+// Record k is texels 3k (a.xyz, link), 3k + 1 (b.xyz, -) and 3k + 2 (c.xyz, pair) of a uvec4 texel buffer: a
+// box (a = lo, b = hi, link = the first record after its subtree; pair ≠ 0 when record k + 1 is a box too: c
+// holds that box packed into this one and pair is its link) or a triangle (its vertices, link =
 // BVH_THREAD_TRI; its successor is the next record).
+//
+// Two boxes a step: a met box whose successor is packed tests that one too, and moves past both (to k + 2 if
+// it is met, else past its subtree). The step reads the third texel anyway (llvmpipe runs the triangle's side
+// of the branch under masks), so the second box costs a slab test and no read. Packed, axis j of the second
+// box is [lo_j + q_j · s_j, hi_j − q'_j · s_j] with s = (hi − lo) · 2^-16 and 16-bit q, q' (low and high half
+// of word j of c), all rounded as written (`precise`); crates/graph/src/bvh/quant.rs picks q, q' with the
+// same f32 arithmetic so that this box holds the exact one. The slab test is then bvh_hit_box on a box
+// around the same triangles, which never culls what the exact box would let through: the answers do not
+// change, only the steps.
 layout(set = 0, binding = B_BVH_THREADED) uniform usamplerBuffer bvh_threaded;
 
-// One step of the walk: read and test record i, then move on (nothing once `done`).
+// The walk's records.
+int bvh_thread_records() {
+    return textureSize(bvh_threaded) / 3;
+}
+
+// Whether the box packed as q into box [lo, hi] (see above) meets (tmin, tmax).
+bool bvh_hit_packed_box(BvhRay r, vec3 lo, vec3 hi, uvec3 q, float tmin, float tmax) {
+    // Through int: a 16-bit value converts exactly either way, and a signed conversion is one instruction on
+    // x86 (llvmpipe), an unsigned one several.
+    precise vec3 s = (hi - lo) * (1.0 / 65536.0);
+    precise vec3 plo = lo + vec3(ivec3(q & 0xffffu)) * s;
+    precise vec3 phi = hi - vec3(ivec3(q >> 16u)) * s;
+    float tnear;
+    return bvh_hit_box(r, plo, phi, tmin, tmax, tnear);
+}
+
+// Where a box step goes from box record i ([lo, hi], link a.w, third texel c): past its subtree if the box
+// is missed; else to the next record, or with a packed successor past that one too (met: into its subtree;
+// missed: past it).
+int bvh_box_next(BvhRay r, vec3 lo, vec3 hi, uvec4 a, uvec4 c, bool met, int i, float tmin, float tmax) {
+    bool second = bvh_hit_packed_box(r, lo, hi, c.xyz, tmin, tmax);
+    int after = c.w == 0u ? i + 1 : (second ? i + 2 : int(c.w));
+    return met ? after : int(a.w);
+}
+
+// One step of the walk: read and test record i (and its packed successor), then move on (nothing once
+// `done`).
 void bvh_thread_step(BvhRay r, float tmin, float tmax, int end, inout int i, inout uint steps, inout bool done,
                      inout bool hit) {
     if (done) return;
     steps++;
     uvec4 a = texelFetch(bvh_threaded, 3 * i);
     vec3 b = uintBitsToFloat(texelFetch(bvh_threaded, 3 * i + 1).xyz);
+    uvec4 c = texelFetch(bvh_threaded, 3 * i + 2);
     if (a.w == BVH_THREAD_TRI) {
-        vec3 c = uintBitsToFloat(texelFetch(bvh_threaded, 3 * i + 2).xyz);
         float t;
         vec2 bary;
-        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), b, c, t, bary) && t > tmin && t < tmax) {
+        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), b, uintBitsToFloat(c.xyz), t, bary) && t > tmin &&
+            t < tmax) {
             hit = true;
             done = true;
         }
         i++;
     } else {
         float tnear;
-        i = bvh_hit_box(r, uintBitsToFloat(a.xyz), b, tmin, tmax, tnear) ? i + 1 : int(a.w);
+        vec3 lo = uintBitsToFloat(a.xyz);
+        i = bvh_box_next(r, lo, b, a, c, bvh_hit_box(r, lo, b, tmin, tmax, tnear), i, tmin, tmax);
     }
     // Past the last record: nothing left to test (the walk never starts there: the tree has a record).
     if (i >= end) done = true;
@@ -334,7 +372,7 @@ bool bvh_any_hit(vec3 o, vec3 d, float tmin, float tmax) {
     if (!bvh_usable_ray(o, d, tmin, tmax))
         return false;
     BvhRay r = bvh_make_ray(o, d);
-    int end = textureSize(bvh_threaded) / 3;
+    int end = bvh_thread_records();
     int i = 0;
     bool hit = false;
     bool done = false;
@@ -355,11 +393,12 @@ void bvh_closest_step(BvhRay r, float tmin, int end, inout int i, inout uint ste
     steps++;
     uvec4 a = texelFetch(bvh_threaded, 3 * i);
     uvec4 b = texelFetch(bvh_threaded, 3 * i + 1);
+    uvec4 c = texelFetch(bvh_threaded, 3 * i + 2);
     if (a.w == BVH_THREAD_TRI) {
-        vec3 c = uintBitsToFloat(texelFetch(bvh_threaded, 3 * i + 2).xyz);
         float t;
         vec2 bary;
-        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), c, t, bary) && t > tmin) {
+        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), uintBitsToFloat(c.xyz), t, bary) &&
+            t > tmin) {
             uint tri = b.w;
             if (t < best || (t == best && (!found || tri < best_tri))) {
                 found = true;
@@ -371,7 +410,8 @@ void bvh_closest_step(BvhRay r, float tmin, int end, inout int i, inout uint ste
         i++;
     } else {
         float tnear;
-        i = bvh_hit_box(r, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), tmin, best, tnear) ? i + 1 : int(a.w);
+        vec3 lo = uintBitsToFloat(a.xyz), hi = uintBitsToFloat(b.xyz);
+        i = bvh_box_next(r, lo, hi, a, c, bvh_hit_box(r, lo, hi, tmin, best, tnear), i, tmin, best);
     }
 }
 
@@ -388,7 +428,7 @@ float bvh_closest_walk(vec3 o, vec3 d, float tmax, out uint tri, out vec2 bary) 
     bvh_exhausted = false;
     if (!bvh_usable_ray(o, d, 0.0, tmax)) return -1.0;
     BvhRay r = bvh_make_ray(o, d);
-    int end = textureSize(bvh_threaded) / 3;
+    int end = bvh_thread_records();
     int i = 0;
     uint steps = 0u;
     float best = tmax;

@@ -12,10 +12,14 @@ use glam::DVec3;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct WalkCount {
     pub occluded: bool,
-    /// Records read (boxes and triangles): the GPU walk's steps.
+    /// Records read (boxes and triangles).
     pub records: u32,
     /// Of which triangles.
     pub tests: u32,
+    /// The GPU walk's steps: a met box whose successor is a box (`pad2` ≠ 0) reads both in one step.
+    /// Its test of the successor here is the exact box's, where the GPU's is the packed box around it,
+    /// so the GPU may enter a few more subtrees than counted (same answer).
+    pub steps: u32,
 }
 
 /// Whether the segment a → b meets box [lo, hi] at a parameter in [t.0, t.1] (slabs in f64, closed).
@@ -47,9 +51,14 @@ pub fn walk(records: &[GpuThreadRec], a: DVec3, b: DVec3, lo: f64, hi: f64) -> W
 pub fn walk_clipped(records: &[GpuThreadRec], a: DVec3, b: DVec3, lo: f64, hi: f64, runs: &[(f64, f64)]) -> WalkCount {
     let mut c = WalkCount::default();
     let mut i = 0;
+    // The record that the step before read as its second box, if any.
+    let mut second = usize::MAX;
     while i < records.len() {
         let r = &records[i];
         c.records += 1;
+        if i != second {
+            c.steps += 1;
+        }
         if r.link == THREAD_TRI {
             c.tests += 1;
             let t = GpuBvhTri { v0: r.a, tri: 0, v1: r.b, pad1: 0, v2: r.c, pad2: 0 };
@@ -61,6 +70,9 @@ pub fn walk_clipped(records: &[GpuThreadRec], a: DVec3, b: DVec3, lo: f64, hi: f
         } else {
             let (blo, bhi) = (DVec3::from(r.a.map(f64::from)), DVec3::from(r.b.map(f64::from)));
             let meets = runs.iter().any(|&t| meets_box_within(blo, bhi, a, b, t));
+            if meets && i != second && r.pad2 != 0 {
+                second = i + 1;
+            }
             i = if meets { i + 1 } else { r.link as usize };
         }
     }

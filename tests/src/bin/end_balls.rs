@@ -63,6 +63,7 @@ fn main() -> anyhow::Result<()> {
     }
     println!("median r: pixels {:.3}, vpls {:.3}, diag {:.1}", med(&rx), med(&ry), diag);
     let mut xonly = 0u64;
+    let mut steps = 0u64;
     let (mut rays, mut full, mut clipped, mut none_needed, mut vis, mut vis_full, mut vis_clip) =
         (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
     for (pi, &(x, nx)) in pixels.iter().enumerate() {
@@ -92,6 +93,7 @@ fn main() -> anyhow::Result<()> {
             anyhow::ensure!(cx.occluded == w.occluded, "answers differ at pixel {pi}");
             xonly += cx.records as u64;
             clipped += c.records as u64;
+            steps += c.steps as u64;
             if !w.occluded {
                 vis += 1;
                 vis_full += w.records as u64;
@@ -108,6 +110,7 @@ fn main() -> anyhow::Result<()> {
         vis_clip as f64 / vis as f64
     );
     println!("pixel end only: {:.1}", xonly as f64 / n);
+    println!("steps per ray with the balls (two boxes a step): {:.1}", steps as f64 / n);
     Ok(())
 }
 

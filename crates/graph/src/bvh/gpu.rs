@@ -30,7 +30,8 @@
 //! * threaded: [`GpuThreadRec`], 48 bytes, [`FlatBvh::threaded`]: the same tree in depth-first preorder,
 //!   one record per triangle (its positions) and per node whose box is worth testing
 //!   ([`FlatBvh::box_records`]: its box and the index past its subtree), for the stackless any-hit walk
-//!   of the shadow rays (`bvh_any_hit`).
+//!   of the shadow rays (`bvh_any_hit`). A box record whose successor is a box also holds that box,
+//!   packed into its own ([`super::quant`]), so a step that meets it tests both.
 //!
 //! **Depth and stack.** The traversal keeps a stack of [`STACK_SIZE`] = 64 entries, and a tree of
 //! height h (levels below the root) needs at most h. The SAH builder may go deeper on pathological
@@ -61,6 +62,7 @@
 //! `glsl/shared/bindings.glsl` (generated constants); a test checks the rest of `bvh.glsl`'s constants.
 
 use super::build::Bvh;
+use super::quant;
 use crate::scene::Scene;
 use crate::shader_types::Vertex;
 use anyhow::{Context, Result};
@@ -122,9 +124,10 @@ const _: () = assert!(offset_of!(GpuBvhTri, v1) == 16);
 const _: () = assert!(offset_of!(GpuBvhTri, v2) == 32);
 
 /// A record of the threaded layout ([`FlatBvh::threaded`]): a box (`a` = lo, `b` = hi, `link` = the index
-/// of the first record after its subtree) or a triangle (`a`, `b`, `c` its positions, `link` =
-/// [`THREAD_TRI`], `tri` the scene triangle, which the closest-hit walk reports; the next record
-/// follows). GLSL: `BvhThreadRec`.
+/// of the first record after its subtree; where the next record is a box too, `c` holds the bits of that
+/// box packed into three words and `pad2` its link, else `pad2` = 0: [`super::quant`]) or a triangle
+/// (`a`, `b`, `c` its positions, `link` = [`THREAD_TRI`], `tri` the scene triangle, which the closest-hit
+/// walk reports; the next record follows). GLSL: the walk's steps in `bvh.glsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuThreadRec {
@@ -262,6 +265,7 @@ impl FlatBvh {
                 stack.push((first, None));
             }
         }
+        quant::pair_records(&mut out);
         out
     }
 
@@ -692,6 +696,16 @@ mod tests {
             }
             let end = r.link as usize;
             assert!(end > k && end <= *ends.last().unwrap(), "record {k}: link {end} does not nest");
+            // The packed successor: present where the next record is a box, and holding it.
+            match th.get(k + 1).filter(|n| n.link != THREAD_TRI) {
+                Some(n) => {
+                    assert_eq!(r.pad2, n.link, "record {k}: the pair's link");
+                    let (plo, phi) = quant::unpack(r.a, r.b, r.c.map(f32::to_bits));
+                    let (nlo, nhi) = (Vec3::from(n.a), Vec3::from(n.b));
+                    assert!(plo.cmple(nlo).all() && phi.cmpge(nhi).all(), "record {k}: the packed box");
+                }
+                None => assert_eq!(r.pad2, 0, "record {k}: a pair without a box after it"),
+            }
             ends.push(end);
             let (lo, hi) = (Vec3::from(r.a), Vec3::from(r.b));
             for q in &th[k + 1..end] {

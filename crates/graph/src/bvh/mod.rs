@@ -6,11 +6,13 @@
 //! - [`gpu`]: the GPU layout (32-byte nodes, 48-byte leaf-ordered triangles), the flattening under the
 //!   traversal's stack limit ([`FlatBvh`]), the upload and bindings ([`GpuBvh`]), and the constants the
 //!   shaders share.
+//! - [`quant`]: the child box packed into a threaded box record, so one step of the walk tests two boxes.
 //! - [`query`]: closest hit and occlusion on the CPU over the flattened tree, for the host's decisions.
 
 pub mod build;
 pub mod cells;
 pub mod gpu;
+pub mod quant;
 pub mod query;
 
 pub use build::{Bvh, BvhNode, BvhTri, MEDIAN_DEPTH};
