@@ -134,15 +134,31 @@ bool bvh_hit_triangle(BvhRay r, BvhTri tr, out float t, out vec2 bary) {
     return wt_hit_triangle(r.w, tr.v0, tr.v1, tr.v2, t, bary);
 }
 
+// min and max as a comparison and a select. The slab test's operands are never NaN (finite o, lo and hi, and
+// 1/d finite by BVH_MIN_DIR), where these agree with min and max (a zero's sign aside, which no comparison
+// sees). llvmpipe makes min and max NaN-safe, three instructions each; this is one on x86.
+vec3 bvh_min(vec3 a, vec3 b) {
+    return mix(b, a, lessThan(a, b));
+}
+vec3 bvh_max(vec3 a, vec3 b) {
+    return mix(b, a, greaterThan(a, b));
+}
+float bvh_min(float a, float b) {
+    return a < b ? a : b;
+}
+float bvh_max(float a, float b) {
+    return a > b ? a : b;
+}
+
 // Slab test of box [lo, hi] against (tmin, tmax): whether they meet, and the entry distance.
 bool bvh_hit_box(BvhRay r, vec3 lo, vec3 hi, float tmin, float tmax, out float tnear) {
     vec3 t0 = (lo - r.w.o) * r.inv_d;
     vec3 t1 = (hi - r.w.o) * r.inv_d;
-    vec3 ts = min(t0, t1);
-    vec3 tb = max(t0, t1);
-    float near = max(max(ts.x, ts.y), max(ts.z, tmin));
-    float far = min(min(tb.x, tb.y), tb.z) * BVH_BOX_GROW;
-    far = min(far, tmax * BVH_BOX_GROW);
+    vec3 ts = bvh_min(t0, t1);
+    vec3 tb = bvh_max(t0, t1);
+    float near = bvh_max(bvh_max(ts.x, ts.y), bvh_max(ts.z, tmin));
+    float far = bvh_min(bvh_min(tb.x, tb.y), tb.z) * BVH_BOX_GROW;
+    far = bvh_min(far, tmax * BVH_BOX_GROW);
     tnear = near;
     return near <= far;
 }
@@ -326,30 +342,31 @@ int bvh_box_next(BvhRay r, vec3 lo, vec3 hi, uvec4 a, uvec4 c, bool met, int i, 
 }
 
 // One step of the walk: read and test record i (and its packed successor), then move on (nothing once
-// `done`).
+// `done`). Written without branches: llvmpipe runs both sides of a branch under masks anyway, and then
+// blends every variable either side writes; here each is chosen once.
 void bvh_thread_step(BvhRay r, float tmin, float tmax, int end, inout int i, inout uint steps, inout bool done,
                      inout bool hit) {
-    if (done) return;
-    steps++;
-    uvec4 a = texelFetch(bvh_threaded, 3 * i);
-    vec3 b = uintBitsToFloat(texelFetch(bvh_threaded, 3 * i + 1).xyz);
-    uvec4 c = texelFetch(bvh_threaded, 3 * i + 2);
-    if (a.w == BVH_THREAD_TRI) {
-        float t;
-        vec2 bary;
-        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), b, uintBitsToFloat(c.xyz), t, bary) && t > tmin &&
-            t < tmax) {
-            hit = true;
-            done = true;
-        }
-        i++;
-    } else {
-        float tnear;
-        vec3 lo = uintBitsToFloat(a.xyz);
-        i = bvh_box_next(r, lo, b, a, c, bvh_hit_box(r, lo, b, tmin, tmax, tnear), i, tmin, tmax);
-    }
+    // A done walk reads its last record again (in range: i can be end) and keeps its state.
+    int k = min(i, end - 1);
+    uvec4 a = texelFetch(bvh_threaded, 3 * k);
+    vec3 b = uintBitsToFloat(texelFetch(bvh_threaded, 3 * k + 1).xyz);
+    uvec4 c = texelFetch(bvh_threaded, 3 * k + 2);
+    bool tri = a.w == BVH_THREAD_TRI;
+    float t;
+    vec2 bary;
+    bool crossed = wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), b, uintBitsToFloat(c.xyz), t, bary) && t > tmin &&
+                   t < tmax;
+    float tnear;
+    vec3 lo = uintBitsToFloat(a.xyz);
+    int box_next = bvh_box_next(r, lo, b, a, c, bvh_hit_box(r, lo, b, tmin, tmax, tnear), k, tmin, tmax);
+    int next = tri ? k + 1 : box_next;
+    bool stop = tri && crossed;
+    bool live = !done;
+    i = live ? next : i;
+    steps += live ? 1u : 0u;
+    hit = hit || (live && stop);
     // Past the last record: nothing left to test (the walk never starts there: the tree has a record).
-    if (i >= end) done = true;
+    done = done || stop || next >= end;
 }
 
 // BVH_THREAD_UNROLL (8) steps, written out: a loop would count in llvmpipe's limit. One loop iteration of
