@@ -297,7 +297,7 @@ float bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out uint t
 // for all lanes of a SIMD vector under masks, and reads a storage buffer lane by lane when the index differs
 // per lane. bvh_trace's body (a triangle, a node and its two children from storage buffers, a stack push)
 // paid all of that every iteration; a step here is three texel fetches (one gather per vector each) and
-// one test. And BVH_THREAD_UNROLL steps share one loop iteration, so llvmpipe's loop limit counts a trace
+// one record's tests. And BVH_THREAD_UNROLL steps share one loop iteration, so llvmpipe's loop limit counts a trace
 // as at most ⌈min(BVH_MAX_STEPS, records + 1) / BVH_THREAD_UNROLL⌉ iterations
 // (GpuBvh::max_iterations_occluded): more shadow rays fit in one dispatch.
 //
