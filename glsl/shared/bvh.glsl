@@ -406,30 +406,28 @@ bool bvh_any_hit(vec3 o, vec3 d, float tmin, float tmax) {
 // replaces the closest hit under bvh_trace's rule (nearer, or as near with a lower triangle index).
 void bvh_closest_step(BvhRay r, float tmin, int end, inout int i, inout uint steps, inout float best,
                       inout bool found, inout uint best_tri, inout vec2 best_bary) {
-    if (i >= end) return;
-    steps++;
-    uvec4 a = texelFetch(bvh_threaded, 3 * i);
-    uvec4 b = texelFetch(bvh_threaded, 3 * i + 1);
-    uvec4 c = texelFetch(bvh_threaded, 3 * i + 2);
-    if (a.w == BVH_THREAD_TRI) {
-        float t;
-        vec2 bary;
-        if (wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), uintBitsToFloat(c.xyz), t, bary) &&
-            t > tmin) {
-            uint tri = b.w;
-            if (t < best || (t == best && (!found || tri < best_tri))) {
-                found = true;
-                best = t;
-                best_tri = tri;
-                best_bary = bary;
-            }
-        }
-        i++;
-    } else {
-        float tnear;
-        vec3 lo = uintBitsToFloat(a.xyz), hi = uintBitsToFloat(b.xyz);
-        i = bvh_box_next(r, lo, hi, a, c, bvh_hit_box(r, lo, hi, tmin, best, tnear), i, tmin, best);
-    }
+    // Without branches, as bvh_thread_step: a finished walk reads its last record again and keeps its state.
+    bool live = i < end;
+    int k = min(i, end - 1);
+    uvec4 a = texelFetch(bvh_threaded, 3 * k);
+    uvec4 b = texelFetch(bvh_threaded, 3 * k + 1);
+    uvec4 c = texelFetch(bvh_threaded, 3 * k + 2);
+    bool tri = a.w == BVH_THREAD_TRI;
+    float t;
+    vec2 bary;
+    bool crossed = wt_hit_triangle(r.w, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), uintBitsToFloat(c.xyz), t,
+                                   bary) && t > tmin;
+    // bvh_trace's rule: nearer, or as near with a lower triangle index.
+    bool take = live && tri && crossed && (t < best || (t == best && (!found || b.w < best_tri)));
+    float tnear;
+    vec3 lo = uintBitsToFloat(a.xyz), hi = uintBitsToFloat(b.xyz);
+    int box_next = bvh_box_next(r, lo, hi, a, c, bvh_hit_box(r, lo, hi, tmin, best, tnear), k, tmin, best);
+    i = live ? (tri ? k + 1 : box_next) : i;
+    steps += live ? 1u : 0u;
+    found = found || take;
+    best = take ? t : best;
+    best_tri = take ? b.w : best_tri;
+    best_bary = take ? bary : best_bary;
 }
 
 // bvh_closest's answer (the tests check every query bit for bit) by the walk the shadow rays take over the
