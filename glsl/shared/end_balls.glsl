@@ -96,7 +96,7 @@ float end_ball_tri_distance(vec3 p, vec3 a, vec3 b, vec3 c) {
 // records.
 float end_ball_radius(vec3 p, vec3 n, float rmax) {
     float tau = end_ball_tau(p);
-    int end = textureSize(bvh_threaded) / 3;
+    int end = bvh_thread_records();
     float best = rmax;
     int i = 0;
     for (uint k = 0u; k < uint(END_BALL_MAX_STEPS) && i < end; k++) {

@@ -27,7 +27,7 @@ vec2 shadow_queue_window[SHADOW_QUEUE];
 
 // Bit j set: the shadow ray o → shadow_queue_end[j] (j < n ≤ SHADOW_QUEUE) is not occluded.
 uint shadow_queue_trace(vec3 o, uint n) {
-    int end = textureSize(bvh_threaded) / 3;
+    int end = bvh_thread_records();
     float tmin = BVH_LIFTED_EPS, tmax = 1.0 - BVH_LIFTED_EPS;
     uint visible = 0u, next = 0u, current = 0u, steps = 0u;
     bool tracing = false, done = false, hit = false;
@@ -103,7 +103,7 @@ uint shadow_pool_trace(vec3 o, uint n) {
     subgroupMemoryBarrierShared();
     subgroupBarrier();
 
-    int end = textureSize(bvh_threaded) / 3;
+    int end = bvh_thread_records();
     float tmin = BVH_LIFTED_EPS, tmax = 1.0 - BVH_LIFTED_EPS;
     uint taken = 0u, ticket = 0u, steps = 0u;
     bool tracing = false, done = true, hit = false;

@@ -610,13 +610,7 @@ mod tests {
 
     /// A deterministic soup of small random triangles plus a degenerate one (index `n`).
     fn soup(n: usize) -> Vec<[Vec3; 3]> {
-        let mut s = 0x1234_5678_9abc_def1u64;
-        let mut r = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut r = crate::bvh::test_uniforms(0x1234_5678_9abc_def1u64);
         let mut tris: Vec<[Vec3; 3]> = (0..n)
             .map(|_| {
                 let c = Vec3::new(r(), r(), r()) * 10.0;

@@ -20,3 +20,15 @@ pub use gpu::{
     FlatBvh, GpuBvh, GpuBvhNode, GpuBvhTri, GpuThreadRec, B_BVH_NODES, B_BVH_THREADED, B_BVH_TRIS, MAX_STEPS, NO_TRI,
     SHADOW_EPS, STACK_SIZE, THREAD_TRI, THREAD_UNROLL,
 };
+
+/// Test-only: a deterministic xorshift stream of numbers in [0, 1) from `seed` (the unit tests' random
+/// boxes and triangles).
+#[cfg(test)]
+pub(crate) fn test_uniforms(mut seed: u64) -> impl FnMut() -> f32 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 40) as f32 / (1u64 << 24) as f32
+    }
+}

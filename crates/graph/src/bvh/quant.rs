@@ -83,13 +83,7 @@ mod tests {
 
     #[test]
     fn a_packed_box_holds_the_box_and_is_tight() {
-        let mut s = 0x9e37_79b9_7f4a_7c15u64;
-        let mut r = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut r = crate::bvh::test_uniforms(0x9e37_79b9_7f4a_7c15u64);
         for k in 0..20_000 {
             // Parents from a millimetre to a kilometre, far from the origin or not, some flat.
             let scale = 10f32.powi(k % 7 - 3);
