@@ -31,6 +31,7 @@ layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 
+#define CDF_SHAPE_FROM_FRAME
 #include "shared/cdf.glsl"
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"

@@ -60,6 +60,7 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 #define END_BALLS_READ
 #include "shared/end_balls.glsl"
 #endif
+#define CDF_SHAPE_FROM_FRAME
 #include "shared/cdf.glsl"
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"
@@ -194,22 +195,6 @@ float thesis_p_g(vec3 x, vec3 nx, Vpl vpl) {
     return cos_x * sqrt(max(1.0 - cos_x * cos_x, 0.0)) / PI;
 }
 
-// The exact mixture probability of v under the CDF strategy (the same as draw_vpl's).
-float cdf_strategy_prob(uint v) {
-    uint len = pc.cdf_len;
-    uint live = 0u;
-    float method = 0.0;
-    for (uint s = 1u; s <= pc.sections; s++) {
-        uint cb = s * len;
-        if (!(cdf_total_at(cb) > 0.0)) continue;
-        live++;
-        method += section_prob(cb, v, pc.face_mode == FACE_UNIFORM ? live_faces(cb) : 0u);
-    }
-    float eps = live == 0u ? 1.0 : pc.defensive;
-    float uniform_p = cdf_prob_rows(0u, v, 0u, faces() * face_rows());
-    return eps * uniform_p + (live > 0u ? (1.0 - eps) * method / float(live) : 0.0);
-}
-
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
@@ -292,7 +277,7 @@ void main() {
                     if (c == vec3(0.0)) continue;
                     float ap_g = area_times_gathering_density(x, nx, q, front_part(q, x, nx).frac * q.area, y);
                     if (!(ap_g > 0.0)) continue;
-                    float p_v = cdf_strategy_prob(v);
+                    float p_v = source_prob(v);
                     if (thesis) {
                         float p_g = thesis_p_g(x, nx, vpl);
                         sum += p_g / (p_v + p_g) * c / (n_g * ap_g);

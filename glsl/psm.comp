@@ -17,6 +17,7 @@ layout(std430, set = 0, binding = B_IMPORTANCE) readonly buffer Importance { flo
 layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 layout(std430, set = 0, binding = B_PSM_VIEWS) writeonly buffer PsmViews { PsmView psm_views[]; };
 
+#define CDF_SHAPE_FROM_FRAME
 #include "shared/cdf.glsl"
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"

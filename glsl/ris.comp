@@ -84,6 +84,7 @@ layout(std430, set = 0, binding = B_RIS_POOL) writeonly buffer RisPool { vec4 po
 #endif
 #endif
 
+#define CDF_SHAPE_FROM_FRAME
 #include "shared/cdf.glsl"
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"
@@ -178,12 +179,11 @@ void main() {
         uint seed = pcg_hash(tile ^ 0x6A09E667u) ^ pc.seed;
 #ifdef RIS_UNIFORM_SOURCE
         // The uniform source with faces by Russian roulette: its section and the defensive one are the same
-        // CDF (importance = validity), so draw_vpl's mixture is that CDF's distribution. One search and one
-        // probability instead of draw_vpl's two of each, with draw_vpl's stratified points.
+        // CDF (importance = validity), so draw_vpl's mixture is that CDF's distribution. One search (and its
+        // probability) instead of draw_vpl's two, with draw_vpl's stratified points.
         uint all_rows = faces() * face_rows();
         vec3 u = vec3(owen_sobol2(k, seed ^ 0xA54FF53Au), owen_sobol1(k, seed ^ 0x510E527Fu));
-        uint v = cdf_sample_rows3(0u, 0u, u, 0u, all_rows);
-        prob = cdf_prob_rows(0u, v, 0u, all_rows);
+        uint v = cdf_sample_rows3_prob(0u, 0u, u, 0u, all_rows, prob);
 #else
         uint v = draw_vpl(k, seed, prob);
 #endif

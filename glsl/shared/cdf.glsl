@@ -31,8 +31,18 @@ float cdf_below(float x) {
 }
 
 // The prefix over row totals restarts at each face, a run of `len` rows (cdf_reduce.comp).
+// CDF_SHAPE_FROM_FRAME (defined by the renderer's shaders before the include, after `frame`): every
+// section is over the frame's light-map texels, `faces · res` rows of `res` texels (the shape the frame
+// recipe gives cdf_reduce), so rows and row length come from the frame's uniforms and no search reads
+// the header. On llvmpipe a texel fetch is a gather instruction even when every lane reads the same
+// texel, and the header was read again by every helper below. Test kernels read the header.
+#ifdef CDF_SHAPE_FROM_FRAME
+uint cdf_len(uint cb) { return frame.size.w; }
+uint cdf_rows(uint cb) { return frame.light_map.y * frame.size.z * frame.size.w; }
+#else
 uint cdf_len(uint cb) { return floatBitsToUint(cdf_at(cb + 2u)); }
 uint cdf_rows(uint cb) { return floatBitsToUint(cdf_at(cb + 1u)); }
+#endif
 
 // Total of face f (its last row's prefix).
 float cdf_face_total(uint cb, uint f) {
@@ -54,6 +64,14 @@ float cdf_rows_total(uint cb, uint r0, uint r1) {
     return t;
 }
 
+// The last step of cdf_prob_rows (and of cdf_sample_rows3_prob, which must give its bits): the face
+// factor, times the row's share Δ_r of the face's range, times the texel's step of its row's prefix
+// over the row's total. 0 where any of them has no weight.
+float cdf_prob_of(float p_face, float range, float delta, float last, float hi, float lo) {
+    if (!(range > 0.0) || !(delta > 0.0) || !(last > 0.0)) return 0.0;
+    return p_face * (delta / range) * (max(hi - lo, 0.0) / last);
+}
+
 // Draw a texel among rows [r0, r1) of section (cb, ib) (inside one face, or whole faces) with
 // probability mass(v) / total(rows), by inverse transform with one uniform per level: the face (when the
 // range spans several) by the face totals, the row inside the face (the first whose in-face prefix
@@ -65,23 +83,32 @@ float cdf_rows_total(uint cb, uint r0, uint r1) {
 // Why this never returns a texel without mass: a zero weight leaves a float prefix unchanged
 // (acc + 0 = acc), so "first prefix > t" can only stop where the prefix grew, i.e. at a texel with
 // mass; and clamping each target just below its total (u → 1 and rounding could otherwise reach it)
-// guarantees such a prefix exists. Call only when the rows' total is > 0. Returns the texel.
-uint cdf_sample_rows3(uint cb, uint ib, vec3 u, uint r0, uint r1) {
+// guarantees such a prefix exists. Call only when the rows' total is > 0. Returns the texel, and in prob
+// the texel's cdf_prob_rows(cb, texel, r0, r1), bit for bit: computed by cdf_prob_of from the same floats
+// (the face totals, summed in the same order, and the row range the search read; four more reads for the
+// row's and the texel's own steps), which spares a caller the twenty-odd reads of a second descent.
+uint cdf_sample_rows3_prob(uint cb, uint ib, vec3 u, uint r0, uint r1, out float prob) {
     uint rows = cdf_rows(cb), len = cdf_len(cb);
     uint f0 = r0 / len, f1 = (r1 - 1u) / len;
     uint a = r0, b = r1;
     // One face: u.x picks the row and u.y the texel. Several: u.x the face, u.y the row, u.z the texel.
     vec2 ur = u.xy;
+    float p_face = 1.0;
+    bool weighed = true; // cdf_prob_rows's early 0 when the faces' total is not > 0
     if (f0 != f1) {
         ur = u.yz;
         float t = cdf_rows_total(cb, r0, r1);
         float target = min(u.x * t, cdf_below(t));
-        float cum = 0.0;
+        float cum = 0.0, before = 0.0;
         uint f = f1;
         for (uint k = f0; k <= f1; k++) {
+            before = cum;
             cum += cdf_face_total(cb, k);
             if (cum > target) { f = k; break; }
         }
+        // cdf_prob_rows's face factor: its loop stops at f with the same partial sums.
+        weighed = t > 0.0;
+        p_face = (cum - before) / t;
         a = f * len;
         b = min((f + 1u) * len, rows);
     }
@@ -104,7 +131,16 @@ uint cdf_sample_rows3(uint cb, uint ib, vec3 u, uint r0, uint r1) {
         uint mid = (lo + hi) / 2u;
         if (cdf_at(base + mid) > tt) hi = mid; else lo = mid + 1u;
     }
+    float delta = cdf_at(cb + CDF_HEADER + r) - cdf_row_start(cb, r);
+    float texel_hi = cdf_at(base + lo);
+    float texel_lo = lo > 0u ? cdf_at(base + lo - 1u) : 0.0;
+    prob = weighed ? cdf_prob_of(p_face, end - before0, delta, last, texel_hi, texel_lo) : 0.0;
     return r * len + lo;
+}
+
+uint cdf_sample_rows3(uint cb, uint ib, vec3 u, uint r0, uint r1) {
+    float prob;
+    return cdf_sample_rows3_prob(cb, ib, u, r0, r1, prob);
 }
 
 // Two more uniforms derived from the first, for the single-u entry points used by tests.
@@ -145,13 +181,11 @@ float cdf_prob_rows(uint cb, uint v, uint r0, uint r1) {
     }
     float range = cdf_at(cb + CDF_HEADER + b - 1u) - cdf_row_start(cb, a);
     float delta = cdf_at(cb + CDF_HEADER + r) - cdf_row_start(cb, r);
-    if (!(range > 0.0) || !(delta > 0.0)) return 0.0;
     uint base = cb + CDF_HEADER + rows + r * len;
     float last = cdf_at(base + len - 1u);
-    if (!(last > 0.0)) return 0.0;
     float hi = cdf_at(base + i);
     float lo = i > 0u ? cdf_at(base + i - 1u) : 0.0;
-    return p_face * (delta / range) * (max(hi - lo, 0.0) / last);
+    return cdf_prob_of(p_face, range, delta, last, hi, lo);
 }
 
 // The whole of section 0, with the texel's probability (its weight over the total).

@@ -17,27 +17,48 @@ uint live_faces(uint cb) {
     return n;
 }
 
-// Probability that method section s (CDF at cb) draws v, given its face choice (exact: see
-// cdf_prob_rows).
-float section_prob(uint cb, uint v, uint nlive) {
-    uint all_rows = faces() * face_rows();
-    if (pc.face_mode == FACE_RR) return cdf_prob_rows(cb, v, 0u, all_rows);
-    uint f = v / (face_rows() * face_rows());
-    if (!(cdf_rows_total(cb, f * face_rows(), (f + 1u) * face_rows()) > 0.0)) return 0.0;
-    return cdf_prob_rows(cb, v, f * face_rows(), (f + 1u) * face_rows()) / float(nlive);
+// Term t of the mixture's probability of drawing v: t = 0 is section 0 (every valid VPL, over all rows);
+// t ≥ 1 is method section t, with its faces by Russian roulette (all rows) or uniformly among its faces
+// with weight (v's face's rows, over their number). Exact: see cdf_prob_rows. One cdf_prob_rows call
+// whatever t is: llvmpipe runs both sides of a branch, so two calls behind a branch cost two.
+float term_prob(uint t, uint v) {
+    uint cb = t * pc.cdf_len, fr = face_rows();
+    bool per_face = t > 0u && pc.face_mode == FACE_UNIFORM;
+    uint f = v / (fr * fr);
+    uint r0 = per_face ? f * fr : 0u, r1 = per_face ? (f + 1u) * fr : faces() * fr;
+    float p = cdf_prob_rows(cb, v, r0, r1);
+    if (!per_face) return p;
+    if (!(cdf_rows_total(cb, r0, r1) > 0.0)) return 0.0;
+    return p / float(live_faces(cb));
 }
 
-// The mixture probability of VPL v (draw_vpl's p_v), given `live` method sections with weight and the
-// effective defensive share eps.
-float mixture_prob(uint v, uint live, float eps) {
-    uint len = pc.cdf_len;
-    float method = 0.0;
-    for (uint s = 1u; s <= pc.sections; s++) {
-        uint cb = s * len;
-        if (!(cdf_total_at(cb) > 0.0)) continue;
-        method += section_prob(cb, v, pc.face_mode == FACE_UNIFORM ? live_faces(cb) : 0u);
+// No term known to mixture_prob: it computes them all.
+#define TERM_NONE 0xFFFFFFFFu
+
+// draw_vpl's p_v of VPL v, given `live` method sections with weight and the effective defensive share eps:
+//   p_v = ε · P_0(v) + (1 − ε)/live · Σ_{s live} P_s(v).
+// Term `known` (TERM_NONE: none) is given as known_p, the bits term_prob(known, v) has: draw_vpl knows the
+// term that drew v, and cdf_sample_rows3_prob gives its probability from the searches' own reads. The
+// other terms are computed one per iteration of a loop, whose count is the same for every lane, so
+// `uniform` (section 0 alone) computes none: a loop runs only while a lane needs it, where llvmpipe runs
+// a branch's body under a mask whatever the lanes need. The method terms are summed in section order as
+// before, the known one in its place, so p_v keeps its bits.
+float mixture_prob(uint v, uint live, float eps, uint known, float known_p) {
+    uint sections = pc.sections;
+    float uniform_p = known_p, method = 0.0;
+    bool known_summed = known == 0u || known > sections;
+    uint others = known <= sections ? sections : sections + 1u;
+    for (uint j = 0u; j < others; j++) {
+        uint t = j < known ? j : j + 1u;
+        if (!known_summed && t > known) {
+            method += known_p;
+            known_summed = true;
+        }
+        float p = term_prob(t, v);
+        if (t == 0u) uniform_p = p;
+        else if (cdf_total_at(t * pc.cdf_len) > 0.0) method += p;
     }
-    float uniform_p = cdf_prob_rows(0u, v, 0u, faces() * face_rows());
+    if (!known_summed) method += known_p;
     return eps * uniform_p + (live > 0u ? (1.0 - eps) * method / float(live) : 0.0);
 }
 
@@ -45,7 +66,7 @@ float mixture_prob(uint v, uint live, float eps) {
 float source_prob(uint v) {
     uint live = 0u;
     for (uint s = 1u; s <= pc.sections; s++) live += cdf_total_at(s * pc.cdf_len) > 0.0 ? 1u : 0u;
-    return mixture_prob(v, live, live == 0u ? 1.0 : pc.defensive);
+    return mixture_prob(v, live, live == 0u ? 1.0 : pc.defensive, TERM_NONE, 0.0);
 }
 
 // The sampling mixture: with probability ε (or when no method section has weight) uniformly among the
@@ -70,9 +91,11 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     vec2 face_row = owen_sobol2(k, seed ^ 0xA54FF53Au);
     float texel = owen_sobol1(k, seed ^ 0x510E527Fu);
     vec3 u = vec3(face_row, texel);
-    uint v;
+    uint v, known;
+    float known_p; // the drawing term's probability of v (mixture_prob)
     if (choice.x < eps) {
-        v = cdf_sample_rows3(0u, 0u, u, 0u, faces() * face_rows());
+        v = cdf_sample_rows3_prob(0u, 0u, u, 0u, faces() * face_rows(), known_p);
+        known = 0u;
     } else {
         // A section uniformly among those with weight (a local region whose gather points all missed
         // has none).
@@ -85,23 +108,27 @@ uint draw_vpl(uint k, uint seed, out float prob) {
             }
         }
         uint cb = s * len;
+        known = s;
         if (pc.face_mode == FACE_RR) {
-            v = cdf_sample_rows3(cb, s * n, u, 0u, faces() * face_rows());
+            v = cdf_sample_rows3_prob(cb, s * n, u, 0u, faces() * face_rows(), known_p);
         } else {
             // The face uniformly among those with weight, then (row, texel) inside it.
             uint nlive = live_faces(cb);
             pick = min(uint(u.x * float(nlive)), nlive - 1u);
             uint f = 0u;
+            bool found = false; // a face with weight (term_prob's test for v's face)
             for (uint j = 0u; j < faces(); j++) {
                 if (cdf_rows_total(cb, j * face_rows(), (j + 1u) * face_rows()) > 0.0) {
-                    if (pick == 0u) { f = j; break; }
+                    if (pick == 0u) { f = j; found = true; break; }
                     pick--;
                 }
             }
-            v = cdf_sample_rows3(cb, s * n, u.yzx, f * face_rows(), (f + 1u) * face_rows());
+            float p;
+            v = cdf_sample_rows3_prob(cb, s * n, u.yzx, f * face_rows(), (f + 1u) * face_rows(), p);
+            known_p = found ? p / float(nlive) : 0.0;
         }
     }
-    prob = mixture_prob(v, live, eps);
+    prob = mixture_prob(v, live, eps, known, known_p);
     return v;
 }
 

@@ -6,6 +6,7 @@
 //   0: cdf_sample(u) over section 0               → (texel, bits of its probability)
 //   1: cdf_sample_rows(cb, ib, u, r0, r1)          → (texel, bits of cdf_prob_rows(cb, texel, r0, r1))
 //   2: texel i = invocation, no u                  → (i, bits of cdf_prob_rows(cb, i, r0, r1))
+//   3: cdf_sample_rows3_prob as mode 1 draws        → (texel, bits of the probability the draw gives)
 // One invocation per u (or texel): a draw is two binary searches, ⌈log2 rows⌉ + ⌈log2 row_length⌉
 // iterations, far below llvmpipe's loop limit. Test-only bindings: the u values at B_TEST_IN, the results
 // at B_TEST_OUT. A dispatch covers [first, first + count), so a large batch can be split over several
@@ -41,6 +42,8 @@ void main() {
     } else if (pc.mode == 1u) {
         v = cdf_sample_rows(pc.cb, pc.ib, us[i], pc.r0, pc.r1);
         prob = cdf_prob_rows(pc.cb, v, pc.r0, pc.r1);
+    } else if (pc.mode == 3u) {
+        v = cdf_sample_rows3_prob(pc.cb, pc.ib, cdf_uniforms(us[i]), pc.r0, pc.r1, prob);
     } else {
         v = i;
         prob = cdf_prob_rows(pc.cb, v, pc.r0, pc.r1);

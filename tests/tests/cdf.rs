@@ -104,6 +104,8 @@ enum Op {
     Rows { section: u32, r0: u32, r1: u32 },
     /// `cdf_prob_rows` of every texel of a section for rows [r0, r1): (texel, probability) per texel.
     Probs { section: u32, r0: u32, r1: u32 },
+    /// `cdf_sample_rows3_prob`, as `Rows` draws: (texel, the probability the draw gives with it).
+    Drawn { section: u32, r0: u32, r1: u32 },
 }
 
 /// The CDF's shape: `sections` arrays of `rows × len` weights.
@@ -149,6 +151,7 @@ fn run(gpu: &Gpu, k: &Kernels, weights: &[f32], s: Shape, ops: &[(Op, &[f32])]) 
             Op::Sample => (0u32, 0, 0, 0, us.len() as u32),
             Op::Rows { section, r0, r1 } => (1, section, r0, r1, us.len() as u32),
             Op::Probs { section, r0, r1 } => (2, section, r0, r1, texels),
+            Op::Drawn { section, r0, r1 } => (3, section, r0, r1, us.len() as u32),
         };
         let push = [0, 0, mode, section * section_len, section * texels, r0, r1, 0u32];
         let hu = g.import_buffer(ub);
@@ -336,7 +339,9 @@ fn check(what: &str, w: &[f32], s: Shape, cpu: &[f32], op: Op, us: &[f32], got: 
     let texels = (s.rows * s.len) as usize;
     let (section, r0, r1) = match op {
         Op::Sample => (0, 0, s.rows),
-        Op::Rows { section, r0, r1 } | Op::Probs { section, r0, r1 } => (section, r0, r1),
+        Op::Rows { section, r0, r1 } | Op::Probs { section, r0, r1 } | Op::Drawn { section, r0, r1 } => {
+            (section, r0, r1)
+        }
     };
     let cb = section as usize * cpu_cdf::section_len(s.rows, s.len);
     let ws = &w[section as usize * texels..][..texels];
@@ -471,6 +476,32 @@ fn sampling_edge_cases_match_the_twin() {
     assert_eq!(face(d[20_000].0), face(first), "u = 0 draws in the first face with weight");
     assert_eq!(face(d[20_000 + 4].0), face(last), "u = 1 − 2⁻²⁴ draws in the last face with weight");
     assert_eq!(face(d[20_000 + 5].0), face(last), "u = 1 (out of contract) is clamped to the last face with weight");
+    // The same rows drawn with the probability the draw gives (both faces, so its face factor too).
+    let ops: [(Op, &[f32]); 2] =
+        [(Op::Rows { section: 0, r0: 0, r1: rows }, &u), (Op::Drawn { section: 0, r0: 0, r1: rows }, &u)];
+    assert_eq!(drawn_equal_rows(&ops, &run_and_check(&gpu, &k, "zero runs, drawn", &w, shape(rows, len), &ops)), 1);
+}
+
+/// Checks that each [`Op::Drawn`] of `ops` gave what the [`Op::Rows`] just before it gave (the same rows
+/// and u), bit for bit: the probability a draw returns with its texel (draw_vpl's known term) is
+/// `cdf_prob_rows`'s. Returns the number of such pairs.
+fn drawn_equal_rows(ops: &[(Op, &[f32])], results: &[Vec<(u32, f32)>]) -> usize {
+    let mut pairs = 0;
+    for (j, (op, _)) in ops.iter().enumerate() {
+        let Op::Drawn { section, r0, r1 } = *op else { continue };
+        let before = if j > 0 { Some(ops[j - 1].0) } else { None };
+        assert!(
+            matches!(before, Some(Op::Rows { section: s0, r0: a, r1: b }) if (s0, a, b) == (section, r0, r1)),
+            "{op:?} must follow the Rows op of its rows"
+        );
+        assert_eq!(results[j].len(), results[j - 1].len());
+        for (n, (&(v, p), &(vr, pr))) in results[j].iter().zip(&results[j - 1]).enumerate() {
+            assert_eq!(v, vr, "{op:?}: draw {n}: texel {v}, cdf_sample_rows's {vr}");
+            assert_eq!(p.to_bits(), pr.to_bits(), "{op:?}: draw {n} (texel {v}): its own {p:e}, cdf_prob_rows {pr:e}");
+        }
+        pairs += 1;
+    }
+    pairs
 }
 
 #[test]
@@ -506,6 +537,7 @@ fn sample_rows_and_prob_rows_match_the_twin_on_sections_and_faces() {
             // Draw only where the gather would (rows with weight); the probabilities everywhere.
             if cpu_cdf::rows_total(&cpu, section as usize * cpu_cdf::section_len(s.rows, s.len), r0, r1) > 0.0 {
                 ops.push((Op::Rows { section, r0, r1 }, &u));
+                ops.push((Op::Drawn { section, r0, r1 }, &u));
             }
             ops.push((Op::Probs { section, r0, r1 }, &[]));
         }
@@ -516,6 +548,7 @@ fn sample_rows_and_prob_rows_match_the_twin_on_sections_and_faces() {
     let (i, _) =
         ops.iter().enumerate().find(|(_, (op, _))| matches!(op, Op::Rows { section: 2, r0: 0, r1: 128 })).unwrap();
     assert!(results[i].iter().all(|&(v, _)| v >= res * res));
+    assert!(drawn_equal_rows(&ops, &results) >= 10);
     eprintln!("{} ops on 3 sections: {:.2} s", ops.len(), t.elapsed().as_secs_f64());
 }
 

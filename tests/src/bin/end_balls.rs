@@ -25,6 +25,12 @@ fn main() -> anyhow::Result<()> {
     let scene = Scene::load(Path::new(path))?;
     let flat = FlatBvh::new(&Bvh::new(&scene), &scene.vertices);
     let threaded = flat.threaded();
+    let paired = threaded.iter().filter(|r| r.pad2 != 0).count();
+    println!(
+        "{} threaded records ({:.1} MiB), {paired} of them boxes holding the box after them",
+        threaded.len(),
+        std::mem::size_of_val(threaded.as_slice()) as f64 / (1 << 20) as f64
+    );
     let view = BvhView { nodes: &flat.nodes, tris: &flat.tris };
     let diag = (scene.bounds_max - scene.bounds_min).length();
     let lift = |x: Vec3| (1e-5 * diag).max(x.abs().max_element() / 262144.0);
