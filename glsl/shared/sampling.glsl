@@ -91,12 +91,13 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     vec2 face_row = owen_sobol2(k, seed ^ 0xA54FF53Au);
     float texel = owen_sobol1(k, seed ^ 0x510E527Fu);
     vec3 u = vec3(face_row, texel);
-    uint v, known;
-    float known_p; // the drawing term's probability of v (mixture_prob)
-    if (choice.x < eps) {
-        v = cdf_sample_rows3_prob(0u, 0u, u, 0u, faces() * face_rows(), known_p);
-        known = 0u;
-    } else {
+    // The term that draws (section 0, or method section s) and its rows. One cdf_sample_rows3_prob call
+    // with the chosen term's arguments: llvmpipe runs both sides of a branch under masks, so a call on each
+    // side (and one per face mode) cost a whole draw each.
+    uint cb = 0u, ib = 0u, known = 0u, r0 = 0u, r1 = faces() * face_rows(), nlive = 1u;
+    vec3 ut = u;
+    bool per_face = false, found = false;
+    if (!(choice.x < eps)) {
         // A section uniformly among those with weight (a local region whose gather points all missed
         // has none).
         uint pick = min(uint(choice.y * float(live)), live - 1u);
@@ -107,27 +108,29 @@ uint draw_vpl(uint k, uint seed, out float prob) {
                 pick--;
             }
         }
-        uint cb = s * len;
+        cb = s * len;
+        ib = s * n;
         known = s;
-        if (pc.face_mode == FACE_RR) {
-            v = cdf_sample_rows3_prob(cb, s * n, u, 0u, faces() * face_rows(), known_p);
-        } else {
+        if (pc.face_mode == FACE_UNIFORM) {
             // The face uniformly among those with weight, then (row, texel) inside it.
-            uint nlive = live_faces(cb);
+            per_face = true;
+            nlive = live_faces(cb);
             pick = min(uint(u.x * float(nlive)), nlive - 1u);
             uint f = 0u;
-            bool found = false; // a face with weight (term_prob's test for v's face)
             for (uint j = 0u; j < faces(); j++) {
                 if (cdf_rows_total(cb, j * face_rows(), (j + 1u) * face_rows()) > 0.0) {
-                    if (pick == 0u) { f = j; found = true; break; }
+                    if (pick == 0u) { f = j; found = true; break; } // term_prob's test for v's face
                     pick--;
                 }
             }
-            float p;
-            v = cdf_sample_rows3_prob(cb, s * n, u.yzx, f * face_rows(), (f + 1u) * face_rows(), p);
-            known_p = found ? p / float(nlive) : 0.0;
+            ut = u.yzx;
+            r0 = f * face_rows();
+            r1 = (f + 1u) * face_rows();
         }
     }
+    float p;
+    uint v = cdf_sample_rows3_prob(cb, ib, ut, r0, r1, p);
+    float known_p = per_face ? (found ? p / float(nlive) : 0.0) : p; // term_prob(known, v)'s bits
     prob = mixture_prob(v, live, eps, known, known_p);
     return v;
 }
