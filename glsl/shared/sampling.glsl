@@ -8,16 +8,10 @@ uint vpl_slots() { return lm_faces() * frame.size.z * frame.size.w * frame.size.
 uint face_rows() { return frame.size.w; }
 uint faces() { return lm_faces() * frame.size.z; }
 
-// The faces FACE_UNIFORM chooses among: all of them in that mode, none with Russian roulette. The loops
-// over faces run to this count, so Russian roulette (the default) reads no face total for them: llvmpipe
-// runs a branch's body under masks whatever its lanes need, where a loop of no iteration costs nothing.
-uint uniform_faces() { return pc.face_mode == FACE_UNIFORM ? faces() : 0u; }
-
-// Number of faces with weight in method section s (the faces FACE_UNIFORM chooses among; 0 with Russian
-// roulette, where no caller uses it).
+// Number of faces with weight in method section s (the faces FACE_UNIFORM chooses among).
 uint live_faces(uint cb) {
     uint n = 0u;
-    for (uint f = 0u; f < uniform_faces(); f++) {
+    for (uint f = 0u; f < faces(); f++) {
         if (cdf_rows_total(cb, f * face_rows(), (f + 1u) * face_rows()) > 0.0) n++;
     }
     return n;
@@ -123,7 +117,7 @@ uint draw_vpl(uint k, uint seed, out float prob) {
             nlive = live_faces(cb);
             pick = min(uint(u.x * float(nlive)), nlive - 1u);
             uint f = 0u;
-            for (uint j = 0u; j < uniform_faces(); j++) {
+            for (uint j = 0u; j < faces(); j++) {
                 if (cdf_rows_total(cb, j * face_rows(), (j + 1u) * face_rows()) > 0.0) {
                     if (pick == 0u) { f = j; found = true; break; } // term_prob's test for v's face
                     pick--;
