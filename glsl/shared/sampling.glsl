@@ -92,8 +92,8 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     float texel = owen_sobol1(k, seed ^ 0x510E527Fu);
     vec3 u = vec3(face_row, texel);
     // The term that draws (section 0, or method section s) and its rows. One cdf_sample_rows3_prob call
-    // with the chosen term's arguments: llvmpipe runs both sides of a branch under masks, so a call on each
-    // side (and one per face mode) cost a whole draw each.
+    // with the chosen term's arguments: llvmpipe runs both sides of a branch under masks (it leaves only a
+    // loop that no lane needs), so a call on each side, and one per face mode, each paid their reads.
     uint cb = 0u, ib = 0u, known = 0u, r0 = 0u, r1 = faces() * face_rows(), nlive = 1u;
     vec3 ut = u;
     bool per_face = false, found = false;
