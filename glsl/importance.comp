@@ -44,7 +44,7 @@ void main() {
     uvec3 id = gl_GlobalInvocationID;
     uint res = frame.size.w;
     if (id.x >= res || id.y >= res) return;
-    uint layers = lm_faces() * frame.size.z;
+    uint layers = faces();
     uint layer = id.z % layers;
     uint section = pc.section + id.z / layers;
     uint v = (layer * res + id.y) * res + id.x;

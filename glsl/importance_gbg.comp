@@ -114,7 +114,7 @@ void resolve(uvec3 id) {
             if (k > 0) w = (k % 2 == 1) ? vals[k / 2] : 0.5 * (vals[k / 2 - 1] + vals[k / 2]);
         }
     }
-    importance[pc.section * (lm_faces() * frame.size.z * res * res) + v] = w;
+    importance[pc.section * vpl_slots() + v] = w;
 }
 
 void main() {

@@ -31,14 +31,14 @@ float cdf_below(float x) {
 }
 
 // The prefix over row totals restarts at each face, a run of `len` rows (cdf_reduce.comp).
-// CDF_SHAPE_FROM_FRAME (defined by the renderer's shaders before the include, after `frame`): every
-// section is over the frame's light-map texels, `faces · res` rows of `res` texels (the shape the frame
-// recipe gives cdf_reduce), so rows and row length come from the frame's uniforms and no search reads
-// the header. On llvmpipe a texel fetch is a gather instruction even when every lane reads the same
-// texel, and the header was read again by every helper below. Test kernels read the header.
+// CDF_SHAPE_FROM_FRAME (defined by the renderer's shaders before the include, after scene.glsl): every
+// section is over the frame's VPL slots, faces() · face_rows() rows of face_rows() texels
+// (shared/lightmap.glsl; the shape the frame recipe gives cdf_reduce), so no search reads the header. On
+// llvmpipe a texel fetch is a gather instruction even when every lane reads the same texel, and the
+// header was read again by every helper below. Test kernels read the header.
 #ifdef CDF_SHAPE_FROM_FRAME
-uint cdf_len(uint cb) { return frame.size.w; }
-uint cdf_rows(uint cb) { return frame.light_map.y * frame.size.z * frame.size.w; }
+uint cdf_len(uint cb) { return face_rows(); }
+uint cdf_rows(uint cb) { return faces() * face_rows(); }
 #else
 uint cdf_len(uint cb) { return floatBitsToUint(cdf_at(cb + 2u)); }
 uint cdf_rows(uint cb) { return floatBitsToUint(cdf_at(cb + 1u)); }
@@ -138,11 +138,6 @@ uint cdf_sample_rows3_prob(uint cb, uint ib, vec3 u, uint r0, uint r1, out float
     return r * len + lo;
 }
 
-uint cdf_sample_rows3(uint cb, uint ib, vec3 u, uint r0, uint r1) {
-    float prob;
-    return cdf_sample_rows3_prob(cb, ib, u, r0, r1, prob);
-}
-
 // Two more uniforms derived from the first, for the single-u entry points used by tests.
 vec3 cdf_uniforms(float u) {
     uint h1 = pcg_hash(floatBitsToUint(u) ^ 0x9E3779B9u);
@@ -151,10 +146,11 @@ vec3 cdf_uniforms(float u) {
 }
 
 uint cdf_sample_rows(uint cb, uint ib, float u, uint r0, uint r1) {
-    return cdf_sample_rows3(cb, ib, cdf_uniforms(u), r0, r1);
+    float prob;
+    return cdf_sample_rows3_prob(cb, ib, cdf_uniforms(u), r0, r1, prob);
 }
 
-// The probability that cdf_sample_rows3 returns v, computed from the same floats the searches read
+// The probability that cdf_sample_rows3_prob returns v, computed from the same floats the searches read
 // (not from v's weight): the face f with probability (C_f − C_{f−1}) / C (C the running sum of face
 // totals over the range, in the same order), the row r inside it with Δ_r / (face range), the texel with
 // (p_i − p_{i−1}) / P (P the row's total). A weight too small to change its float prefix is never drawn

@@ -15,6 +15,12 @@ uint lm_kind() { return frame.light_map.x; }
 uint lm_faces() { return frame.light_map.y; }
 float lm_tan() { return uintBitsToFloat(frame.light_map.z); }
 
+// The frame's VPL slots: every light's faces (faces() in all), each res rows (face_rows()) of res texels;
+// the shape of the importance arrays and of each CDF section (shared/cdf.glsl, CDF_SHAPE_FROM_FRAME).
+uint face_rows() { return frame.size.w; }
+uint faces() { return lm_faces() * frame.size.z; }
+uint vpl_slots() { return faces() * face_rows() * face_rows(); }
+
 // The axes (X, Y, Z) of face `face` of light `l`.
 void lm_axes(uint l, uint face, out vec3 X, out vec3 Y, out vec3 Z) {
     uint kind = lm_kind();

@@ -4,9 +4,6 @@
 #define BOUNCE_SAMPLING_GLSL
 #include "owen_sobol.glsl"
 
-uint vpl_slots() { return lm_faces() * frame.size.z * frame.size.w * frame.size.w; }
-uint face_rows() { return frame.size.w; }
-uint faces() { return lm_faces() * frame.size.z; }
 
 // Number of faces with weight in method section s (the faces FACE_UNIFORM chooses among).
 uint live_faces(uint cb) {

@@ -217,7 +217,7 @@ pub fn sample_in_row(cdf: &[f32], cb: usize, r: u32, u: f32) -> u32 {
     lo
 }
 
-/// `cdf_sample_rows3(cb, ib, u, r0, r1)`: the texel (index within the section) drawn among rows [r0, r1)
+/// `cdf_sample_rows3_prob(cb, ib, u, r0, r1, prob)`: the texel (index within the section) drawn among rows [r0, r1)
 /// of the section at `cb` for the three uniforms `u` (face, row in face, texel in row). The shader's
 /// `ib` is not read.
 ///
