@@ -3,11 +3,12 @@
 //! view (each pixel's first hit to 8 of 1,024 VPLs, the first light's first hits in uniform directions,
 //! as `cell-bvhs --gather`), with each end's plane its triangle's. It prints the radii's medians, the
 //! records one ball costs by the threaded walk for a few caps on the radius, and the records per ray
-//! (all, visible) walking whole segments against skipping both balls and only the pixel's. Every
+//! (all, visible) walking whole segments against skipping both balls and only the pixel's, then the walk's
+//! loop iterations per ray when 1, 8 or 32 pixels walk their queues of rays in lock step. Every
 //! clipped walk's answer is checked against the whole segment's. `CAP=c` caps the radii at c × the
 //! scene diagonal (default: the renderer's, END_BALL_MAX_RADIUS); like the renderer it subtracts one lift.
 //! (Here each end is lifted along its face normal, the renderer lifts x along its shading normal.)
-//! Figures: BENCHMARKS.md, first section.
+//! Figures: BENCHMARKS.md, "Exact shadow rays that skip their ends' empty balls" and "An optimized BVH".
 //!
 //!     cargo run --release -p bounce-tests --bin end-balls -- scene.toml
 
@@ -70,6 +71,10 @@ fn main() -> anyhow::Result<()> {
     println!("median r: pixels {:.3}, vpls {:.3}, diag {:.1}", med(&rx), med(&ry), diag);
     let mut xonly = 0u64;
     let mut steps = 0u64;
+    // Each pixel's loop iterations: the gather walks a pixel's rays one after another from a queue
+    // (`glsl/shared/shadow_queue.glsl`), each taking whole iterations of THREAD_UNROLL steps.
+    let unroll = bounce_graph::bvh::THREAD_UNROLL;
+    let mut per_pixel = vec![0u64; pixels.len()];
     let (mut rays, mut full, mut clipped, mut none_needed, mut vis, mut vis_full, mut vis_clip) =
         (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
     for (pi, &(x, nx)) in pixels.iter().enumerate() {
@@ -100,6 +105,7 @@ fn main() -> anyhow::Result<()> {
             xonly += cx.records as u64;
             clipped += c.records as u64;
             steps += c.steps as u64;
+            per_pixel[pi] += c.steps.div_ceil(unroll) as u64;
             if !w.occluded {
                 vis += 1;
                 vis_full += w.records as u64;
@@ -117,6 +123,12 @@ fn main() -> anyhow::Result<()> {
     );
     println!("pixel end only: {:.1}", xonly as f64 / n);
     println!("steps per ray with the balls (two boxes a step): {:.1}", steps as f64 / n);
+    // What a SIMD machine pays: lanes (pixels, in the order drawn) run in lock step until the one with the
+    // most iterations is done (8 lanes: llvmpipe's 256-bit vectors; 32: a GPU's warp).
+    for lanes in [1usize, 8, 32] {
+        let iterations: u64 = per_pixel.chunks(lanes).map(|g| g.iter().max().unwrap_or(&0) * g.len() as u64).sum();
+        println!("{lanes} lanes: loop iterations per ray {:.2}", iterations as f64 / n);
+    }
     Ok(())
 }
 

@@ -10,7 +10,8 @@
 //! Zero-area and non-finite triangles are left out of the tree (never hit). Nodes stop splitting at
 //! [`LEAF_MIN`] triangles; SAH may keep up to [`LEAF_MAX`] where splitting does not pay; beyond depth
 //! [`MEDIAN_DEPTH`] the build splits at the median (each halves the count), which bounds the height to
-//! `MEDIAN_DEPTH + 32`.
+//! `MEDIAN_DEPTH + 32`. The top-down tree is then optimized by moving subtrees
+//! ([`super::optimize`]): the same leaves under boxes that cost less, within the same height bound.
 
 use crate::scene::Scene;
 use crate::shader_types::Vertex;
@@ -85,8 +86,16 @@ impl Bvh {
     }
 
     /// Builds the BVH of a flat triangle list (`3t..3t+3` = triangle `t`; a trailing partial
-    /// triangle is ignored).
+    /// triangle is ignored): the SAH build, then the insertion-based optimization
+    /// ([`super::optimize`]).
     pub fn from_vertices(vertices: &[Vertex]) -> Bvh {
+        let Bvh { nodes, order, tris } = Bvh::sah(vertices);
+        let (nodes, order) = super::optimize::optimized(nodes, order);
+        Bvh { nodes, order, tris }
+    }
+
+    /// The binned SAH build alone, top down (module doc).
+    pub(super) fn sah(vertices: &[Vertex]) -> Bvh {
         let tris: Vec<BvhTri> = vertices
             .chunks_exact(3)
             .map(|v| {

@@ -3,6 +3,7 @@
 //!
 //! - [`build`]: the binned-SAH build in f64 ([`Bvh`]). The CPU reference of the tests
 //!   (`bounce-oracles`) casts its rays through this same tree.
+//! - `optimize`: the built tree's subtrees moved where they cost less (insertion-based optimization).
 //! - [`gpu`]: the GPU layout (32-byte nodes, 48-byte leaf-ordered triangles), the flattening under the
 //!   traversal's stack limit ([`FlatBvh`]), the upload and bindings ([`GpuBvh`]), and the constants the
 //!   shaders share.
@@ -12,6 +13,7 @@
 pub mod build;
 pub mod cells;
 pub mod gpu;
+mod optimize;
 pub mod quant;
 pub mod query;
 
