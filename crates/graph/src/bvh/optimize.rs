@@ -415,4 +415,27 @@ mod tests {
         // Both kinds of answer occur, so the comparison means something.
         assert!(hits > 400 && hits < 3600 && blocked > 400 && blocked < 3600, "{hits} hits, {blocked} blocked");
     }
+
+    #[test]
+    fn degenerate_scenes_keep_their_leaves_and_the_height_bound() {
+        // A geometric row (each triangle 17× the last and as far out: the SAH build peels one a level) and
+        // a thousand copies of one triangle (no split separates them).
+        let tri = |p: Vec3, s: f32| {
+            [p, p + Vec3::X * s, p + Vec3::Y * s]
+                .map(|q| Vertex { position_u: [q.x, q.y, q.z, 0.0], normal_v: [0.0, 0.0, 1.0, 0.0] })
+        };
+        let row: Vec<Vertex> = (-30..30).flat_map(|i| tri(Vec3::X * 17f32.powi(i), 0.1 * 17f32.powi(i))).collect();
+        let copies: Vec<Vertex> = (0..1000).flat_map(|_| tri(Vec3::ONE, 1.0)).collect();
+        for (name, v) in [("row", row), ("copies", copies)] {
+            let sah = Bvh::sah(&v);
+            let height = |nodes: &[BvhNode]| Linked::from_nodes(nodes).height();
+            let (nodes, order) = optimized(sah.nodes().to_vec(), sah.leaf_order().to_vec());
+            assert_eq!(leaves(&nodes, &order), leaves(sah.nodes(), sah.leaf_order()), "{name}");
+            assert!(height(&nodes) <= MEDIAN_DEPTH + 32, "{name}: height {}", height(&nodes));
+            assert!(Linked::from_nodes(&nodes).cost() <= Linked::from_nodes(sah.nodes()).cost(), "{name}");
+            if name == "row" {
+                assert!(height(sah.nodes()) > 50, "the row should build a deep tree: {}", height(sah.nodes()));
+            }
+        }
+    }
 }
