@@ -9,10 +9,13 @@
 //!   C = Σ_interior A(N) + Σ_leaf A(N) · count(N)   (in units of the root's area),
 //!
 //! the expected boxes and triangles a random line that meets the root tests (Goldsmith and Salmon's
-//! rule). A shadow ray's walk reads one record per box or triangle it reaches, so it reads fewer.
+//! rule). A shadow ray's walk reads one record per box or triangle it reaches, so it tends to read
+//! fewer; shadow rays are not random lines (they run between surfaces), and on one scene of the suite
+//! it reads more (BENCHMARKS.md).
 //!
 //! One move: take an interior node N (not the root) whose box is large against its children's,
-//! `A(N)² / (½ (A(L) + A(R)) · min(A(L), A(R)))` (the paper's combined measure), out of the tree with
+//! `A(N)³ / (½ (A(L) + A(R)) · min(A(L), A(R)))` (the paper's combined measure: the product of A(N),
+//! A(N) against its children's mean and against their minimum), out of the tree with
 //! its parent P (N's sibling takes P's place), and insert N's children L and R back one at a time, each
 //! where it adds least to C: as the sibling of the node X that minimizes
 //!
