@@ -57,7 +57,8 @@ pub struct Bvh {
     tris: Vec<BvhTri>,
 }
 
-fn area(lo: DVec3, hi: DVec3) -> f64 {
+/// Surface area of the box `[lo, hi]` (0 for an empty box).
+pub(super) fn area(lo: DVec3, hi: DVec3) -> f64 {
     let d = (hi - lo).max(DVec3::ZERO);
     2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
 }

@@ -30,7 +30,7 @@
 //! The answer of any ray query is unchanged (the same triangles, exact boxes); only which records a
 //! walk reads changes. Measured: BENCHMARKS.md ("An optimized BVH").
 
-use super::build::{BvhNode, MEDIAN_DEPTH};
+use super::build::{area, BvhNode, MEDIAN_DEPTH};
 use glam::DVec3;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -74,11 +74,6 @@ pub(super) fn optimized(nodes: Vec<BvhNode>, order: Vec<u32>) -> (Vec<BvhNode>, 
         return (nodes, order);
     }
     t.to_nodes(&order)
-}
-
-fn area(lo: DVec3, hi: DVec3) -> f64 {
-    let d = (hi - lo).max(DVec3::ZERO);
-    2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
 }
 
 /// A non-negative f64 as a key that orders like it (the IEEE bits of a non-negative float do).
@@ -237,13 +232,13 @@ impl Linked {
         best
     }
 
-    /// Inserts the detached subtree `x` beside its best sibling, with the free node `parent` above both.
+    /// Inserts the detached subtree `x` beside its best sibling, with the free interior node `parent`
+    /// (one taken out by [`Linked::reinsert`]) above both.
     fn insert(&mut self, x: u32, parent: u32) {
         let (lo, hi) = (self.lo[x as usize], self.hi[x as usize]);
         let s = self.best_sibling(lo, hi);
         self.replace_child(s, parent);
         self.child[parent as usize] = [s, x];
-        self.count[parent as usize] = 0;
         self.parent[s as usize] = parent;
         self.parent[x as usize] = parent;
         self.refit_up(parent);
