@@ -18,10 +18,22 @@ pub const SUCCESS: i32 = 0;
 pub const RUNTIME: i32 = 1;
 pub const BAD_INPUT: i32 = 2;
 
-/// An error the user can fix by changing the input: the app's own input checks.
-#[derive(Debug, thiserror::Error)]
-#[error("{0:#}")]
+/// An error the user can fix by changing the input: the app's own input checks. It shows the wrapped
+/// error's own message and passes its causes on as its source, so [`report`] sees the whole chain.
+#[derive(Debug)]
 pub struct BadInput(anyhow::Error);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Display::fmt(&self.0, f)
+    }
+}
+
+impl std::error::Error for BadInput {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
 
 /// Marks `e` as bad input (exit code 2).
 pub fn bad(e: impl Into<anyhow::Error>) -> anyhow::Error {
@@ -64,9 +76,21 @@ pub fn exit_code(e: &anyhow::Error) -> i32 {
     }
 }
 
-/// Writes `e` as one `error:` line on `err` and returns its exit code.
+/// Writes `e` as one `error:` line on `err` and returns its exit code: the chain of causes, outermost
+/// first, joined by ": ". A cause whose text already ends its wrapper's (an error that prints its source
+/// and also returns it from `source()`, as `SceneError::Io` and exr's I/O errors do) is said once.
 pub fn report(e: &anyhow::Error, err: &mut dyn Write) -> i32 {
-    let one_line = format!("{e:#}").replace('\n', " ");
+    let mut one_line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string().replace('\n', " ");
+        if one_line.ends_with(&text) {
+            continue;
+        }
+        if !one_line.is_empty() {
+            one_line.push_str(": ");
+        }
+        one_line.push_str(&text);
+    }
     // Nothing is left to tell the user if stderr itself fails; the exit code still says it.
     let _ = writeln!(err, "error: {one_line}");
     exit_code(e)
@@ -122,5 +146,23 @@ mod tests {
         let e = anyhow::anyhow!("first\nsecond").context("outer");
         assert_eq!(report(&e, &mut err), RUNTIME);
         assert_eq!(String::from_utf8(err).unwrap(), "error: outer: first second\n");
+    }
+
+    #[test]
+    fn a_cause_its_wrapper_already_prints_is_said_once() {
+        let missing = || std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let scene = SceneError::Io { path: PathBuf::from("s.toml"), source: missing() };
+        let mut err = vec![];
+        assert_eq!(report(&anyhow::Error::new(scene).context("loading"), &mut err), BAD_INPUT);
+        assert_eq!(String::from_utf8(err).unwrap(), "error: loading: cannot read s.toml: no such file\n");
+        // A cause that differs from its wrapper's ending is kept.
+        let mut err = vec![];
+        report(&anyhow::Error::new(missing()).context("writing out.exr"), &mut err);
+        assert_eq!(String::from_utf8(err).unwrap(), "error: writing out.exr: no such file\n");
+        // Bad input shows its whole chain, each cause once.
+        let mut err = vec![];
+        let wrapped = SceneError::Io { path: PathBuf::from("t.exr"), source: missing() };
+        assert_eq!(report(&bad(anyhow::Error::new(wrapped).context("reading t.exr")), &mut err), BAD_INPUT);
+        assert_eq!(String::from_utf8(err).unwrap(), "error: reading t.exr: cannot read t.exr: no such file\n");
     }
 }
