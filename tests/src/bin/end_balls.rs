@@ -4,8 +4,10 @@
 //! as `cell-bvhs --gather`), with each end's plane its triangle's. It prints the radii's medians, the
 //! records one ball costs by the threaded walk for a few caps on the radius, and the records per ray
 //! (all, visible) walking whole segments against skipping both balls and only the pixel's, then the walk's
-//! loop iterations per ray when 1, 8 or 32 pixels walk their queues of rays in lock step. Every
-//! clipped walk's answer is checked against the whole segment's. `CAP=c` caps the radii at c × the
+//! loop iterations per ray when 1, 8 or 32 pixels walk their queues of rays in lock step (on lavapipe
+//! the time follows these only in part: 19 % fewer of them bought 8 % on Sibenik, BENCHMARKS.md, "Where
+//! the exact gather's time goes on this CPU"). Every clipped walk's answer is checked against the whole
+//! segment's. `CAP=c` caps the radii at c × the
 //! scene diagonal (default: the renderer's, END_BALL_MAX_RADIUS); like the renderer it subtracts one lift.
 //! (Here each end is lifted along its face normal, the renderer lifts x along its shading normal.)
 //! Figures: BENCHMARKS.md, "Exact shadow rays that skip their ends' empty balls" and "An optimized BVH".
