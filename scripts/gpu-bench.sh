@@ -89,7 +89,7 @@ stage_experiments() {
     [ -e "$experiment_patch" ] || continue
     experiment_label="$(basename "$experiment_patch" .patch)"
     if ! git apply --check "$experiment_patch" 2>/dev/null; then
-      echo "skipping $experiment_label: it does not apply to this tree" >&2
+      echo "skipping $experiment_label: it does not apply to this tree (see the first lines of its patch)" >&2
       continue
     fi
     git apply "$experiment_patch"
