@@ -245,11 +245,12 @@ fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
         indicatif::ProgressStyle::with_template("bench {bar:40} {pos}/{len} frames ({msg}), eta {eta}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    // One untimed frame first: it builds what every later frame reuses (the voxel grid) and warms the
-    // driver's shader caches, so the first timed frame is not charged for them.
-    r.render(&FrameSettings { method: plan.methods[0], vpls: 1, component: Component::Indirect, ..plan.base.clone() })?;
     let mut samples = vec![];
     for &method in &plan.methods {
+        // An untimed frame of the method first: it builds what later frames reuse (the voxel grid) and
+        // has the driver compile what it compiles at first use, so no timed frame or budget pays for it.
+        let first = plan.columns.first().map_or(1, |c| c.vpls);
+        r.warm_up(&FrameSettings { method, vpls: first, component: Component::Indirect, ..plan.base.clone() })?;
         for &column in &plan.columns {
             for seed in 1..=plan.repeats as u64 {
                 bar.set_message(format!("{} {}", method.name(), column.label()));

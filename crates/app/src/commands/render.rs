@@ -40,6 +40,9 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
             "note: this frame is the same for every seed (`all` or direct light): one frame, whatever the time limit"
         )?;
     }
+    if a.timings && a.time_limit.is_none() {
+        renderer.warm_up(&settings)?; // the table reports the frame's work, not first-use compilation
+    }
     renderer.prepare(&settings)?;
     let t0 = Instant::now();
     let (frame, frames) = match a.time_limit {

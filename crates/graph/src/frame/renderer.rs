@@ -139,6 +139,26 @@ impl Renderer {
         self.state.retained.clear();
     }
 
+    /// An untimed frame of `s` at 8 × 8 pixels (maps at most 32² a face), then [`Self::clear_frame_cache`]:
+    /// a driver that compiles a shader at its first dispatch does it here, not inside the next frame's
+    /// timestamps. llvmpipe does (each pass's first frame on a cold shader cache read 0.2–0.7 s where a
+    /// warm one reads 0.2–30 ms); drivers that compile at pipeline creation pay nothing here. The next
+    /// frame's image does not change: it records every pass as a first frame does.
+    pub fn warm_up(&mut self, s: &FrameSettings) -> Result<()> {
+        let small = FrameSettings {
+            width: 8,
+            height: 8,
+            dprsm_res: s.dprsm_res.min(32),
+            shadow_res: s.shadow_res.min(32),
+            psm_res: s.psm_res.min(32),
+            ..s.clone()
+        };
+        self.prepare(&small)?;
+        self.render(&small).context("the untimed warm-up frame")?;
+        self.clear_frame_cache();
+        Ok(())
+    }
+
     /// The per-frame constants for `s` with the current camera.
     pub fn uniforms(&self, s: &FrameSettings) -> FrameUniforms {
         self.ctx.uniforms(s, &self.state.camera)
