@@ -40,8 +40,8 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
             "note: this frame is the same for every seed (`all` or direct light): one frame, whatever the time limit"
         )?;
     }
-    if a.timings && a.time_limit.is_none() {
-        renderer.warm_up(&settings)?; // the table reports the frame's work, not first-use compilation
+    if a.timings || a.time_limit.is_some() {
+        renderer.warm_up(&settings)?; // times the frames' work, not the driver's first-use compilation
     }
     renderer.prepare(&settings)?;
     let t0 = Instant::now();
