@@ -448,7 +448,7 @@ pub struct RenderArgs {
     pub picture: PictureArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
-    /// Print a per-pass GPU time table (of the frame's own work: an untimed 8 × 8 frame runs first, so a
+    /// Print a per-pass GPU time table (of the frame's own work: an untimed small frame runs first, so a
     /// driver's first-use shader compilation is not counted).
     #[arg(long)]
     pub timings: bool,

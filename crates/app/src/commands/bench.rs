@@ -247,8 +247,9 @@ fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
     );
     let mut samples = vec![];
     for &method in &plan.methods {
-        // An untimed frame of the method first: it builds what later frames reuse (the voxel grid) and
-        // has the driver compile what it compiles at first use, so no timed frame or budget pays for it.
+        // An untimed frame of the method first: the driver compiles there what it compiles at first use,
+        // so no timed frame or budget pays for it (each still records its full frame: `measure` clears
+        // the kept products).
         let first = plan.columns.first().map_or(1, |c| c.vpls);
         r.warm_up(&FrameSettings { method, vpls: first, component: Component::Indirect, ..plan.base.clone() })?;
         for &column in &plan.columns {

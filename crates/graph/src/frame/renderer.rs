@@ -139,18 +139,26 @@ impl Renderer {
         self.state.retained.clear();
     }
 
-    /// An untimed frame of `s` at 8 × 8 pixels (maps at most 32² a face), then [`Self::clear_frame_cache`]:
+    /// An untimed frame of `s` at about 8 × 8 pixels (maps about 32² a face), then
+    /// [`Self::clear_frame_cache`]:
     /// a driver that compiles a shader at its first dispatch does it here, not inside the next frame's
-    /// timestamps. llvmpipe does (each pass's first frame on a cold shader cache read 0.2–0.7 s where a
-    /// warm one reads 0.2–30 ms); drivers that compile at pipeline creation pay nothing here. The next
-    /// frame's image does not change: it records every pass as a first frame does.
+    /// timestamps. llvmpipe does (on a cold shader cache the Cornell box's passes read 47–675 ms in their
+    /// first frame against 0.2–28 ms after it); drivers that compile at pipeline creation pay nothing
+    /// here. The next frame's image does not change: it records every pass as a first frame does.
     pub fn warm_up(&mut self, s: &FrameSettings) -> Result<()> {
+        // llvmpipe keys a shader's compiled variant on whether each image's sides are powers of two, so
+        // a smaller stand-in keeps that: a power of two becomes `cap`, any other size 1.5 · cap.
+        let small = |n: u32, cap: u32| match n {
+            n if n <= cap => n,
+            n if n.is_power_of_two() => cap,
+            _ => cap + cap / 2,
+        };
         let small = FrameSettings {
-            width: 8,
-            height: 8,
-            dprsm_res: s.dprsm_res.min(32),
-            shadow_res: s.shadow_res.min(32),
-            psm_res: s.psm_res.min(32),
+            width: small(s.width, 8),
+            height: small(s.height, 8),
+            dprsm_res: small(s.dprsm_res, 32),
+            shadow_res: small(s.shadow_res, 32),
+            psm_res: small(s.psm_res, 32),
             ..s.clone()
         };
         self.prepare(&small)?;
