@@ -73,43 +73,6 @@ fn render_writes_exr_png_and_timings() {
     assert_eq!(names.len(), 2, "{names:?}");
 }
 
-/// `--timings` renders an untimed warm-up frame first (`Renderer::warm_up`, about 8 × 8 with maps of about
-/// 32²), so that a driver's first-use compilation stays out of the table; the timed frame, at other sizes,
-/// must give the image a render without it gives, bit for bit.
-#[test]
-fn timings_warm_up_leaves_the_image_unchanged() {
-    let d = scratch("warm-up");
-    let scene = bounce_tests::default_scene();
-    let render = |name: &str, extra: &[&str]| {
-        let exr = d.join(name);
-        let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "--out",
-            exr.to_str().unwrap(),
-            "--width",
-            "24",
-            "--height",
-            "16",
-            "--dprsm-res",
-            "64",
-            "--method",
-            "gbg",
-            "--vpls",
-            "16",
-            "--validation",
-        ];
-        args.extend(extra);
-        let r = bounce(&args);
-        assert_eq!(r.code, 0, "stderr: {}", r.stderr);
-        read_exr(&exr).unwrap().0
-    };
-    let plain = render("plain.exr", &[]);
-    let timed = render("timed.exr", &["--timings"]);
-    assert!(plain.pixels.iter().any(|p| p[0] > 0.0), "black image");
-    assert!(plain.pixels == timed.pixels, "--timings changed the image");
-}
-
 fn expect_bad_input(args: &[&str], must_name: &str, out: &Path) {
     let r = bounce(args);
     assert_eq!(r.code, 2, "args {args:?}: stderr {}", r.stderr);

@@ -160,6 +160,45 @@ fn an_unchanged_frame_records_only_the_gather() {
     assert_eq!(fresh.radiance, bigger.radiance, "the kept validity CDF changed the image");
 }
 
+/// `Renderer::warm_up` (every `render` runs it before its timed frames, so that a driver's first-use
+/// compilation stays out of their GPU time) renders an untimed frame of about 8 × 8 with maps of about 32²
+/// and drops what it kept: the next frame, at other sizes, must record every pass a fresh renderer's first
+/// frame records and give its image bit for bit. Methods whose frames keep products (gbg's importance, the
+/// voxel grid, mis's patches) and ris, whose reservoirs live across frames.
+#[test]
+fn a_warm_up_leaves_the_next_frame_as_a_first_frame() {
+    use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, Visibility};
+    use bounce_graph::scene::Scene;
+    let gpu = TestGpu::new();
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    for (method, visibility) in [
+        (Method::Gbg, Visibility::Voxel),
+        (Method::Uniform, Visibility::Exact),
+        (Method::Mis, Visibility::Exact),
+        (Method::Ris, Visibility::Exact),
+    ] {
+        let s = FrameSettings {
+            width: 24,
+            height: 16,
+            component: Component::Indirect,
+            method,
+            vpls: 8,
+            dprsm_res: 64,
+            voxels: 32,
+            visibility,
+            ..FrameSettings::default()
+        };
+        let fresh = Renderer::new(&gpu, &scene).unwrap().render(&s).unwrap();
+        let mut warmed = Renderer::new(&gpu, &scene).unwrap();
+        warmed.warm_up(&s).unwrap();
+        let after = warmed.render(&s).unwrap();
+        assert!(fresh.radiance.iter().any(|p| p[0] > 0.0), "{method:?}: black image");
+        // A product the warm-up kept would show as a pass this frame skipped.
+        assert_eq!(after.ran, fresh.ran, "{method:?}: the frame after a warm-up recorded other passes");
+        assert!(after.radiance == fresh.radiance, "{method:?}: the warm-up changed the next frame's image");
+    }
+}
+
 /// A camera move (the viewer's fly camera) re-records what the camera feeds (G-buffer, direct light,
 /// importance, CDF) and keeps the light side (reflective DPRSM, shadow map); the image equals a fresh
 /// renderer's at the new camera, so nothing stale is reused.

@@ -44,6 +44,13 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     }
     let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
+    // Bad settings are one line at once, before the renderer builds its pipelines and uploads the scene;
+    // the checks that need the renderer follow below.
+    for &method in &a.methods {
+        for &vpls in &a.vpls {
+            FrameSettings { method, vpls, ..base.clone() }.validate(&gpu)?;
+        }
+    }
     let mut renderer = Renderer::new(&gpu, &scene)?;
     if a.animate.is_some() {
         animation::run(a, &scene, &mut renderer, &base, out, err)?;

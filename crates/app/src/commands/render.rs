@@ -24,11 +24,14 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         time_limit_method(a, &mut settings, err)?;
     }
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
+    // Before the renderer builds its pipelines and uploads the scene (seconds on a large scene): bad
+    // settings are one line at once.
+    settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
     if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
         ris_frame_budget(a, &mut renderer, &mut settings, err)?;
+        settings.validate(&gpu)?;
     }
-    settings.validate(&gpu)?;
     renderer.check(&settings)?;
     if let Some(frames) = a.frames {
         animate(a, &mut renderer, &settings, path.as_ref(), frames, err)?;
@@ -40,9 +43,9 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
             "note: this frame is the same for every seed (`all` or direct light): one frame, whatever the time limit"
         )?;
     }
-    if a.timings || a.time_limit.is_some() {
-        renderer.warm_up(&settings)?; // times the frames' work, not the driver's first-use compilation
-    }
+    // The frame's GPU time (the EXR's `gpu_ms`, --timings) and --time-limit's budget are then the frames'
+    // own work, not the driver's first-use compilation; that compilation is paid here or in the frame.
+    renderer.warm_up(&settings)?;
     renderer.prepare(&settings)?;
     let t0 = Instant::now();
     let (frame, frames) = match a.time_limit {
@@ -121,6 +124,8 @@ fn animate(
     let dir = a.out_dir.as_ref().expect("checked: --frames comes with --out-dir");
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let gpu_name = r.gpu.name.clone();
+    // So that frame 0's `gpu_ms` is its work, as every later frame's is.
+    r.warm_up(s)?;
     for k in 0..frames {
         if let Some(p) = path {
             p.apply(r, k);

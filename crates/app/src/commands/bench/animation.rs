@@ -67,6 +67,8 @@ pub(super) fn run(
     let mut samples = vec![];
     let bar = indicatif::ProgressBar::new((a.methods.len() * a.temporal.len()) as u64 * a.frames as u64);
     for &method in &a.methods {
+        // Frame 0's time (bench.csv) is then its work, not the driver's first-use compilation.
+        r.warm_up(&FrameSettings { method, vpls, ..base.clone() })?;
         for &temporal in &a.temporal {
             r.clear_frame_cache();
             let mut previous: Option<RgbImage> = None;
