@@ -400,6 +400,13 @@ fn bad_inputs_give_one_line_and_exit_2() {
             vec!["--shadow-rays", "stack"],
             "--shadow-rays",
         ),
+        // Checked before the render: the EXR, whose own path is fine, must not be written either.
+        (
+            "a PNG where there is no directory",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--png", "no-such-directory-of-bounce/x.png"],
+            "no-such-directory-of-bounce/x.png",
+        ),
     ];
     for (name, files, args, must) in cases {
         let dir = d.join(name.replace(' ', "-"));
@@ -421,6 +428,14 @@ fn bad_inputs_give_one_line_and_exit_2() {
         assert!(errs[0].contains(must), "{name}: the error does not name `{must}`: {}", errs[0]);
         assert!(!out.exists(), "{name}: an output file was written");
     }
+    // An output path that is a directory.
+    let dir = d.join("zero-vpls");
+    let scene = dir.join("s.toml");
+    let r =
+        bounce(&["render", scene.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--width", "8", "--height", "8"]);
+    assert_eq!(r.code, 2, "an output directory: exit {} stderr {}", r.code, r.stderr);
+    let errs = error_lines(&r);
+    assert!(errs.len() == 1 && errs[0].contains("is a directory"), "{}", r.stderr);
 }
 
 /// `bounce view` as its own process under Xvfb (`xvfb-run`, installed by scripts/setup.sh). One at a

@@ -1,7 +1,8 @@
 //! Image files and what is computed on their pixels: linear float32 RGB EXR with metadata (written
 //! and read), tone-mapped PNG, the Reinhard 2002 tone mapping, and FLIP (nv-flip) on a pair tone-mapped
 //! alike. Every file is written to a temporary file next to the target and renamed into place, so a
-//! failure never leaves a half-written output.
+//! failure never leaves a half-written output; a command with several outputs stages them all
+//! ([`Staged`]) before it commits any, and checks where they go ([`check_destination`]) before its work.
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
@@ -28,15 +29,66 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// A file written under its temporary name and renamed over its path by [`Staged::commit`]. Dropped
+/// uncommitted (a later output of the same command failed), it removes the temporary: a command that
+/// writes several files stages them all first, so a failure leaves none of them half-written or alone.
+#[must_use = "a staged file is removed unless committed"]
+pub struct Staged {
+    tmp: PathBuf,
+    path: PathBuf,
+    committed: bool,
+}
+
+impl Staged {
+    pub fn commit(mut self) -> Result<()> {
+        std::fs::rename(&self.tmp, &self.path).with_context(|| format!("renaming into {}", self.path.display()))?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Write with `write` to `path`'s temporary file (removed again on failure).
+fn stage(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<Staged> {
+    let staged = Staged { tmp: temp_path(path), path: path.to_path_buf(), committed: false };
+    write(&staged.tmp)?;
+    Ok(staged)
+}
+
 /// Write with `write` to a temporary file, then rename over `path`; the temporary is removed on failure.
 fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let tmp = temp_path(path);
-    let r = write(&tmp)
-        .and_then(|_| std::fs::rename(&tmp, path).with_context(|| format!("renaming into {}", path.display())));
-    if r.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    stage(path, write)?.commit()
+}
+
+/// Whether a file can be written at `path`, asked before the work that makes it: `path` is not a
+/// directory and its directory exists and takes a file (a temporary is created there and removed).
+/// The error names the path and the cause, for the caller to report as bad input.
+pub fn check_destination(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        anyhow::bail!("cannot write {}: it is a directory", path.display());
     }
-    r
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        anyhow::bail!("cannot write {}: there is no directory {}", path.display(), dir.display());
+    }
+    let tmp = temp_path(path);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::remove_file(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
+    Ok(())
 }
 
 fn ascii(s: &str) -> String {
@@ -50,6 +102,11 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 
 /// Write linear float32 RGB with `metadata` as EXR string attributes (`bounce.<key>`).
 pub fn write_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Result<()> {
+    stage_exr(path, img, metadata)?.commit()
+}
+
+/// [`write_exr`], staged: the file is in place once committed.
+pub fn stage_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Result<Staged> {
     use exr::prelude::*;
     let (w, h) = (img.width as usize, img.height as usize);
     let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
@@ -63,7 +120,7 @@ pub fn write_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Re
         let value = Text::new_or_none(ascii(v)).context("EXR attribute value")?;
         image.attributes.other.insert(key, AttributeValue::Text(value));
     }
-    write_atomic(path, |tmp| image.write().to_file(tmp).with_context(|| format!("writing {}", path.display())))
+    stage(path, |tmp| image.write().to_file(tmp).with_context(|| format!("writing {}", path.display())))
 }
 
 /// Read the first RGB(A) layer of an EXR as linear RGB, with its `bounce.*` string attributes.
@@ -163,13 +220,81 @@ pub fn flip(test: &RgbImage, reference: &RgbImage) -> (f64, Vec<u8>) {
 
 /// Write sRGB8 RGB bytes as a PNG (temporary file, then rename).
 pub fn write_png_bytes(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<()> {
+    stage_png_bytes(path, width, height, bytes)?.commit()
+}
+
+fn stage_png_bytes(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<Staged> {
     let buf = image::RgbImage::from_raw(width, height, bytes).context("PNG buffer size")?;
-    write_atomic(path, |tmp| {
+    stage(path, |tmp| {
         buf.save_with_format(tmp, image::ImageFormat::Png).with_context(|| format!("writing {}", path.display()))
     })
 }
 
 /// Tone-map (Reinhard 2002) and write an sRGB PNG.
 pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
-    write_png_bytes(path, img.width, img.height, srgb8(&tonemap_reinhard(img)))
+    stage_png(path, img)?.commit()
+}
+
+/// [`write_png`], staged: the file is in place once committed.
+pub fn stage_png(path: &Path, img: &RgbImage) -> Result<Staged> {
+    stage_png_bytes(path, img.width, img.height, srgb8(&tonemap_reinhard(img)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("bounce-output-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<_> =
+            std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        v.sort();
+        v
+    }
+
+    /// A staged file is in place only once committed; dropped before, it leaves nothing (not even its
+    /// temporary), so a command whose second output fails leaves neither.
+    #[test]
+    fn staged_files_appear_on_commit_and_vanish_when_dropped() {
+        let d = scratch("staged");
+        let img = RgbImage { width: 2, height: 1, pixels: vec![[0.5, 0.25, 1.0], [0.0, 0.0, 0.0]] };
+        let exr = stage_exr(&d.join("a.exr"), &img, &[("k", "v".into())]).unwrap();
+        let png = stage_png(&d.join("a.png"), &img).unwrap();
+        assert!(!d.join("a.exr").exists() && !d.join("a.png").exists(), "visible before the commit: {:?}", names(&d));
+        drop(png);
+        exr.commit().unwrap();
+        assert_eq!(names(&d), ["a.exr"]);
+        let (back, meta) = read_exr(&d.join("a.exr")).unwrap();
+        assert_eq!(back.pixels, img.pixels);
+        assert!(meta.contains(&("bounce.k".into(), "v".into())), "{meta:?}");
+        // A failing write removes its temporary too.
+        let r = stage(&d.join("b.txt"), |tmp| {
+            std::fs::write(tmp, "partial").unwrap();
+            anyhow::bail!("the write failed")
+        });
+        assert!(r.is_err());
+        assert_eq!(names(&d), ["a.exr"]);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_destination_is_checked_without_leaving_anything() {
+        let d = scratch("destination");
+        check_destination(&d.join("x.exr")).unwrap();
+        assert!(names(&d).is_empty(), "the probe stayed: {:?}", names(&d));
+        let e = check_destination(&d).unwrap_err().to_string();
+        assert!(e.contains("is a directory"), "{e}");
+        let e = check_destination(&d.join("no/x.exr")).unwrap_err().to_string();
+        assert!(e.contains("no directory"), "{e}");
+        std::fs::write(d.join("file"), "").unwrap();
+        let e = check_destination(&d.join("file/x.exr")).unwrap_err().to_string();
+        assert!(e.contains("no directory"), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
 }

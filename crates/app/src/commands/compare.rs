@@ -9,6 +9,9 @@ use anyhow::Result;
 use std::io::Write;
 
 pub fn run(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {
+    if let Some(h) = &a.heatmap {
+        output::check_destination(h).map_err(bad)?;
+    }
     let (t, _) = output::read_exr(&a.test).map_err(bad)?;
     let (r, _) = output::read_exr(&a.reference).map_err(bad)?;
     if (t.width, t.height) != (r.width, r.height) {

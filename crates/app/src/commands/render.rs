@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 
 pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     check_animation_flags(a)?;
+    check_destinations(a)?;
     let scene = super::load_scene(&a.scene, err)?;
     let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
     let mut settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
@@ -24,8 +25,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         time_limit_method(a, &mut settings, err)?;
     }
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
-    // Before the renderer builds its pipelines and uploads the scene (seconds on a large scene): bad
-    // settings are one line at once.
+    // Before the renderer builds pipelines and uploads the scene (seconds on a large scene).
     settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
     if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
@@ -82,10 +82,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         meta.push(("gpu_ms_total", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())));
         writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {t} s)")?;
     }
-    output::write_exr(&a.out, &img, &meta)?;
-    if let Some(p) = &a.png {
-        output::write_png(p, &img)?;
-    }
+    write_outputs(a, &img, &meta)?;
     if a.timings {
         timings(out, &settings, &frame, wall, &gpu.name)?;
     }
@@ -97,6 +94,25 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     )
     .context("writing to stderr")?;
     Ok(())
+}
+
+/// Where the image goes, checked before the work that makes it (an animation writes to --out-dir).
+fn check_destinations(a: &RenderArgs) -> Result<()> {
+    if a.frames.is_none() {
+        for p in std::iter::once(&a.out).chain(&a.png) {
+            output::check_destination(p).map_err(bad)?;
+        }
+    }
+    Ok(())
+}
+
+/// The EXR and the optional PNG, both written before either is renamed into place: a failure leaves
+/// neither.
+fn write_outputs(a: &RenderArgs, img: &RgbImage, meta: &[(&str, String)]) -> Result<()> {
+    let exr = output::stage_exr(&a.out, img, meta)?;
+    let png = a.png.as_ref().map(|p| output::stage_png(p, img)).transpose()?;
+    exr.commit()?;
+    png.map_or(Ok(()), |p| p.commit())
 }
 
 /// The animation flags go together: --frames with --out-dir, --light-path only with --frames, and an

@@ -67,6 +67,11 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
     if a.frames.is_some() != a.screenshot.is_some() {
         return Err(bad(anyhow::anyhow!("--frames and --screenshot go together")));
     }
+    if let Some(png) = &a.screenshot {
+        for p in [png.clone(), png.with_extension("exr")] {
+            output::check_destination(&p).map_err(bad)?;
+        }
+    }
     let vpls = a.picture.vpls.unwrap_or(crate::cli::DEFAULT_VPLS);
     if !(1..=4096).contains(&vpls) {
         return Err(bad(anyhow::anyhow!("--vpls must be between 1 and 4096 (got {vpls})")));
@@ -418,8 +423,10 @@ impl Viewer<'_> {
             ("device", st.gpu.name.clone()),
             ("non_finite_pixels", img.non_finite_count().to_string()),
         ];
-        output::write_exr(&exr, &img, &meta)?;
-        output::write_png(png, &img)?;
+        // Both written before either is renamed into place: a failure leaves neither.
+        let (staged_exr, staged_png) = (output::stage_exr(&exr, &img, &meta)?, output::stage_png(png, &img)?);
+        staged_exr.commit()?;
+        staged_png.commit()?;
         let copies = st.gpu.readbacks() - st.readbacks;
         self.log.push(format!(
             "wrote {} and {} ({} frame{} in the mean, {} in all; {copies} cop{} to host memory)",
