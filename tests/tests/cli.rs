@@ -638,6 +638,16 @@ fn view_without_a_display_is_a_clear_error() {
     assert_eq!(errors.len(), 1, "{stderr}");
     assert!(errors[0].contains("no display"), "{stderr}");
     assert!(!shot.exists());
+    // Where the screenshot goes is checked first, display or not: its folder, and a name that is not
+    // the EXR it writes beside the PNG.
+    for (bad, named) in [(d.join("nowhere/s.png"), "no directory"), (d.join("s.exr"), "--screenshot names the PNG")] {
+        let o = view(&[scene.to_str().unwrap(), "--frames", "1", "--screenshot", bad.to_str().unwrap()], false);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{stderr}");
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+        assert!(errors.len() == 1 && errors[0].contains(named), "{stderr}");
+    }
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0, "a file was left behind");
 }
 
 /// A textured scene renders its texture (the `SPEC_TEXTURED` shader variant is on for it): a floor

@@ -68,6 +68,12 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
         return Err(bad(anyhow::anyhow!("--frames and --screenshot go together")));
     }
     if let Some(png) = &a.screenshot {
+        if png.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+            return Err(bad(anyhow::anyhow!(
+                "--screenshot names the PNG (the EXR goes next to it, as .exr): got {}",
+                png.display()
+            )));
+        }
         for p in [png.clone(), png.with_extension("exr")] {
             output::check_destination(&p).map_err(bad)?;
         }
