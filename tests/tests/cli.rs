@@ -428,14 +428,19 @@ fn bad_inputs_give_one_line_and_exit_2() {
         assert!(errs[0].contains(must), "{name}: the error does not name `{must}`: {}", errs[0]);
         assert!(!out.exists(), "{name}: an output file was written");
     }
-    // An output path that is a directory.
+    // An output path that is a directory, and one file named for both outputs.
     let dir = d.join("zero-vpls");
-    let scene = dir.join("s.toml");
-    let r =
-        bounce(&["render", scene.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--width", "8", "--height", "8"]);
-    assert_eq!(r.code, 2, "an output directory: exit {} stderr {}", r.code, r.stderr);
-    let errs = error_lines(&r);
-    assert!(errs.len() == 1 && errs[0].contains("is a directory"), "{}", r.stderr);
+    let (scene, out) = (dir.join("s.toml"), dir.join("out.exr"));
+    let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    for (args, named) in
+        [(vec!["--out", dir.to_str().unwrap()], "is a directory"), (vec!["--out", out, "--png", out], "the same file")]
+    {
+        let r = bounce(&[&["render", scene, "--width", "8", "--height", "8"][..], &args].concat());
+        assert_eq!(r.code, 2, "{named}: exit {} stderr {}", r.code, r.stderr);
+        let errs = error_lines(&r);
+        assert!(errs.len() == 1 && errs[0].contains(named), "{}", r.stderr);
+        assert!(!Path::new(out).exists(), "{named}: an output file was written");
+    }
 }
 
 /// `bounce view` as its own process under Xvfb (`xvfb-run`, installed by scripts/setup.sh). One at a

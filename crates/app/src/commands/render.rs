@@ -98,6 +98,9 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
 
 /// Where the image goes, checked before the work that makes it (an animation writes to --out-dir).
 fn check_destinations(a: &RenderArgs) -> Result<()> {
+    if a.png.as_ref() == Some(&a.out) {
+        return Err(bad(anyhow::anyhow!("--out and --png name the same file ({})", a.out.display())));
+    }
     if a.frames.is_none() {
         for p in std::iter::once(&a.out).chain(&a.png) {
             output::check_destination(p).map_err(bad)?;
