@@ -432,9 +432,10 @@ fn bad_inputs_give_one_line_and_exit_2() {
     let dir = d.join("zero-vpls");
     let (scene, out) = (dir.join("s.toml"), dir.join("out.exr"));
     let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
-    for (args, named) in
-        [(vec!["--out", dir.to_str().unwrap()], "is a directory"), (vec!["--out", out, "--png", out], "the same file")]
-    {
+    for (args, named) in [
+        (vec!["--out", dir.to_str().unwrap()], "is a directory"),
+        (vec!["--out", out, "--png", &format!("{}/./out.exr", dir.display())], "the same file"),
+    ] {
         let r = bounce(&[&["render", scene, "--width", "8", "--height", "8"][..], &args].concat());
         assert_eq!(r.code, 2, "{named}: exit {} stderr {}", r.code, r.stderr);
         let errs = error_lines(&r);

@@ -98,7 +98,9 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
 
 /// Where the image goes, checked before the work that makes it (an animation writes to --out-dir).
 fn check_destinations(a: &RenderArgs) -> Result<()> {
-    if a.png.as_ref() == Some(&a.out) {
+    // Lexically absolute (`./a.exr` and `a.exr` are one file), as far as that goes without the disk.
+    let same = |p: &std::path::Path| std::path::absolute(p).ok() == std::path::absolute(&a.out).ok();
+    if a.png.as_deref().is_some_and(same) {
         return Err(bad(anyhow::anyhow!("--out and --png name the same file ({})", a.out.display())));
     }
     if a.frames.is_none() {
