@@ -197,6 +197,11 @@ fn bench_writes_csv_markdown_and_a_plot() {
     assert!(r2.stderr.contains("(cached)"), "{}", r2.stderr);
     let bad = bounce(&["bench", scene.to_str().unwrap(), "--out", d.to_str().unwrap(), "--methods", "all"]);
     assert_eq!(bad.code, 2);
+    // An output folder under a file: one line, before the scene is loaded.
+    let under_a_file = d.join("bench.csv").join("more");
+    let bad = bounce(&["bench", scene.to_str().unwrap(), "--out", under_a_file.to_str().unwrap()]);
+    assert_eq!(bad.code, 2, "{}", bad.stderr);
+    assert!(error_lines(&bad).len() == 1 && bad.stderr.contains("is not a directory"), "{}", bad.stderr);
 }
 
 /// Broken inputs: each gives exit code 2, exactly one `error:` line naming what is wrong, no output file,

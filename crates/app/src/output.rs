@@ -240,6 +240,24 @@ pub fn stage_png(path: &Path, img: &RgbImage) -> Result<Staged> {
     stage_png_bytes(path, img.width, img.height, srgb8(&tonemap_reinhard(img)))
 }
 
+/// Whether files can be written into the folder `path`, asked before the work: it is a folder, or it can
+/// be made (its nearest existing ancestor is a folder). Nothing is created here.
+pub fn check_folder(path: &Path) -> Result<()> {
+    if path.exists() {
+        anyhow::ensure!(path.is_dir(), "cannot write into {}: it is not a directory", path.display());
+        return Ok(());
+    }
+    let mut up = path.parent();
+    while let Some(p) = up.filter(|p| !p.as_os_str().is_empty()) {
+        if p.exists() {
+            anyhow::ensure!(p.is_dir(), "cannot create {}: {} is not a directory", path.display(), p.display());
+            break;
+        }
+        up = p.parent();
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -295,6 +313,13 @@ mod tests {
         std::fs::write(d.join("file"), "").unwrap();
         let e = check_destination(&d.join("file/x.exr")).unwrap_err().to_string();
         assert!(e.contains("no directory"), "{e}");
+        check_folder(&d).unwrap();
+        check_folder(&d.join("new/deeper")).unwrap();
+        assert!(!d.join("new").exists(), "check_folder made a folder");
+        let e = check_folder(&d.join("file")).unwrap_err().to_string();
+        assert!(e.contains("not a directory"), "{e}");
+        let e = check_folder(&d.join("file/sub/deeper")).unwrap_err().to_string();
+        assert!(e.contains("is not a directory"), "{e}");
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

@@ -35,6 +35,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    output::check_folder(&a.out).map_err(bad)?;
     let scene = super::load_scene(&a.scene, err)?;
     if a.methods.is_empty() || a.vpls.is_empty() || a.repeats == 0 {
         return Err(bad(anyhow::anyhow!("--methods, --vpls and --repeats must not be empty or zero")));

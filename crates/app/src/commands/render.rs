@@ -96,7 +96,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     Ok(())
 }
 
-/// Where the image goes, checked before the work that makes it (an animation writes to --out-dir).
+/// Where the images go, checked before the work that makes them (an animation writes to --out-dir).
 fn check_destinations(a: &RenderArgs) -> Result<()> {
     // Lexically absolute (`./a.exr` and `a.exr` are one file), as far as that goes without the disk.
     let same = |p: &std::path::Path| std::path::absolute(p).ok() == std::path::absolute(&a.out).ok();
@@ -107,6 +107,9 @@ fn check_destinations(a: &RenderArgs) -> Result<()> {
         for p in std::iter::once(&a.out).chain(&a.png) {
             output::check_destination(p).map_err(bad)?;
         }
+    }
+    if let Some(dir) = &a.out_dir {
+        output::check_folder(dir).map_err(bad)?;
     }
     Ok(())
 }
