@@ -81,12 +81,9 @@ pub fn check_destination(path: &Path) -> Result<()> {
     if !dir.is_dir() {
         anyhow::bail!("cannot write {}: there is no directory {}", path.display(), dir.display());
     }
+    // The temporary the write itself will use (a stale one from a crashed run of this pid is replaced).
     let tmp = temp_path(path);
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::File::create(&tmp).with_context(|| format!("cannot write {}", path.display()))?;
     std::fs::remove_file(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
     Ok(())
 }
