@@ -1,8 +1,9 @@
 //! Image files and what is computed on their pixels: linear float32 RGB EXR with metadata (written
 //! and read), tone-mapped PNG, the Reinhard 2002 tone mapping, and FLIP (nv-flip) on a pair tone-mapped
 //! alike. Every file is written to a temporary file next to the target and renamed into place, so a
-//! failure never leaves a half-written output; a command with several outputs stages them all
-//! ([`Staged`]) before it commits any, and checks where they go ([`check_destination`]) before its work.
+//! failure never leaves a half-written output; an image's EXR and PNG are both written before either
+//! is renamed ([`write_exr_and_png`]), and commands check where their outputs go
+//! ([`check_destination`], [`check_folder`]) before their work.
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
@@ -33,14 +34,14 @@ fn temp_path(path: &Path) -> PathBuf {
 /// uncommitted (a later output of the same command failed), it removes the temporary: a command that
 /// writes several files stages them all first, so a failure leaves none of them half-written or alone.
 #[must_use = "a staged file is removed unless committed"]
-pub struct Staged {
+struct Staged {
     tmp: PathBuf,
     path: PathBuf,
     committed: bool,
 }
 
 impl Staged {
-    pub fn commit(mut self) -> Result<()> {
+    fn commit(mut self) -> Result<()> {
         std::fs::rename(&self.tmp, &self.path).with_context(|| format!("renaming into {}", self.path.display()))?;
         self.committed = true;
         Ok(())
@@ -103,7 +104,7 @@ pub fn write_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Re
 }
 
 /// [`write_exr`], staged: the file is in place once committed.
-pub fn stage_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Result<Staged> {
+fn stage_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Result<Staged> {
     use exr::prelude::*;
     let (w, h) = (img.width as usize, img.height as usize);
     let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
@@ -118,6 +119,15 @@ pub fn stage_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Re
         image.attributes.other.insert(key, AttributeValue::Text(value));
     }
     stage(path, |tmp| image.write().to_file(tmp).with_context(|| format!("writing {}", path.display())))
+}
+
+/// An image as its EXR (with `metadata`) and, when asked, its tone-mapped PNG: both written before
+/// either is renamed into place, so a failure leaves neither.
+pub fn write_exr_and_png(exr: &Path, png: Option<&Path>, img: &RgbImage, metadata: &[(&str, String)]) -> Result<()> {
+    let staged_exr = stage_exr(exr, img, metadata)?;
+    let staged_png = png.map(|p| stage_png(p, img)).transpose()?;
+    staged_exr.commit()?;
+    staged_png.map_or(Ok(()), Staged::commit)
 }
 
 /// Read the first RGB(A) layer of an EXR as linear RGB, with its `bounce.*` string attributes.
@@ -233,7 +243,7 @@ pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
 }
 
 /// [`write_png`], staged: the file is in place once committed.
-pub fn stage_png(path: &Path, img: &RgbImage) -> Result<Staged> {
+fn stage_png(path: &Path, img: &RgbImage) -> Result<Staged> {
     stage_png_bytes(path, img.width, img.height, srgb8(&tonemap_reinhard(img)))
 }
 
@@ -295,6 +305,12 @@ mod tests {
         });
         assert!(r.is_err());
         assert_eq!(names(&d), ["a.exr"]);
+        // The pair: a PNG that cannot be written leaves no EXR either.
+        let e = write_exr_and_png(&d.join("c.exr"), Some(&d.join("no/c.png")), &img, &[]).unwrap_err();
+        assert!(format!("{e:#}").contains("c.png"), "{e:#}");
+        assert_eq!(names(&d), ["a.exr"]);
+        write_exr_and_png(&d.join("c.exr"), Some(&d.join("c.png")), &img, &[]).unwrap();
+        assert_eq!(names(&d), ["a.exr", "c.exr", "c.png"]);
         std::fs::remove_dir_all(&d).unwrap();
     }
 

@@ -82,7 +82,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         meta.push(("gpu_ms_total", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())));
         writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {t} s)")?;
     }
-    write_outputs(a, &img, &meta)?;
+    output::write_exr_and_png(&a.out, a.png.as_deref(), &img, &meta)?;
     if a.timings {
         timings(out, &settings, &frame, wall, &gpu.name)?;
     }
@@ -98,12 +98,12 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
 
 /// Where the images go, checked before the work that makes them (an animation writes to --out-dir).
 fn check_destinations(a: &RenderArgs) -> Result<()> {
-    // Lexically absolute (`./a.exr` and `a.exr` are one file), as far as that goes without the disk.
-    let same = |p: &std::path::Path| std::path::absolute(p).ok() == std::path::absolute(&a.out).ok();
-    if a.png.as_deref().is_some_and(same) {
-        return Err(bad(anyhow::anyhow!("--out and --png name the same file ({})", a.out.display())));
-    }
     if a.frames.is_none() {
+        // Lexically absolute (`./a.exr` and `a.exr` are one file), as far as that goes without the disk.
+        let same = |p: &std::path::Path| std::path::absolute(p).ok() == std::path::absolute(&a.out).ok();
+        if a.png.as_deref().is_some_and(same) {
+            return Err(bad(anyhow::anyhow!("--out and --png name the same file ({})", a.out.display())));
+        }
         for p in std::iter::once(&a.out).chain(&a.png) {
             output::check_destination(p).map_err(bad)?;
         }
@@ -112,15 +112,6 @@ fn check_destinations(a: &RenderArgs) -> Result<()> {
         output::check_folder(dir).map_err(bad)?;
     }
     Ok(())
-}
-
-/// The EXR and the optional PNG, both written before either is renamed into place: a failure leaves
-/// neither.
-fn write_outputs(a: &RenderArgs, img: &RgbImage, meta: &[(&str, String)]) -> Result<()> {
-    let exr = output::stage_exr(&a.out, img, meta)?;
-    let png = a.png.as_ref().map(|p| output::stage_png(p, img)).transpose()?;
-    exr.commit()?;
-    png.map_or(Ok(()), |p| p.commit())
 }
 
 /// The animation flags go together: --frames with --out-dir, --light-path only with --frames, and an

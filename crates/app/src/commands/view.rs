@@ -429,10 +429,7 @@ impl Viewer<'_> {
             ("device", st.gpu.name.clone()),
             ("non_finite_pixels", img.non_finite_count().to_string()),
         ];
-        // Both written before either is renamed into place: a failure leaves neither.
-        let (staged_exr, staged_png) = (output::stage_exr(&exr, &img, &meta)?, output::stage_png(png, &img)?);
-        staged_exr.commit()?;
-        staged_png.commit()?;
+        output::write_exr_and_png(&exr, Some(png), &img, &meta)?;
         let copies = st.gpu.readbacks() - st.readbacks;
         self.log.push(format!(
             "wrote {} and {} ({} frame{} in the mean, {} in all; {copies} cop{} to host memory)",
