@@ -6,6 +6,7 @@
 //! when the test ends: any message fails the test.
 
 pub mod maps;
+pub mod windows;
 
 use bounce::output::{self, RgbImage};
 use bounce_device::{Gpu, GpuOptions};

@@ -15,7 +15,7 @@
 //!     cargo run --release -p bounce-tests --bin end-balls -- scene.toml
 
 use bounce_graph::bvh::query::BvhView;
-use bounce_graph::bvh::{Bvh, FlatBvh, GpuBvhNode};
+use bounce_graph::bvh::{Bvh, FlatBvh};
 use bounce_graph::scene::Scene;
 use bounce_oracles::cpu_end_balls::point_triangle_distance;
 use bounce_oracles::cpu_threaded;
@@ -40,14 +40,16 @@ fn main() -> anyhow::Result<()> {
     let (pixels, vpls, mut rng) = bounce_tests::gather_ends(&scene, &flat);
     let light = Vec3::from_slice(&scene.lights[0].position[..3]);
     let t0 = std::time::Instant::now();
-    let rx: Vec<f64> = pixels.iter().map(|&(x, n)| free_radius(&view, x, n, lift(x) / 16.0)).collect();
+    let rx: Vec<f64> =
+        pixels.iter().map(|&(x, n)| bounce_tests::windows::ball_radius(&view, x, n, lift(x) / 16.0)).collect();
     let cap: f64 = std::env::var("CAP")
         .ok()
         .and_then(|c| c.parse().ok())
         .unwrap_or(bounce_graph::bindings::END_BALL_MAX_RADIUS as f64)
         * diag as f64;
     let rx: Vec<f64> = rx.iter().map(|r| r.min(cap)).collect();
-    let ry: Vec<f64> = vpls.iter().map(|&(y, n)| free_radius(&view, y, n, lift(y) / 16.0).min(cap)).collect();
+    let ry: Vec<f64> =
+        vpls.iter().map(|&(y, n)| bounce_tests::windows::ball_radius(&view, y, n, lift(y) / 16.0).min(cap)).collect();
     println!("radii in {:.1} s", t0.elapsed().as_secs_f64());
     let med = |v: &[f64]| {
         let mut s = v.to_vec();
@@ -92,8 +94,23 @@ fn main() -> anyhow::Result<()> {
             let (lo, hi) = (1e-6, 1.0 - 1e-6);
             let w = cpu_threaded::walk(&threaded, o, e, lo, hi);
             full += w.records as u64;
-            let t1 = skip(o, e, x.as_dvec3(), nx.as_dvec3(), rx[pi] - lift(x) as f64, lift(x) as f64 / 8.0);
-            let t2 = 1.0 - skip(e, o, y.as_dvec3(), ny.as_dvec3(), ry[vi] - lift(y) as f64, lift(y) as f64 / 8.0);
+            let t1 = bounce_tests::windows::ball_exit(
+                o,
+                e,
+                x.as_dvec3(),
+                nx.as_dvec3(),
+                rx[pi] - lift(x) as f64,
+                lift(x) as f64 / 8.0,
+            );
+            let t2 = 1.0
+                - bounce_tests::windows::ball_exit(
+                    e,
+                    o,
+                    y.as_dvec3(),
+                    ny.as_dvec3(),
+                    ry[vi] - lift(y) as f64,
+                    lift(y) as f64 / 8.0,
+                );
             let (a, b) = (t1.max(lo), t2.min(hi));
             let c = if a >= b {
                 none_needed += 1;
@@ -132,60 +149,6 @@ fn main() -> anyhow::Result<()> {
         println!("{lanes} lanes: loop iterations per ray {:.2}", iterations as f64 / n);
     }
     Ok(())
-}
-
-/// The parameter along a → b (from a's side) up to which the segment lies in p's empty half-ball.
-fn skip(a: DVec3, b: DVec3, p: DVec3, n: DVec3, r: f64, margin: f64) -> f64 {
-    let (ha, hb) = (n.dot(a - p), n.dot(b - p));
-    if ha <= margin || hb <= margin || r <= 0.0 {
-        return 0.0;
-    }
-    let r = r * (1.0 - 1e-4);
-    let d = b - a;
-    let f = a - p;
-    let (qa, qb, qc) = (d.dot(d), 2.0 * f.dot(d), f.dot(f) - r * r);
-    if qc >= 0.0 {
-        return 0.0;
-    }
-    let disc = qb * qb - 4.0 * qa * qc;
-    ((-qb + disc.sqrt()) / (2.0 * qa)).clamp(0.0, 1.0)
-}
-
-/// Distance from p to the nearest triangle with a vertex more than tau above p's plane.
-fn free_radius(view: &BvhView, p: Vec3, n: Vec3, tau: f32) -> f64 {
-    let (p, n, tau) = (p.as_dvec3(), n.as_dvec3(), tau as f64);
-    let mut best = f64::INFINITY;
-    let mut stack = vec![0u32];
-    while let Some(i) = stack.pop() {
-        let nd: GpuBvhNode = view.nodes[i as usize];
-        let (lo, hi) = (Vec3::from(nd.lo).as_dvec3(), Vec3::from(nd.hi).as_dvec3());
-        let q = p.clamp(lo, hi);
-        if (q - p).length() >= best {
-            continue;
-        }
-        // Highest point of the box above the plane.
-        let top = DVec3::new(
-            if n.x > 0.0 { hi.x } else { lo.x },
-            if n.y > 0.0 { hi.y } else { lo.y },
-            if n.z > 0.0 { hi.z } else { lo.z },
-        );
-        if n.dot(top - p) <= tau {
-            continue;
-        }
-        if nd.is_leaf() {
-            for k in nd.first..nd.first + nd.count {
-                let v = view.tris[k as usize].positions().map(|v| v.as_dvec3());
-                if v.iter().all(|&v| n.dot(v - p) <= tau) {
-                    continue;
-                }
-                best = best.min(point_triangle_distance(p, &v));
-            }
-        } else {
-            stack.push(nd.first);
-            stack.push(nd.first + 1);
-        }
-    }
-    best
 }
 
 fn threaded_radius(recs: &[bounce_graph::bvh::GpuThreadRec], p: Vec3, n: Vec3, tau: f32, rmax: f64) -> (f64, u32) {
