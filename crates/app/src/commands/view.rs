@@ -14,7 +14,9 @@
 //! and down (the camera's speed), [ and ] scale its intensity by 0.8 and 1.25; M cycles the sampling
 //! method, +/− double/halve the VPL count, C cycles the component, Space toggles accumulation, P writes
 //! a screenshot (PNG + EXR of the linear mean), Esc quits. The title shows method, VPLs, frames
-//! accumulated, the selected light, frame time and the slowest passes' GPU times.
+//! accumulated, the selected light, frame time and the slowest passes' GPU times (after an untimed
+//! warm-up frame, as `render` runs one, so that the first frame's do not hold the driver's shader
+//! compilation).
 //!
 //! `--light-path orbit[:PERIOD]|FILE.toml` moves the lights by script (`crate::light_path`): frame k
 //! of the run puts them where the path says. `--temporal` picks the seeds (`cli::Temporal`): with
@@ -299,8 +301,11 @@ impl Viewer<'_> {
             Swapchain::new(&gpu, surface, size.width, size.height, !self.args.no_vsync).map_err(error::device)?;
         self.settings.width = swapchain.extent.width;
         self.settings.height = swapchain.extent.height;
-        let renderer = Renderer::new(&gpu, self.scene)?;
+        let mut renderer = Renderer::new(&gpu, self.scene)?;
         renderer.check(&self.settings)?;
+        // As `render` does: a driver that compiles a shader at its first dispatch does it here, so the
+        // first frame's title shows its passes' own times.
+        renderer.warm_up(&frame_settings(&self.settings, 0))?;
         let fly = Fly::new(&self.scene.camera, self.scene.diagonal());
         let lamp = Lamp::new(self.scene, &renderer);
         let ldr = Present::ldr_image(&gpu, self.settings.width, self.settings.height)?;
