@@ -25,18 +25,23 @@ use bounce_tests::windows::{ball_exit, ball_radius, nearest_above};
 use glam::{DVec3, Vec3};
 use std::path::Path;
 
-fn list(arg: Option<&String>, default: &[usize]) -> anyhow::Result<Vec<usize>> {
-    match arg {
-        None => Ok(default.to_vec()),
-        Some(a) => a.split(',').map(|x| Ok(x.parse::<usize>()?.max(1))).collect(),
-    }
+/// A comma-separated list of sizes from 1 to `max` (`default` when absent).
+fn list(arg: Option<&String>, default: &[usize], max: usize) -> anyhow::Result<Vec<usize>> {
+    let Some(a) = arg else { return Ok(default.to_vec()) };
+    a.split(',')
+        .map(|x| match x.parse::<usize>() {
+            Ok(n) if (1..=max).contains(&n) => Ok(n),
+            _ => anyhow::bail!("'{x}' in '{a}' is not a size from 1 to {max}"),
+        })
+        .collect()
 }
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(path) = args.first() else { anyhow::bail!("usage: ray-windows scene.toml [G,G,…] [m,m,…]") };
-    let (grids, bins) = (list(args.get(1), &[32, 64, 128, 256])?, list(args.get(2), &[2, 4, 8])?);
+    let (grids, bins) = (list(args.get(1), &[32, 64, 128, 256], 1024)?, list(args.get(2), &[2, 4, 8], 64)?);
     let scene = Scene::load(Path::new(path))?;
+    anyhow::ensure!(!scene.lights.is_empty(), "{path} has no light, so no VPLs");
     let flat = FlatBvh::new(&Bvh::new(&scene), &scene.vertices);
     let threaded = flat.threaded();
     let view = BvhView { nodes: &flat.nodes, tris: &flat.tris };
