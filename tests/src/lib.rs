@@ -276,3 +276,20 @@ pub fn gather_ends(
     }
     (pixels, vpls, rng)
 }
+
+/// The gather's pairs as the measuring tools draw them after [`gather_ends`]: for each pixel, 8 VPLs
+/// drawn from `rng`, kept where each end lies in front of the other's plane (the rays a gather traces),
+/// as (pixel, VPL) indices.
+pub fn gather_pairs(pixels: &[SurfacePoint], vpls: &[SurfacePoint], rng: &mut Rng) -> Vec<(usize, usize)> {
+    let mut pairs = Vec::new();
+    for (pi, &(x, nx)) in pixels.iter().enumerate() {
+        for _ in 0..8 {
+            let vi = rng.below(vpls.len() as u32) as usize;
+            let (y, ny) = vpls[vi];
+            if nx.dot(y - x) > 0.0 && ny.dot(x - y) > 0.0 {
+                pairs.push((pi, vi));
+            }
+        }
+    }
+    pairs
+}

@@ -81,55 +81,49 @@ fn main() -> anyhow::Result<()> {
     let mut per_pixel = vec![0u64; pixels.len()];
     let (mut rays, mut full, mut clipped, mut none_needed, mut vis, mut vis_full, mut vis_clip) =
         (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
-    for (pi, &(x, nx)) in pixels.iter().enumerate() {
-        for _ in 0..8 {
-            let vi = rng.below(vpls.len() as u32) as usize;
-            let (y, ny) = vpls[vi];
-            if nx.dot(y - x) <= 0.0 || ny.dot(x - y) <= 0.0 {
-                continue;
-            }
-            rays += 1;
-            let o = (x + nx * lift(x)).as_dvec3();
-            let e = (y + (light - y).normalize() * lift(y)).as_dvec3();
-            let (lo, hi) = (1e-6, 1.0 - 1e-6);
-            let w = cpu_threaded::walk(&threaded, o, e, lo, hi);
-            full += w.records as u64;
-            let t1 = bounce_tests::windows::ball_exit(
-                o,
+    for (pi, vi) in bounce_tests::gather_pairs(&pixels, &vpls, &mut rng) {
+        let ((x, nx), (y, ny)) = (pixels[pi], vpls[vi]);
+        rays += 1;
+        let o = (x + nx * lift(x)).as_dvec3();
+        let e = (y + (light - y).normalize() * lift(y)).as_dvec3();
+        let (lo, hi) = (1e-6, 1.0 - 1e-6);
+        let w = cpu_threaded::walk(&threaded, o, e, lo, hi);
+        full += w.records as u64;
+        let t1 = bounce_tests::windows::ball_exit(
+            o,
+            e,
+            x.as_dvec3(),
+            nx.as_dvec3(),
+            rx[pi] - lift(x) as f64,
+            lift(x) as f64 / 8.0,
+        );
+        let t2 = 1.0
+            - bounce_tests::windows::ball_exit(
                 e,
-                x.as_dvec3(),
-                nx.as_dvec3(),
-                rx[pi] - lift(x) as f64,
-                lift(x) as f64 / 8.0,
+                o,
+                y.as_dvec3(),
+                ny.as_dvec3(),
+                ry[vi] - lift(y) as f64,
+                lift(y) as f64 / 8.0,
             );
-            let t2 = 1.0
-                - bounce_tests::windows::ball_exit(
-                    e,
-                    o,
-                    y.as_dvec3(),
-                    ny.as_dvec3(),
-                    ry[vi] - lift(y) as f64,
-                    lift(y) as f64 / 8.0,
-                );
-            let (a, b) = (t1.max(lo), t2.min(hi));
-            let c = if a >= b {
-                none_needed += 1;
-                cpu_threaded::WalkCount::default()
-            } else {
-                cpu_threaded::walk_clipped(&threaded, o, e, a, b, &[(a, b)])
-            };
-            anyhow::ensure!(c.occluded == w.occluded, "answers differ at pixel {pi}");
-            let cx = cpu_threaded::walk_clipped(&threaded, o, e, t1.max(lo), hi, &[(t1.max(lo), hi)]);
-            anyhow::ensure!(cx.occluded == w.occluded, "answers differ at pixel {pi}");
-            xonly += cx.records as u64;
-            clipped += c.records as u64;
-            steps += c.steps as u64;
-            per_pixel[pi] += c.steps.div_ceil(unroll) as u64;
-            if !w.occluded {
-                vis += 1;
-                vis_full += w.records as u64;
-                vis_clip += c.records as u64;
-            }
+        let (a, b) = (t1.max(lo), t2.min(hi));
+        let c = if a >= b {
+            none_needed += 1;
+            cpu_threaded::WalkCount::default()
+        } else {
+            cpu_threaded::walk_clipped(&threaded, o, e, a, b, &[(a, b)])
+        };
+        anyhow::ensure!(c.occluded == w.occluded, "answers differ at pixel {pi}");
+        let cx = cpu_threaded::walk_clipped(&threaded, o, e, t1.max(lo), hi, &[(t1.max(lo), hi)]);
+        anyhow::ensure!(cx.occluded == w.occluded, "answers differ at pixel {pi}");
+        xonly += cx.records as u64;
+        clipped += c.records as u64;
+        steps += c.steps as u64;
+        per_pixel[pi] += c.steps.div_ceil(unroll) as u64;
+        if !w.occluded {
+            vis += 1;
+            vis_full += w.records as u64;
+            vis_clip += c.records as u64;
         }
     }
     let n = rays as f64;

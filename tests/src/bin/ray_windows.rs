@@ -59,44 +59,38 @@ fn main() -> anyhow::Result<()> {
     let (mut free, mut free_vis, mut cells) =
         (vec![0u64; grids.len()], vec![0u64; grids.len()], vec![0u64; grids.len()]);
     let (mut coned, mut coned_vis) = (vec![0u64; bins.len()], vec![0u64; bins.len()]);
-    for (pi, &(x, nx)) in pixels.iter().enumerate() {
-        for _ in 0..8 {
-            let vi = rng.below(vpls.len() as u32) as usize;
-            let (y, ny) = vpls[vi];
-            if nx.dot(y - x) <= 0.0 || ny.dot(x - y) <= 0.0 {
-                continue;
-            }
-            let (o, e) = ((x + nx * lift(x)).as_dvec3(), ends[vi]);
-            let whole = cpu_threaded::walk(&threaded, o, e, 1e-6, 1.0 - 1e-6);
-            let (mx, my) = (lift(x) as f64 / 8.0, lift(y) as f64 / 8.0);
-            let a = ball_exit(o, e, x.as_dvec3(), nx.as_dvec3(), rx[pi] - lift(x) as f64, mx).max(1e-6);
-            let b = (1.0 - ball_exit(e, o, y.as_dvec3(), ny.as_dvec3(), ry[vi] - lift(y) as f64, my)).min(1.0 - 1e-6);
-            let walk = |b: f64| match a < b {
-                true => cpu_threaded::walk_clipped(&threaded, o, e, a, b, &[(a, b)]),
-                false => cpu_threaded::WalkCount::default(),
-            };
-            let w = walk(b);
-            anyhow::ensure!(w.occluded == whole.occluded, "the balls changed pixel {pi}'s answer");
-            rays += 1;
-            visible += u64::from(!whole.occluded);
-            balls += w.records as u64;
-            balls_vis += if whole.occluded { 0 } else { w.records as u64 };
-            for (k, &g) in grids.iter().enumerate() {
-                let (empty, n) = if a < b { march(&scene, g, &occupied[k], o, e, a, b) } else { (true, 0) };
-                anyhow::ensure!(!(empty && whole.occluded), "an occluded ray's window is empty on the {g}³ grid");
-                cells[k] += n as u64;
-                free[k] += u64::from(empty);
-                free_vis[k] += u64::from(empty && !whole.occluded);
-            }
-            let len = (o - e).length();
-            let above = ny.as_dvec3().dot(e - y.as_dvec3()) > my && ny.as_dvec3().dot(o - y.as_dvec3()) > my;
-            for (k, &m) in bins.iter().enumerate() {
-                let d = if above { (cones[k][vi][bin_of((o - e) / len, m)] - 1e-6 * len).max(0.0) } else { 0.0 };
-                let c = walk(b.min(1.0 - d / len));
-                anyhow::ensure!(c.occluded == whole.occluded, "the {m}² cones changed pixel {pi}'s answer");
-                coned[k] += c.records as u64;
-                coned_vis[k] += if whole.occluded { 0 } else { c.records as u64 };
-            }
+    for (pi, vi) in bounce_tests::gather_pairs(&pixels, &vpls, &mut rng) {
+        let ((x, nx), (y, ny)) = (pixels[pi], vpls[vi]);
+        let (o, e) = ((x + nx * lift(x)).as_dvec3(), ends[vi]);
+        let whole = cpu_threaded::walk(&threaded, o, e, 1e-6, 1.0 - 1e-6);
+        let (mx, my) = (lift(x) as f64 / 8.0, lift(y) as f64 / 8.0);
+        let a = ball_exit(o, e, x.as_dvec3(), nx.as_dvec3(), rx[pi] - lift(x) as f64, mx).max(1e-6);
+        let b = (1.0 - ball_exit(e, o, y.as_dvec3(), ny.as_dvec3(), ry[vi] - lift(y) as f64, my)).min(1.0 - 1e-6);
+        let walk = |b: f64| match a < b {
+            true => cpu_threaded::walk_clipped(&threaded, o, e, a, b, &[(a, b)]),
+            false => cpu_threaded::WalkCount::default(),
+        };
+        let w = walk(b);
+        anyhow::ensure!(w.occluded == whole.occluded, "the balls changed pixel {pi}'s answer");
+        rays += 1;
+        visible += u64::from(!whole.occluded);
+        balls += w.records as u64;
+        balls_vis += if whole.occluded { 0 } else { w.records as u64 };
+        for (k, &g) in grids.iter().enumerate() {
+            let (empty, n) = if a < b { march(&scene, g, &occupied[k], o, e, a, b) } else { (true, 0) };
+            anyhow::ensure!(!(empty && whole.occluded), "an occluded ray's window is empty on the {g}³ grid");
+            cells[k] += n as u64;
+            free[k] += u64::from(empty);
+            free_vis[k] += u64::from(empty && !whole.occluded);
+        }
+        let len = (o - e).length();
+        let above = ny.as_dvec3().dot(e - y.as_dvec3()) > my && ny.as_dvec3().dot(o - y.as_dvec3()) > my;
+        for (k, &m) in bins.iter().enumerate() {
+            let d = if above { (cones[k][vi][bin_of((o - e) / len, m)] - 1e-6 * len).max(0.0) } else { 0.0 };
+            let c = walk(b.min(1.0 - d / len));
+            anyhow::ensure!(c.occluded == whole.occluded, "the {m}² cones changed pixel {pi}'s answer");
+            coned[k] += c.records as u64;
+            coned_vis[k] += if whole.occluded { 0 } else { c.records as u64 };
         }
     }
     let (n, nv) = (rays as f64, visible as f64);
