@@ -198,7 +198,7 @@ pub fn closed_box(center: glam::Vec3, half: f32) -> Vec<[glam::Vec3; 3]> {
 
 /// The cells of `spec`'s grid that the segment a → b crosses, in order, each with the parameter interval
 /// (t in [0, 1]) it spends there: a DDA (Amanatides–Woo) in f64, for the measuring tools' structures
-/// over a grid (`march-length`'s occupied runs, `cell-bvhs`). The segment is taken to start inside the
+/// over a grid (`march-length`'s occupied runs, `cell-bvhs`, `ray-windows`). The segment is taken to start inside the
 /// grid (its first cell is clamped to it) and ends where it leaves.
 pub fn grid_cells_along(
     spec: &bounce_graph::passes::voxelize::VoxelGridSpec,

@@ -2,8 +2,8 @@
 //! empty space would leave unwalked, on the gather's pairs of a 64² view (as `end-balls`: each pixel's
 //! first hit to 8 of 1,024 VPLs, the balls capped at the renderer's END_BALL_MAX_RADIUS):
 //! - *an occupancy grid*: the rays whose window (the segment less both balls) crosses no occupied cell of
-//!   a G³ grid need no walk at all. A cell is occupied when a triangle's plane crosses it within the
-//!   triangle's bounding box (a superset of the conservative voxelization). Printed per G: the share of
+//!   a G³ grid need no walk at all. The grid is the renderer's conservative voxelization (its CPU twin
+//!   `bounce_oracles::cpu_voxel`, G cells on the longest side). Printed per G: the share of
 //!   rays (and of visible rays) with such a window, and the cells an Amanatides–Woo march visits until it
 //!   meets an occupied cell or the window's end;
 //! - *the VPL's direction cones*: for each VPL and each bin of a cube map of m × m directions a face, the
@@ -19,8 +19,9 @@
 
 use bounce_graph::bvh::query::BvhView;
 use bounce_graph::bvh::{Bvh, FlatBvh};
+use bounce_graph::passes::voxelize::{self, VoxelGridSpec};
 use bounce_graph::scene::Scene;
-use bounce_oracles::cpu_threaded;
+use bounce_oracles::{cpu_threaded, cpu_voxel};
 use bounce_tests::windows::{ball_exit, ball_radius, nearest_above};
 use glam::{DVec3, Vec3};
 use std::path::Path;
@@ -52,7 +53,13 @@ fn main() -> anyhow::Result<()> {
     let light = Vec3::from_slice(&scene.lights[0].position[..3]);
     let rx: Vec<f64> = pixels.iter().map(|&(x, n)| ball_radius(&view, x, n, lift(x) / 16.0).min(cap)).collect();
     let ry: Vec<f64> = vpls.iter().map(|&(y, n)| ball_radius(&view, y, n, lift(y) / 16.0).min(cap)).collect();
-    let occupied: Vec<Vec<bool>> = grids.iter().map(|&g| occupancy(&scene, g)).collect();
+    let occupied: Vec<(VoxelGridSpec, cpu_voxel::CpuGrid)> = grids
+        .iter()
+        .map(|&g| {
+            let spec = voxelize::fit(scene.bounds_min, scene.bounds_max, g as u32);
+            (spec, cpu_voxel::voxelize_scene(&scene, spec))
+        })
+        .collect();
     let ends: Vec<DVec3> = vpls.iter().map(|&(y, _)| (y + (light - y).normalize() * lift(y)).as_dvec3()).collect();
     let cones: Vec<Vec<Vec<f64>>> = bins.iter().map(|&m| cone_distances(&view, &vpls, &ends, m, &lift)).collect();
     let (mut rays, mut visible, mut balls, mut balls_vis) = (0u64, 0u64, 0u64, 0u64);
@@ -77,7 +84,8 @@ fn main() -> anyhow::Result<()> {
         balls += w.records as u64;
         balls_vis += if whole.occluded { 0 } else { w.records as u64 };
         for (k, &g) in grids.iter().enumerate() {
-            let (empty, n) = if a < b { march(&scene, g, &occupied[k], o, e, a, b) } else { (true, 0) };
+            let (spec, grid) = &occupied[k];
+            let (empty, n) = if a < b { march(spec, grid, o, e, a, b) } else { (true, 0) };
             anyhow::ensure!(!(empty && whole.occluded), "an occluded ray's window is empty on the {g}³ grid");
             cells[k] += n as u64;
             free[k] += u64::from(empty);
@@ -117,63 +125,13 @@ fn main() -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The cells of a g³ grid over the scene's bounds that a triangle's plane crosses within its bounding box.
-fn occupancy(scene: &Scene, g: usize) -> Vec<bool> {
-    let (lo, hi) = (scene.bounds_min.as_dvec3(), scene.bounds_max.as_dvec3());
-    let h = (hi - lo) / g as f64;
-    let mut occ = vec![false; g * g * g];
-    let cell = |p: DVec3| ((p - lo) / h).floor().clamp(DVec3::ZERO, DVec3::splat(g as f64 - 1.0));
-    for t in scene.vertices.chunks_exact(3) {
-        let p = [t[0].position(), t[1].position(), t[2].position()].map(|v| v.as_dvec3());
-        let n = (p[1] - p[0]).cross(p[2] - p[0]);
-        let (c0, c1) = (cell(p[0].min(p[1]).min(p[2])), cell(p[0].max(p[1]).max(p[2])));
-        for z in c0.z as usize..=c1.z as usize {
-            for y in c0.y as usize..=c1.y as usize {
-                for x in c0.x as usize..=c1.x as usize {
-                    let centre = lo + (DVec3::new(x as f64, y as f64, z as f64) + 0.5) * h;
-                    // The plane meets the cell (a little grown against rounding).
-                    if n.dot(centre - p[0]).abs() <= (h * 0.505).dot(n.abs()) {
-                        occ[(z * g + y) * g + x] = true;
-                    }
-                }
-            }
-        }
-    }
-    occ
-}
-
-/// Whether the segment o → e between parameters a and b crosses no occupied cell, and the cells visited.
-fn march(scene: &Scene, g: usize, occ: &[bool], o: DVec3, e: DVec3, a: f64, b: f64) -> (bool, u32) {
-    let (lo, hi) = (scene.bounds_min.as_dvec3(), scene.bounds_max.as_dvec3());
-    let h = (hi - lo) / g as f64;
-    let (p0, p1) = ((o + (e - o) * a - lo) / h, (o + (e - o) * b - lo) / h);
-    let d = p1 - p0;
-    let at = |x: f64| (x.floor() as i64).clamp(0, g as i64 - 1);
-    let mut c = [at(p0.x), at(p0.y), at(p0.z)];
-    let (mut next, mut delta, mut step) = ([f64::INFINITY; 3], [f64::INFINITY; 3], [0i64; 3]);
-    for k in 0..3 {
-        if d[k] != 0.0 {
-            step[k] = if d[k] > 0.0 { 1 } else { -1 };
-            let edge = if d[k] > 0.0 { c[k] + 1 } else { c[k] } as f64;
-            next[k] = (edge - p0[k]) / d[k];
-            delta[k] = 1.0 / d[k].abs();
-        }
-    }
-    let mut n = 0;
-    loop {
-        n += 1;
-        if occ[((c[2] as usize) * g + c[1] as usize) * g + c[0] as usize] {
-            return (false, n);
-        }
-        let k = (0..3).min_by(|&i, &j| next[i].total_cmp(&next[j])).unwrap_or(0);
-        if next[k] > 1.0 {
-            return (true, n);
-        }
-        c[k] += step[k];
-        if c[k] < 0 || c[k] >= g as i64 {
-            return (true, n);
-        }
-        next[k] += delta[k];
+/// Whether the segment o → e between parameters a and b crosses no occupied cell of `grid`, and the
+/// cells visited until the first occupied one (or the window's end).
+fn march(spec: &VoxelGridSpec, grid: &cpu_voxel::CpuGrid, o: DVec3, e: DVec3, a: f64, b: f64) -> (bool, u32) {
+    let cells = bounce_tests::grid_cells_along(spec, o + (e - o) * a, o + (e - o) * b);
+    match cells.iter().position(|&(c, _, _)| grid.occupied(c)) {
+        Some(k) => (false, k as u32 + 1),
+        None => (true, cells.len() as u32),
     }
 }
 
