@@ -1,8 +1,4 @@
 #version 460
-#ifdef SHADOW_POOL
-#extension GL_KHR_shader_subgroup_ballot : enable
-#extension GL_KHR_shader_subgroup_arithmetic : enable
-#endif
 // gather: one-bounce indirect radiance at each G-buffer pixel from VPLs, visibility by a voxel march.
 //   L(x) = 1/N Σ_k albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x / d² · V(x, v) / p_v
 // GATHER_SAMPLE: N VPLs drawn from the mixture below (p_v its exact discrete probability).
@@ -10,11 +6,8 @@
 // VPL estimate. See crates/graph/src/passes/gather.rs for the sampling mixture.
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
-#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
+#ifdef EXACT_VISIBILITY
 #include "shared/bvh.glsl"
-#endif
-#ifdef HYBRID_VISIBILITY
-#include "shared/hybrid.glsl"
 #endif
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
@@ -38,46 +31,24 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 
 #ifdef PSM_VISIBILITY
 // `--visibility psm` (gather.psm.comp): sample k is VPL k of the frame's shared set (psm.comp), for
-// every pixel, with visibility from its paraboloid shadow map. PSM_EXACT (gather.psm_exact.comp): the
-// same shared set with exact shadow rays, which isolates the maps' own error.
+// every pixel, with visibility from its paraboloid shadow map.
 layout(std430, set = 0, binding = B_PSM_VIEWS) readonly buffer PsmViews { PsmView psm_views[]; };
-#ifndef PSM_EXACT
 #define PSM_LOOKUP
 layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
-#endif
 #include "shared/psm.glsl"
 #endif
 
-#if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && !defined(PSM_VISIBILITY)
+#ifdef EXACT_VISIBILITY
 // Exact shadow rays from a queue (shared/shadow_queue.glsl): each block of SHADOW_QUEUE samples is drawn
-// first, the rays it needs queued with their weighted contributions, and then traced: by this invocation
-// alone (shadow_queue_trace), or with SHADOW_POOL (`--shadow-rays pool`) by its subgroup's pool
-// (shadow_pool_trace). Both give every ray bvh_occluded_lifted's answer, so the images are the same.
+// first, the rays it needs queued with their weighted contributions, and then traced by this invocation
+// (shadow_queue_trace), which gives every ray bvh_occluded_lifted's answer.
 #define GATHER_QUEUE
 // The rays skip their ends' empty balls (pc.end_balls; passes/end_balls.rs): the same answers.
 #define SHADOW_QUEUE_WINDOWS
 #define END_BALLS_READ
 #include "shared/end_balls.glsl"
-#ifdef SHADOW_POOL
-#define SHADOW_POOL_INVOCATIONS (WG_2D * WG_2D)
-// A pooled ray's key is its VPL: its far end is recomputed from it, the same bits.
-vec3 shadow_pool_end(uint v) {
-    return shadow_end(v, vpl_fetch(v));
-}
-// The owners' x and pixel balls, for the lane that traces their rays (written before shadow_pool_trace,
-// whose barrier makes them visible).
-shared vec4 pool_x[SHADOW_POOL_INVOCATIONS];
-shared vec4 pool_ball[SHADOW_POOL_INVOCATIONS];
-// The window of the owner's ray from `from` to `e`, VPL v's (see shadow_queue.glsl).
-vec2 shadow_pool_window(uint v, uint owner, vec3 from, vec3 e) {
-    uint res = frame.size.w;
-    vec3 y = texelFetch(vpl_position, ivec3(v % res, (v / res) % res, v / (res * res)), 0).xyz;
-    return end_ball_window(from, e, pool_x[owner].xyz, pool_ball[owner], v, y);
-}
-#else
 vec3 ray_origin;   // x lifted (shadow_origin)
 vec4 pixel_ball;   // x's ball (0: none)
-#endif
 #include "shared/shadow_queue.glsl"
 vec3 queue_weight[SHADOW_QUEUE]; // c(x, v) / p_v, the unshadowed contribution
 
@@ -87,42 +58,29 @@ void enqueue(vec3 x, vec3 nx, vec3 ax, uint v, float prob, inout uint n) {
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return;
     queue_weight[n] = c / prob;
-#ifdef SHADOW_POOL
-    shadow_pool_key[n] = v;
-#else
     vec3 e = shadow_end(v, vpl);
     shadow_queue_end[n] = e;
     shadow_queue_window[n] = end_ball_window(ray_origin, e, x, pixel_ball, v, vpl.position);
-#endif
     n++;
 }
 
 // The gather with exact rays: blocks of SHADOW_QUEUE samples drawn, their rays traced, the visible ones
-// summed in sample order (the sums of a ray per sample, bit for bit). With the pool every invocation of the
-// workgroup runs it, one off the image or on the background with nothing to queue, since the pool needs
-// every invocation of a subgroup at each call.
+// summed in sample order (the sums of a ray per sample, bit for bit).
 vec3 gather_queued(ivec2 px, bool inside) {
     bool sampled = pc.mode != GATHER_ALL;
     if (sampled && !(cdf_total_at(0u) > 0.0)) return vec3(0.0); // the same for every invocation
     ivec2 at = min(px, ivec2(frame.size.xy) - 1);
     vec4 gp = texelFetch(g_position, at, 0);
     bool shade = inside && gp.w != 0.0;
-#ifndef SHADOW_POOL
     if (!shade) return vec3(0.0);
-#endif
     vec3 x = gp.xyz;
     vec3 nx = texelFetch(g_normal, at, 0).xyz;
     vec3 ax = texelFetch(g_albedo, at, 0).rgb;
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
     vec3 o = shadow_origin(x, nx);
     vec4 ball = end_ball_of_pixel(at);
-#ifdef SHADOW_POOL
-    pool_x[gl_LocalInvocationIndex] = vec4(x, 0.0);
-    pool_ball[gl_LocalInvocationIndex] = ball;
-#else
     ray_origin = o;
     pixel_ball = ball;
-#endif
     vec3 sum = vec3(0.0);
     for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
         uint n = 0u, top = min(base + SHADOW_QUEUE, pc.last);
@@ -139,11 +97,7 @@ vec3 gather_queued(ivec2 px, bool inside) {
                 for (uint v = base; v < top; v++) enqueue(x, nx, ax, v, 1.0, n);
             }
         }
-#ifdef SHADOW_POOL
-        uint visible = shadow_pool_trace(o, n);
-#else
         uint visible = shadow_queue_trace(o, n);
-#endif
         for (uint j = 0u; j < n; j++)
             if ((visible & (1u << j)) != 0u) sum += queue_weight[j];
     }
@@ -177,12 +131,8 @@ void main() {
                 float prob = w.normal_p.w;
                 if (!(prob > 0.0)) continue;
                 uint v = floatBitsToUint(w.position_v.w);
-#ifdef PSM_EXACT
-                sum += contribution(x, nx, ax, v) / prob;
-#else
                 vec3 c = vpl_unshadowed(x, nx, ax, vpl_fetch(v), pc.clamp_d2);
                 if (c != vec3(0.0)) sum += c * psm_visible(k, x, nx) / prob;
-#endif
             }
 #else
             // Sample k is point k of the pixel's stratified set (draw_vpl): a seed per pixel decorrelates

@@ -4,7 +4,7 @@
 // importance (gathering-based global CDF, thesis §7.3.4), two stages:
 //   IMP_GBG_SCATTER (one invocation per pixel): R cosine-distributed rays from the gather point (a
 //     stratified set per pixel), each marched through the voxel grid to its first occupied cell (the
-//     exact and hybrid variants: to the surface it really hits); that point P is projected into each light's DPRSM, and when that texel's VPL is the surface at P
+//     exact variant: to the surface it really hits); that point P is projected into each light's DPRSM, and when that texel's VPL is the surface at P
 //     (the light sees it: within 3 cells), the VPL's unshadowed contribution (luminance) is added to its
 //     sum and its hit count raised.
 //     Sums are u64 fixed point (atomic adds of integers commute: the result does not depend on thread
@@ -31,17 +31,12 @@ layout(std430, set = 0, binding = B_GBG_COUNT) buffer Counts { uint counts[]; };
 #include "shared/vpl.glsl"
 #include "shared/gathering.glsl"
 #include "shared/owen_sobol.glsl"
-#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
-// importance_gbg.exact.comp and .hybrid.comp (`--visibility exact`, `hybrid`): each ray's first hit is the
-// real surface it meets (the BVH, or shared/hybrid.glsl: the same answer), from x lifted off its surface,
+#ifdef EXACT_VISIBILITY
+// importance_gbg.exact.comp (`--visibility exact`): each ray's first hit is the real surface it meets
+// (the BVH), from x lifted off its surface,
 // instead of the entry point of the first occupied cell 2 cells off the surface.
 #include "shared/bvh.glsl"
-#ifdef HYBRID_VISIBILITY
-#include "shared/hybrid.glsl"
-#define FIRST_HIT_TRACE hybrid_trace
-#else
 #define FIRST_HIT_TRACE bvh_trace
-#endif
 bool first_hit(vec3 x, vec3 n, vec3 d, out vec3 hit) {
     uint tri;
     vec2 bary;

@@ -33,11 +33,8 @@
 // MIS_CONSISTENT or MIS_THESIS; `rays` n_g). Dispatch ⌈W/8⌉ × ⌈H/8⌉.
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
-#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
+#ifdef EXACT_VISIBILITY
 #include "shared/bvh.glsl"
-#endif
-#ifdef HYBRID_VISIBILITY
-#include "shared/hybrid.glsl"
 #endif
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
@@ -54,7 +51,7 @@ layout(set = 0, binding = B_CDF) uniform usamplerBuffer cdf_texels;
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 
-#if defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY) && !defined(PSM_VISIBILITY)
+#ifdef EXACT_VISIBILITY
 // The shadow rays of contribution() skip their ends' empty balls (pc.end_balls; passes/end_balls.rs):
 // the same answers.
 #define END_BALLS_READ
@@ -72,13 +69,9 @@ layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
 // from the same mixture P_v, shared by all pixels) and see through their shadow maps; the gathering
 // samples are per pixel and keep the voxel march. The estimate is then unbiased for the VPL sum with the
 // blended visibility w_c·V_psm + w_g·V_voxel (both approximate the true one within their bias bands).
-// PSM_EXACT (mis.psm_exact.comp): the shared set with exact rays for both strategies, unbiased with
-// respect to `all` with exact visibility.
 layout(std430, set = 0, binding = B_PSM_VIEWS) readonly buffer PsmViews { PsmView psm_views[]; };
-#ifndef PSM_EXACT
 #define PSM_LOOKUP
 layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
-#endif
 #include "shared/psm.glsl"
 #endif
 
@@ -139,18 +132,13 @@ Patch patch_of(uint v, Vpl vpl) {
     return q;
 }
 
-// The first hit of the gathering ray from x along unit d: voxel march, or the BVH (hybrid: the BVH through
-// the grid's occupied cells, the same hit).
+// The first hit of the gathering ray from x along unit d: voxel march, or the BVH.
 bool gathering_first_hit(vec3 x, vec3 nx, vec3 d, out vec3 hit) {
-#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
+#ifdef EXACT_VISIBILITY
     uint tri;
     vec2 bary;
     float lift = surface_lift(x, frame.scene_min.w);
-#ifdef HYBRID_VISIBILITY
-    float th = hybrid_trace(x + nx * lift, d, 0.0, 1e30, false, tri, bary);
-#else
     float th = bvh_closest(x + nx * lift, d, 1e30, tri, bary);
-#endif
     hit = x + nx * lift + d * max(th, 0.0);
     return th > 0.0;
 #else
@@ -222,11 +210,7 @@ void main() {
                 float p_v = sv.normal_p.w;
                 if (!(p_v > 0.0)) continue;
                 uint v = floatBitsToUint(sv.position_v.w);
-#ifdef PSM_EXACT
-                vec3 c = contribution(x, nx, ax, v);
-#else
                 vec3 c = vpl_unshadowed(x, nx, ax, vpl_fetch(v), pc.clamp_d2) * psm_visible(k, x, nx);
-#endif
 #else
                 float p_v;
                 uint v = draw_vpl(k, seed, p_v);

@@ -60,22 +60,6 @@ float light_weight(uint l) {
     return luminance(lights[l].intensity.rgb);
 }
 
-#ifdef COSINE_ONLY
-// Direct radiance leaving y toward x (the contract's L_direct), exact visibility.
-vec3 direct_at(Hit h) {
-    vec3 l_sum = vec3(0.0);
-    for (uint l = 0u; l < frame.size.z; l++) {
-        vec3 lp = lights[l].position.xyz;
-        vec3 to = lp - h.y;
-        float d2 = dot(to, to);
-        if (d2 <= 0.0) continue;
-        float c = dot(h.ns, to) * inversesqrt(d2);
-        if (c <= 0.0 || bvh_occluded(h.y, lp)) continue;
-        l_sum += h.albedo / PI * lights[l].intensity.rgb * c / d2;
-    }
-    return l_sum;
-}
-#else
 const uint NO_LIGHT = 0xFFFFFFFFu;
 
 // L_direct(y → x) (returned) and the light strategy's area density at y (`p_light`). The light `known`
@@ -149,7 +133,6 @@ vec3 light_sample(vec3 o, vec3 x, vec3 n, vec3 ax, uint k, uint seed, float tota
     vec3 ld = light_side(h, l, 1.0 / total, p_light);
     return ax * ld * balance(cos_x / PI * cos_y / r2, p_light);
 }
-#endif
 
 // Strategy (a)'s sample k: a cosine direction at o, its first hit, weighted by the balance heuristic
 // under MIS.
@@ -160,16 +143,12 @@ vec3 cosine_sample(vec3 o, vec3 x, vec3 n, vec3 ax, uint k, uint seed, float tot
     vec2 bary;
     if (bvh_closest_walk(o, d, 1e30, tri, bary) <= 0.0) return vec3(0.0);
     Hit h = hit_at(tri, bary, x);
-#ifdef COSINE_ONLY
-    return ax * direct_at(h);
-#else
     float p_light;
     vec3 ld = light_side(h, NO_LIGHT, total > 0.0 ? 1.0 / total : 0.0, p_light);
     vec3 w = h.y - o;
     float r2 = dot(w, w);
     float p_cos = r2 > 0.0 ? dot(n, d) / PI * abs(dot(h.ng, d)) / r2 : 0.0;
     return ax * ld * balance(p_cos, p_light);
-#endif
 }
 
 void main() {
@@ -190,16 +169,10 @@ void main() {
         vec3 o = x + n * surface_lift(x, frame.scene_min.w);
         uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x2545F491u;
         float inv_n = 1.0 / float(pc.samples);
-#ifdef COSINE_ONLY
-        float total = 0.0;
-#else
         float total = light_power();
-#endif
         for (uint k = pc.first; k < pc.last; k++) {
             vec3 value = cosine_sample(o, x, n, ax, k, seed, total);
-#ifndef COSINE_ONLY
             if (total > 0.0) value += light_sample(o, x, n, ax, k, seed, total);
-#endif
             // Added one sample at a time, in order k: the same sums whatever the dispatches.
             sum += value * inv_n;
             sq += value * value * inv_n;

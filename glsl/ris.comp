@@ -22,18 +22,13 @@
 //   the pool's strategy reaches every VPL (ris.rs).
 // RIS_SPATIAL (W × H × R): the reservoir combined with k neighbours' of the same layer, generalized
 //   balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
-// The target may weigh in the voxel march's visibility (RIS_VOXEL_TARGET variants, ris.target_floor < 1:
-// see target_at).
 // RIS_SHADE (W × H): L = 1/R Σ_r f(y_r) V(y_r) W_r over the reservoirs [first, last), visibility as the
-//   gather's (voxel, EXACT_VISIBILITY, HYBRID_VISIBILITY); with ris.control each term adds the
+//   gather's (voxel, EXACT_VISIBILITY); with ris.control each term adds the
 //   unshadowed control variate β (U_g − g(y_r) W_r), mean 0 given the reservoir's candidates (ris.rs).
 #include "shared/scene.glsl"
 #include "shared/voxel.glsl"
-#if defined(EXACT_VISIBILITY) || defined(HYBRID_VISIBILITY)
+#ifdef EXACT_VISIBILITY
 #include "shared/bvh.glsl"
-#endif
-#ifdef HYBRID_VISIBILITY
-#include "shared/hybrid.glsl"
 #endif
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
@@ -88,7 +83,7 @@ layout(std430, set = 0, binding = B_RIS_POOL) writeonly buffer RisPool { vec4 po
 #include "shared/cdf.glsl"
 #include "shared/vpl.glsl"
 #include "shared/sampling.glsl"
-#if defined(RIS_SHADE) && defined(EXACT_VISIBILITY) && !defined(HYBRID_VISIBILITY)
+#if defined(RIS_SHADE) && defined(EXACT_VISIBILITY)
 // The shade's shadow rays from a queue (shared/shadow_queue.glsl): a block's rays are queued first, traced,
 // and then the block's reservoirs are shaded in order with their answers.
 #define SHADE_QUEUE
@@ -112,20 +107,13 @@ float ris_rand(ivec2 q, uint stream, uint i) {
     return float(h >> 8) * (1.0 / 16777216.0);
 }
 
-// The target p̂ of pixel geometry (x, n, a) for VPL v: the unshadowed contribution's luminance, times
-// max(V_voxel, δ) when δ = ris.target_floor < 1. The voxel march is only a guess at visibility (it leaks
-// and darkens), but a target may be anything that is positive wherever the integrand is: with δ > 0 it
-// is, so the estimate stays unbiased (the shade tests the frame's real visibility), and VPLs the march
-// sees as hidden are drawn δ times as often, which is what an unshadowed target gets wrong behind walls.
+// The target p̂ of pixel geometry (x, n, a) for VPL v: the unshadowed contribution's luminance (a target
+// may be anything positive wherever the integrand is; the shade tests the frame's real visibility).
 // Deterministic per pixel, so the spatial weights evaluate the same p̂ at each neighbour.
 // Split as p̂ = luminance(a ⊙ Φ_v) · target_geometry: the candidates' loop needs the geometric factor for
 // the control variate's U_g too.
 float target_geometry(vec3 x, vec3 n, Vpl vpl) {
-    float g = vpl_unshadowed_geometry(x, n, vpl, pc.clamp_d2);
-#ifdef RIS_VOXEL_TARGET
-    if (g > 0.0) g *= max(voxel_visibility(x, n, vpl.position, vpl.normal), ris.target_floor);
-#endif
-    return g;
+    return vpl_unshadowed_geometry(x, n, vpl, pc.clamp_d2);
 }
 
 float target_of(vec3 x, vec3 n, vec3 a, Vpl vpl) {

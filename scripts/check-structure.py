@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """The code-shape rules of ARCHITECTURE.md, checked: no source file under crates/*/src longer than 800
-lines, no function there longer than 80 lines (tests modules aside), and no barrier recorded outside
-the device crate's sync module (the graph plans every other one). Prints each violation; exits 1 if
-there is any. Run by scripts/test.sh."""
+lines, no function there longer than 80 lines of code (comment and blank lines aside, so a `// SAFETY:`
+line costs nothing; tests modules aside), no shader file under glsl/ longer than 400 lines, and no
+barrier recorded outside the device crate's sync module (the graph plans every other one). Prints each
+violation; exits 1 if there is any. Run by scripts/test.sh."""
 import pathlib
 import re
 import sys
 
 root = pathlib.Path(__file__).resolve().parent.parent
-MAX_FILE, MAX_FN = 800, 80
+MAX_FILE, MAX_FN, MAX_SHADER = 800, 80, 400
 problems = []
 fn_re = re.compile(r"^\s*(pub(\([a-z]+\))?\s+)?(const\s+)?(unsafe\s+)?(extern\s+\"[^\"]+\"\s+)?fn\s+(\w+)")
 
@@ -36,7 +37,7 @@ for path in sorted(root.glob("crates/*/src/**/*.rs")):
                     end = j
                     break
             if end is not None:
-                n = end - start + 1
+                n = sum(1 for t in lines[start : end + 1] if t.strip() and not t.strip().startswith("//"))
                 if n > MAX_FN:
                     problems.append(f"{rel}:{start + 1}: fn {m.group(6)} is {n} lines (at most {MAX_FN})")
                 k = end
@@ -44,8 +45,14 @@ for path in sorted(root.glob("crates/*/src/**/*.rs")):
             problems.append(f"{rel}:{k + 1}: a barrier recorded outside bounce_device::sync")
         k += 1
 
+for path in sorted(root.glob("glsl/**/*")):
+    if path.suffix in (".comp", ".glsl", ".vert", ".frag", ".geom"):
+        n = len(path.read_text().split("\n"))
+        if n > MAX_SHADER:
+            problems.append(f"{path.relative_to(root)}: {n} lines (at most {MAX_SHADER})")
+
 for p in problems:
     print(p)
 if problems:
     sys.exit(1)
-print("structure: every file ≤ 800 lines, every function ≤ 80 lines, every barrier from the sync module")
+print("structure: every file ≤ 800 lines, every function ≤ 80 lines of code, every shader ≤ 400 lines, every barrier from the sync module")

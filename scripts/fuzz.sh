@@ -11,19 +11,9 @@ secs="${1:-300}"
 main_target="$(realpath -m "${CARGO_TARGET_DIR:-target}")"
 rustup toolchain list | grep -q '^nightly' || rustup toolchain install nightly --profile minimal
 command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
-# Link the shaderc the main build compiled (12 minutes on 2 cores) when there is one.
-lib="$(find "$main_target" -path '*shaderc-sys-*/out/lib/libshaderc_combined.a' 2>/dev/null | head -n 1 || true)"
-features=()
-if [ -n "$lib" ]; then
-  export SHADERC_LIB_DIR="$(dirname "$lib")"
-  # shaderc-sys prefers the shared library there; the graph crate's build script runs against it.
-  export LD_LIBRARY_PATH="$SHADERC_LIB_DIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-else
-  features=(--features shaderc-from-source)
-fi
 export CARGO_TARGET_DIR="$main_target/fuzz"
 work="$main_target/fuzz-corpus"
 mkdir -p "$work" "$main_target/fuzz-artifacts"
-cargo +nightly fuzz run --fuzz-dir tests/fuzz "${features[@]}" scene "$work" tests/fuzz/corpus/scene -- \
+cargo +nightly fuzz run --fuzz-dir tests/fuzz scene "$work" tests/fuzz/corpus/scene -- \
   -dict=tests/fuzz/scene.dict -max_total_time="$secs" -max_len=65536 -timeout=10 \
   -artifact_prefix="$main_target/fuzz-artifacts/"

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the visibility stress scenes into assets/<name>/ (OBJ + MTL + scene.toml, scene contract v1).
 
-Each scene isolates one way a voxel march goes wrong against exact visibility (issue 13):
+Each scene isolates one way a voxel march goes wrong against exact visibility:
   box-on-floor  a box standing on the floor of a closed room: wall junctions, and the base of the box,
                 where conservative cells of two surfaces meet and the march's 2-cell end skip runs out;
   doorway       a closed room split by a zero-thickness wall with an off-centre doorway, the light on the

@@ -21,8 +21,11 @@ trap cleanup EXIT
 git worktree add --detach "$work/base" "$base" >/dev/null
 if [ ! -d "$base_target" ] && [ -d "$target" ]; then cp -a "$target" "$base_target"; fi
 echo "building $base and this checkout..." >&2
-CARGO_TARGET_DIR="$base_target" cargo build -q --manifest-path "$work/base/Cargo.toml" -p bounce
-cargo build -q -p bounce -p bounce-tests --bin same-pixels
+# Both with the `lab` feature's switches where the commit has the feature (ris's reuse and pool cases).
+CARGO_TARGET_DIR="$base_target" cargo build -q --manifest-path "$work/base/Cargo.toml" -p bounce --features lab 2>/dev/null ||
+  CARGO_TARGET_DIR="$base_target" cargo build -q --manifest-path "$work/base/Cargo.toml" -p bounce
+cargo build -q -p bounce-tests --bin same-pixels
+cargo build -q -p bounce --features lab
 new_bin="$target/debug/bounce"
 old_bin="$base_target/debug/bounce"
 same="$target/debug/same-pixels"
@@ -45,9 +48,18 @@ cases+=(
   "regions-local|--component indirect --method local --regions 9"
 )
 for m in uniform all gbg mis; do cases+=("exact-$m|--component indirect --method $m --visibility exact"); done
-for v in psm psm-exact; do
-  for m in uniform global mis; do cases+=("$v-$m|--component indirect --method $m --visibility $v"); done
-done
+for m in uniform global mis; do cases+=("psm-$m|--component indirect --method $m --visibility psm"); done
+# ris, the default method, with its features.
+cases+=(
+  "indirect-ris|--component indirect --method ris"
+  "combined-ris|--component combined --method ris"
+  "ris-voxel|--component indirect --method ris --visibility voxel"
+  "ris-gbg-source|--component indirect --method ris --source gbg"
+  "ris-per-pixel|--component indirect --method ris --pool-tiles 0"
+  "ris-picks|--component indirect --method ris --picks 3"
+  "ris-learned|--component indirect --method ris --learn-visibility 0.1"
+  "ris-spatial|--component indirect --method ris --spatial-passes 2"
+)
 for m in uniform all gbg mis; do cases+=("rsm-$m|--component indirect --method $m --light-map rsm"); done
 for m in uniform gbg; do cases+=("cube-$m|--component indirect --method $m --light-map cube"); done
 

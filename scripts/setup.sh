@@ -31,8 +31,8 @@ command -v cargo >/dev/null 2>&1 || { echo "error: cargo not found; install Rust
 first_build_notice() {
   local target="${CARGO_TARGET_DIR:-$(pwd)/target}"
   if ! ls "$target"/debug/build/shaderc-sys-*/out >/dev/null 2>&1; then
-    echo "first build: compiling shaderc (glslang, SPIRV-Tools) from source; about 12 minutes on 2 cores" \
-      "(measured), less with more cores (it builds in parallel). Later builds take seconds." >&2
+    echo "first build: compiling shaderc (glslang, SPIRV-Tools) from source; about 12.5 minutes on 2 cores" \
+      "(measured 2026-12-03), less with more cores (it builds in parallel). Later builds take seconds." >&2
     return 0
   fi
   return 1

@@ -9,19 +9,16 @@ if first_build_notice; then cargo build --workspace --all-targets; fi
 # Shape before behaviour: formatting, lints, and the structure rules of ARCHITECTURE.md.
 cargo fmt --all --check
 cargo clippy -q --workspace --all-targets -- -D warnings
+# The A/B switches of the `lab` feature, built once so they keep compiling.
+cargo clippy -q -p bounce --features lab -- -D warnings
 python3 scripts/check-structure.py
 cargo build -q --workspace --all-targets
 cargo run -q -p bounce -- info | sed -n 1,3p
 # The default scene at 128² with validation: must finish and name every pass it ran.
 cargo run -q -p bounce -- render assets/cornell-box/scene.toml --width 128 --height 128 \
   --out "${CARGO_TARGET_DIR:-target}/default-128.exr" --validation --timings
-# The GPU benchmark's steps, end to end at a tiny size on this device (scripts/gpu-bench.sh).
-./scripts/gpu-bench.sh tiny "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny" >/dev/null
-grep -q "## conference: equal time" "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny/gpu-bench.md"
-# Its visibility table: the subgroup pool timed, and its image equal to the exact queue's ('=').
-grep -Eq '^\| sibenik \| [0-9.]+ \| [0-9.]+ \| [0-9.]+ = \|' "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny/gpu-bench.md"
-# Its A/B table: one build under two labels, so the second's image must equal the first's ('=').
-grep -Eq '^\| cornell-box \| 16 \| [0-9.]+ \| [0-9.]+ \| [0-9.]+ = \|$' "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny/ab/ab.md"
+# The GPU benchmark's steps, end to end at a tiny size on this device (lab/gpu-bench.sh): it must run.
+./lab/gpu-bench.sh tiny "${CARGO_TARGET_DIR:-target}/gpu-bench-tiny" >/dev/null
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 set +e

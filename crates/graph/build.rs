@@ -1,7 +1,7 @@
 //! Compiles every shader of the [`SHADERS`] table to SPIR-V with shaderc (glslang) into OUT_DIR, and writes
-//! `shaders.rs` (one `pub const` of SPIR-V bytes per table row) and `bindings.rs` (the numbers of
-//! `glsl/shared/bindings.glsl` as Rust constants; see [`bindings_rs`]). A GLSL error fails `cargo build`
-//! with file:line.
+//! `shaders.rs` (one `pub const` of SPIR-V bytes per table row). A GLSL error fails `cargo build` with
+//! file:line. (The numbers of `glsl/shared/bindings.glsl` become Rust constants in the scene crate's
+//! build script, which needs no shaderc.)
 //!
 //! **Names.** A row's name is the source's file name, or, for a variant, `<stem>.<variant>.<stage>` where
 //! the source is `<stem>.<stage>`: a dot before the stage extension means "variant of that stem" and
@@ -53,34 +53,24 @@ const SHADERS: &[Shader] = &[
     file("importance.comp"),
     file("importance_gbg.comp"),
     variant("importance_gbg.exact.comp", "importance_gbg.comp", &["EXACT_VISIBILITY"]),
-    variant("importance_gbg.hybrid.comp", "importance_gbg.comp", &["HYBRID_VISIBILITY"]),
     file("cdf_reduce.comp"),
     file("psm.comp"),
-    // gather and mis, each with its visibility variants: `--visibility exact` (shadow rays against the BVH
-    // instead of the voxel march), `psm` (the frame's shared VPL set and its shadow maps), `psm-exact`
-    // (the shared set with exact shadow rays: the reference for the maps' own visibility error) and `hybrid`
-    // (the exact rays traced only through the voxel grid's occupied cells).
+    // gather and mis, each in one variant per `--visibility`: the voxel march, `exact` (shadow rays against
+    // the BVH) and `psm` (the frame's shared VPL set and its shadow maps).
     // end_balls: each exact shadow ray's ends' empty balls, per pixel and (END_BALLS_VPLS) per VPL.
     file("end_balls.comp"),
     variant("end_balls.vpls.comp", "end_balls.comp", &["END_BALLS_VPLS"]),
     file("gather.comp"),
     variant("gather.exact.comp", "gather.comp", &["EXACT_VISIBILITY"]),
-    // `--shadow-rays pool`: the exact rays shared by a subgroup (glsl/shared/shadow_queue.glsl).
-    variant("gather.exact_pool.comp", "gather.comp", &["EXACT_VISIBILITY", "SHADOW_POOL"]),
     variant("gather.psm.comp", "gather.comp", &["PSM_VISIBILITY"]),
-    variant("gather.psm_exact.comp", "gather.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
-    variant("gather.hybrid.comp", "gather.comp", &["HYBRID_VISIBILITY"]),
     file("mis.comp"),
     variant("mis.exact.comp", "mis.comp", &["EXACT_VISIBILITY"]),
     variant("mis.psm.comp", "mis.comp", &["PSM_VISIBILITY"]),
-    variant("mis.psm_exact.comp", "mis.comp", &["PSM_VISIBILITY", "PSM_EXACT", "EXACT_VISIBILITY"]),
-    variant("mis.hybrid.comp", "mis.comp", &["HYBRID_VISIBILITY"]),
-    // ris: its three stages, the shade with the gather's visibility variants (voxel, exact, hybrid).
+    // ris: its stages, the shade with the gather's per-pixel visibility variants (voxel, exact).
     variant("ris.initial.comp", "ris.comp", &["RIS_INITIAL"]),
     variant("ris.presample.comp", "ris.comp", &["RIS_PRESAMPLE"]),
     variant("ris.presample_uniform.comp", "ris.comp", &["RIS_PRESAMPLE", "RIS_UNIFORM_SOURCE"]),
     variant("ris.initial_pool.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL"]),
-    variant("ris.initial_pool_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_VOXEL_TARGET"]),
     variant("ris.initial_pool_learned.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED"]),
     variant("ris.initial_pool_near.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR"]),
     variant(
@@ -112,16 +102,10 @@ const SHADERS: &[Shader] = &[
         &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_NEAR_MULTI", "RIS_UNIFORM_SOURCE"],
     ),
     variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
-    // `--target-floor` < 1: the target marches the voxel grid (so only these bind it).
-    variant("ris.initial_voxel_target.comp", "ris.comp", &["RIS_INITIAL", "RIS_VOXEL_TARGET"]),
-    variant("ris.spatial_voxel_target.comp", "ris.comp", &["RIS_SPATIAL", "RIS_VOXEL_TARGET"]),
     variant("ris.shade.comp", "ris.comp", &["RIS_SHADE"]),
     variant("ris.shade_exact.comp", "ris.comp", &["RIS_SHADE", "EXACT_VISIBILITY"]),
-    variant("ris.shade_hybrid.comp", "ris.comp", &["RIS_SHADE", "HYBRID_VISIBILITY"]),
-    // The reference: two-strategy MIS (cosine at x, light side at y), and the cosine strategy alone
-    // (`--reference-estimator cosine`).
+    // The reference: two-strategy MIS (cosine at x, light side at y).
     file("reference.comp"),
-    variant("reference.cosine.comp", "reference.comp", &["COSINE_ONLY"]),
     // The viewer's presentation: running mean, Reinhard, sRGB8.
     file("present.comp"),
     // Kernels used only by the tests.
@@ -131,7 +115,6 @@ const SHADERS: &[Shader] = &[
     file("test/layout_echo.comp"),
     file("test/owen_sobol.comp"),
     file("test/shadow_queue.comp"),
-    variant("test/shadow_queue.pool.comp", "test/shadow_queue.comp", &["SHADOW_POOL"]),
     file("test/voxel_march.comp"),
     file("test/voxel_rcp.comp"),
 ];
@@ -145,9 +128,6 @@ fn main() {
     println!("cargo:rerun-if-changed={}", glsl.display());
     check_table(&glsl);
     compile_all(&glsl, &out);
-    let header = std::fs::read_to_string(glsl.join("shared/bindings.glsl")).expect("glsl/shared/bindings.glsl");
-    let b = bindings_rs(&header).unwrap_or_else(|e| panic!("glsl/shared/bindings.glsl: {e}"));
-    std::fs::write(out.join("bindings.rs"), b).unwrap();
 }
 
 /// Panics unless every row follows the naming rule (module doc), names are unique, and every stage file
@@ -247,96 +227,4 @@ fn compile_all(glsl: &Path, out: &Path) {
         panic!("GLSL compilation failed:\n{}", errors.join("\n"));
     }
     std::fs::write(out.join("shaders.rs"), rs).unwrap();
-}
-
-/// The Rust constants of bindings.glsl, one per line of these forms (the header says why each exists):
-///   `#define NAME <integer>` (decimal, or 0x hex; optional `u`) and `const uint NAME = <integer>u;` → u32,
-///   `const float NAME = <expression>;` → f32, the expression copied as it is: float literals, names
-///   defined above, `+ - * /` and parentheses, which GLSL and Rust both fold to the same f32.
-/// A `#define` with a value or a `const` line of any other form is an error, so nothing is skipped. The
-/// comment lines right above a constant become its doc comment.
-fn bindings_rs(header: &str) -> Result<String, String> {
-    let mut b = String::from("// Generated by build.rs from glsl/shared/bindings.glsl.\n");
-    let mut defined: Vec<String> = vec![];
-    let mut doc = String::new();
-    let integer = |v: &str| -> Option<u32> {
-        let v = v.strip_suffix('u').unwrap_or(v);
-        match v.strip_prefix("0x").or_else(|| v.strip_prefix("0X")) {
-            Some(hex) => u32::from_str_radix(hex, 16).ok(),
-            None => v.parse().ok(),
-        }
-    };
-    for (i, line) in header.lines().enumerate() {
-        let line = line.trim();
-        if let Some(comment) = line.strip_prefix("//") {
-            if !comment.starts_with(" ----") {
-                writeln!(doc, "///{comment}").unwrap();
-            }
-            continue;
-        }
-        let bad = || format!("line {}: `{line}` is not one of the forms build.rs reads", i + 1);
-        let (name, rust) = if let Some(rest) = line.strip_prefix("#define") {
-            let mut it = rest.split_whitespace();
-            let (Some(name), value) = (it.next(), it.next()) else { return Err(bad()) };
-            let Some(value) = value else {
-                doc.clear();
-                continue; // the include guard
-            };
-            if it.next().is_some() {
-                return Err(bad());
-            }
-            (name, format!("u32 = {}", integer(value).ok_or_else(bad)?))
-        } else if let Some(rest) = line.strip_prefix("const ") {
-            let (decl, expr) = rest.strip_suffix(';').and_then(|r| r.split_once('=')).ok_or_else(bad)?;
-            let (ty, name) = decl.trim().split_once(' ').ok_or_else(bad)?;
-            let expr = expr.trim();
-            match ty {
-                "uint" if expr.ends_with('u') => (name.trim(), format!("u32 = {}", integer(expr).ok_or_else(bad)?)),
-                "float" if float_expression(expr, &defined) => (name.trim(), format!("f32 = {expr}")),
-                _ => return Err(bad()),
-            }
-        } else {
-            doc.clear();
-            continue;
-        };
-        writeln!(b, "{}pub const {name}: {rust};", std::mem::take(&mut doc)).unwrap();
-        defined.push(name.to_string());
-    }
-    Ok(b)
-}
-
-/// Whether `expr` holds only float literals (digits with a `.` or an exponent), names in `defined`, `+ - * /`,
-/// parentheses and spaces: an expression that means the same f32 in GLSL and in Rust.
-fn float_expression(expr: &str, defined: &[String]) -> bool {
-    let mut rest = expr;
-    while let Some(c) = rest.chars().next() {
-        let token_len = if c.is_ascii_digit() {
-            let mantissa = rest.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(rest.len());
-            let mut end = mantissa;
-            if rest[end..].starts_with('e') {
-                end += 1;
-                end += rest[end..].starts_with('-') as usize;
-                let digits = rest[end..].find(|c: char| !c.is_ascii_digit()).unwrap_or(rest.len() - end);
-                if digits == 0 {
-                    return false;
-                }
-                end += digits;
-            } else if !rest[..mantissa].contains('.') {
-                return false; // an integer: not a float in Rust
-            }
-            end
-        } else if c.is_ascii_alphabetic() || c == '_' {
-            let end = rest.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(rest.len());
-            if !defined.iter().any(|d| d == &rest[..end]) {
-                return false;
-            }
-            end
-        } else if " +-*/()".contains(c) {
-            1
-        } else {
-            return false;
-        };
-        rest = &rest[token_len..];
-    }
-    true
 }

@@ -123,14 +123,6 @@ const uint CDF_HEADER = 4u;
 #define BVH_NO_TRI 0xFFFFFFFFu
 // Relative end epsilon of bvh_occluded (the CPU reference uses the same value in f64: bounce_oracles::cpu_ref::SHADOW_EPS).
 const float BVH_SHADOW_EPS = 1e-4;
-// `--visibility hybrid` (shared/hybrid.glsl, crates/graph/src/bvh/cells.rs): triangle lists over a grid of
-// about CELL_DENSITY cells per triangle (never finer than the voxels). A trace tests at most HYBRID_MAX_TESTS
-// listed triangles, then finishes with one BVH traversal from where it stands (Renderer::vpls_per_dispatch
-// counts both).
-#define B_CELL_OFFSETS 44
-#define B_CELL_TRIS 45
-#define CELL_DENSITY 16
-#define HYBRID_MAX_TESTS 96
 
 // ---- end_balls (passes/end_balls.rs, shared/end_balls.glsl): each shadow-ray end's empty half-ball ------
 // The pass reads the G-buffer (B_GATHER_G*) or the VPL images (B_VPL_*) and writes B_END_BALL_OUT; the

@@ -41,8 +41,6 @@ struct FrameUniforms {
     uvec4 voxel_dims;        // xyz cells per axis, w total cells
     uvec4 light_map;         // the VPL map of each light (shared/lightmap.glsl): x kind (LIGHT_MAP_*),
                              // y faces per light, z tan(fov/2) of a perspective face (float bits), w unused
-    uvec4 cells;             // `--visibility hybrid`'s list grid (shared/hybrid.glsl): xyz cells per axis over the
-                             // voxel grid's box, w voxel cells per list cell (crates/graph/src/bvh/cells.rs)
     vec4 vpl;                // x: the weight s of a VPL's patch area in its kernel 1/√(d⁴ + (s·A_v)²)
                              // (shared/vpl.glsl; 0: point VPLs, 1/d²), yzw unused
 };
@@ -77,7 +75,6 @@ struct RisPush {
     float radius;     // spatial radius, pixels
     float history_cap;// the history's confidence is capped at history_cap · M
     uint history;     // 1: last frame's reservoirs are bound at B_RIS_HISTORY
-    float target_floor;// δ: the target weighs a VPL the voxel march calls occluded by δ (1: no march)
     uint pool_tiles;  // candidates from a presampled pool of pool_tiles × RIS_POOL_TILE VPLs (0: per pixel)
     float learned;    // δ_L: the target weighs a VPL by max(V̂, δ_L), V̂ learned from earlier frames (0: off)
     uint vis_tile;    // the learned visibility's screen tiles, pixels per side
@@ -86,6 +83,7 @@ struct RisPush {
     uint near_radius; // the near window's half-width, texels (2r + 1 wide)
     uint control;     // 1: the shade adds β (U_g − g(y) W), the unshadowed control variate (no reuse only)
     uint picks;       // K: VPLs each reservoir's candidates keep, independently (layers: R = streams · K)
+    uint pad;
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

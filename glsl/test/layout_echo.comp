@@ -44,7 +44,6 @@ void main() {
     put4(f.voxel_origin);
     put4u(f.voxel_dims);
     put4u(f.light_map);
-    put4u(f.cells);
     put4(f.vpl);
     put4u(uvec4(gp.mode, gp.samples, gp.seed, gp.first));
     put4u(uvec4(gp.last, gp.accumulate, gp.add_direct, floatBitsToUint(gp.clamp_d2)));

@@ -1,13 +1,9 @@
 #version 460
-#ifdef SHADOW_POOL
-#extension GL_KHR_shader_subgroup_ballot : enable
-#extension GL_KHR_shader_subgroup_arithmetic : enable
-#endif
-// Test kernel: the shadow-ray queue of glsl/shared/shadow_queue.glsl (with SHADOW_POOL: the subgroup's
-// pool, test/shadow_queue.pool.comp) against one bvh_occluded_lifted call per ray. tests/tests/bvh.rs
+// Test kernel: the shadow-ray queue of glsl/shared/shadow_queue.glsl against one bvh_occluded_lifted call
+// per ray. tests/tests/bvh.rs
 // checks that the two answers agree bit for bit, and against the CPU reference. Bindings: the BVH, the
-// queues at B_TEST_IN and the answers at B_TEST_OUT. An invocation traces its queue twice (queued or
-// pooled, then one by one), so it loops at most SHADOW_QUEUE · (M + 1) + M + SHADOW_QUEUE · M + 4 times
+// queues at B_TEST_IN and the answers at B_TEST_OUT. An invocation traces its queue twice (queued, then
+// one by one), so it loops at most SHADOW_QUEUE · (M + 1) + M + SHADOW_QUEUE · M + 4 times
 // (M = max_iterations_occluded): the test keeps that under llvmpipe's 65535.
 #include "../shared/bvh.glsl"
 
@@ -20,7 +16,7 @@ struct Queue {
 };
 
 struct Answer {
-    uint queued; // shadow_queue_trace's (or shadow_pool_trace's) bits: ray j not occluded
+    uint queued; // shadow_queue_trace's bits: ray j not occluded
     uint single; // the same from bvh_occluded_lifted, one ray at a time
     uvec2 pad;
 };
@@ -28,30 +24,18 @@ struct Answer {
 layout(std430, set = 0, binding = B_TEST_IN) readonly buffer Queues { Queue queues[]; };
 layout(std430, set = 0, binding = B_TEST_OUT) writeonly buffer Answers { Answer answers[]; };
 
-#ifdef SHADOW_POOL
-#define SHADOW_POOL_INVOCATIONS WG_1D
-// A pooled ray's key: its queue and slot.
-vec3 shadow_pool_end(uint key) {
-    return queues[key / SHADOW_QUEUE].ends[key % SHADOW_QUEUE].xyz;
-}
-#endif
 #include "../shared/shadow_queue.glsl"
 
 void main() {
     uint q = gl_GlobalInvocationID.x;
-    // The pool needs every invocation of a subgroup: one past the last queue takes part with no rays.
+    // One past the last queue runs with no rays.
     bool inside = q < uint(queues.length());
     uint at = inside ? q : 0u;
     vec3 o = queues[at].o.xyz;
     uint n = inside ? min(queues[at].n.x, SHADOW_QUEUE) : 0u;
     Answer a;
-#ifdef SHADOW_POOL
-    for (uint j = 0u; j < n; j++) shadow_pool_key[j] = at * SHADOW_QUEUE + j;
-    a.queued = shadow_pool_trace(o, n);
-#else
     for (uint j = 0u; j < n; j++) shadow_queue_end[j] = queues[at].ends[j].xyz;
     a.queued = shadow_queue_trace(o, n);
-#endif
     if (!inside) return;
     a.single = 0u;
     for (uint j = 0u; j < n; j++)

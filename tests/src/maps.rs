@@ -45,17 +45,16 @@ pub struct EndBallMaps {
 }
 
 /// The G-buffer, the VPL maps and both end-ball passes, alone in a graph (settings with exact visibility,
-/// and the renderer's BVH built: `Renderer::bvh`).
+/// the renderer's BVH).
 pub fn render_end_balls(r: &Renderer, s: &FrameSettings) -> Result<EndBallMaps> {
     r.check(s)?;
     let uniforms = r.uniform_buffer(s)?;
     let f = r.frame_inputs(s, &uniforms);
-    let Some(bvh) = f.bvh else { anyhow::bail!("end balls need --visibility exact") };
     let mut g = Graph::new(&r.gpu);
     let gb = r.passes.gbuffer.add(&mut g, f);
     let v = r.passes.dprsm.add(&mut g, f);
-    let pixels = r.passes.end_balls.add_pixels(&mut g, f, bvh, &gb);
-    let vpls = r.passes.end_balls.add_vpls(&mut g, f, bvh, &v);
+    let pixels = r.passes.end_balls.add_pixels(&mut g, f, &gb);
+    let vpls = r.passes.end_balls.add_vpls(&mut g, f, &v);
     for h in [&gb.position, &gb.normal, &pixels, &v.position, &vpls] {
         g.export(h);
     }

@@ -32,7 +32,8 @@
 
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu};
-use bounce_graph::bvh::{FlatBvh, GpuBvh, MAX_STEPS, NO_TRI, SHADOW_EPS};
+use bounce_graph::bvh::{FlatBvh, MAX_STEPS, NO_TRI, SHADOW_EPS};
+use bounce_graph::gpu_bvh::GpuBvh;
 use bounce_graph::scene::Scene;
 use bounce_graph::shader_types::Vertex;
 use bounce_oracles::cpu_ref::{self, Bvh, Trace};
@@ -716,16 +717,6 @@ struct QueueOut {
 #[test]
 fn the_shadow_queue_answers_every_ray_as_one_occlusion_test_does() {
     check_shadow_queue(&TestGpu::new(), "shadow_queue", bounce_graph::shaders::SHADOW_QUEUE_COMP);
-}
-
-/// The same for the gather's `--shadow-rays pool` (`shadow_pool_trace`): rays handed between the lanes
-/// of a subgroup come back to the invocation that queued them, each with its own answer, including in
-/// the last workgroup, where invocations past the last queue take part with no rays.
-#[test]
-fn the_subgroup_pool_answers_every_ray_as_one_occlusion_test_does() {
-    let gpu = TestGpu::new();
-    bounce_graph::passes::gather::pool_support(&gpu).expect("lavapipe runs the pool");
-    check_shadow_queue(&gpu, "shadow_pool", bounce_graph::shaders::SHADOW_QUEUE_POOL_COMP);
 }
 
 fn check_shadow_queue(gpu: &TestGpu, name: &'static str, kernel: &[u8]) {

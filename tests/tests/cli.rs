@@ -376,34 +376,16 @@ fn bad_inputs_give_one_line_and_exit_2() {
         ),
         ("garbage toml", vec![("s.toml", "\u{0}\u{1}[[[ = =".into())], vec![], "s.toml"),
         (
-            "learn visibility neither auto, off nor a number",
-            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
-            vec!["--method", "ris", "--learn-visibility", "sometimes"],
-            "--learn-visibility",
-        ),
-        (
-            "control variate neither on nor off",
-            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
-            vec!["--method", "ris", "--control-variate", "yes"],
-            "--control-variate",
-        ),
-        (
             "more picks than a reservoir holds",
             vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
             vec!["--method", "ris", "--picks", "9"],
             "--picks",
         ),
         (
-            "a ray pool without exact rays",
+            "a visibility the product no longer has",
             vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
-            vec!["--visibility", "voxel", "--shadow-rays", "pool"],
-            "--shadow-rays pool",
-        ),
-        (
-            "an unknown ray scheduling",
-            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
-            vec!["--shadow-rays", "stack"],
-            "--shadow-rays",
+            vec!["--visibility", "hybrid"],
+            "--visibility",
         ),
         // Checked before the render: the EXR, whose own path is fine, must not be written either.
         (
@@ -798,4 +780,26 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
     }
     let md = std::fs::read_to_string(bench_dir.join("bench.md")).unwrap();
     assert!(md.contains("0.3 s: frames") && md.contains("0.6 s: frames"), "{md}");
+}
+
+/// `docs/cli.md` is the command line's reference: every command's `--help` as clap prints it. It must
+/// match the schema; `BOUNCE_UPDATE_DOCS=1 cargo test -p bounce-tests cli_reference` rewrites it.
+#[test]
+fn cli_reference_matches_the_help() {
+    let path = bounce_tests::workspace().join("docs/cli.md");
+    let want = bounce::cli_reference();
+    if std::env::var_os("BOUNCE_UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &want).unwrap();
+    }
+    let have = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(have == want, "docs/cli.md differs from `bounce --help`: rerun with BOUNCE_UPDATE_DOCS=1");
+    // And the render command's help lists at most 35 distinct flags (the product's, not the lab's).
+    let render = want.split("\n## bounce render").nth(1).unwrap().split("\n## ").next().unwrap();
+    let mut flags: Vec<&str> = render
+        .lines()
+        .filter_map(|l| l.trim_start().strip_prefix("--").map(|f| f.split([' ', '<', '=']).next().unwrap()))
+        .collect();
+    flags.sort_unstable();
+    flags.dedup();
+    assert!(flags.len() <= 35, "render has {} flags: {flags:?}", flags.len());
 }

@@ -32,8 +32,7 @@ fn settings(w: u32, dprsm_res: u32) -> FrameSettings {
 fn check_radii(path: &str) -> (f64, f64) {
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::workspace().join(path)).unwrap();
-    let mut r = Renderer::new(&gpu, &scene).unwrap();
-    r.bvh().unwrap();
+    let r = Renderer::new(&gpu, &scene).unwrap();
     let s = settings(24, 16);
     let m = bounce_tests::maps::render_end_balls(&r, &s).unwrap();
     let diag = r.uniforms(&s).scene_min[3] as f64;

@@ -33,7 +33,6 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     f.voxel_origin = [next(), next(), next(), next()];
     f.voxel_dims = [3001, 3002, 3003, 3004];
     f.light_map = [3501, 3502, 3503, 3504];
-    f.cells = [3601, 3602, 3603, 3604];
     f.vpl = [next(), next(), next(), next()];
     let gp = GatherPush {
         mode: 4001,

@@ -1,34 +1,23 @@
-//! `--method reference`, both estimators (`glsl/reference.comp`): the two-strategy MIS (cosine at x,
-//! light side at y, balance heuristic) and the cosine strategy alone, against
+//! `--method reference` (`glsl/reference.comp`): the two-strategy MIS (cosine at x, light side at y,
+//! balance heuristic), against
 //! - the closed form inside a sphere (one light, and two lights of different colour and power: the light
 //!   strategy picks by luminance, so a wrong P(l) in either density shows up as a wrong channel);
 //! - the independent CPU one-bounce tracer (`bounce_oracles::cpu_ref`) on the Cornell box, with its
 //!   light, and with two more lights, one of them behind the back wall (it draws points that light x
 //!   does not reach: the two-sided density without the radiance);
-//! - each other: the mean of the MIS estimator over seeds agrees with the cosine estimator's within
-//!   their combined standard errors;
 //! - themselves: a frame's image does not depend on how its samples are split into submissions, and
 //!   the mean of progressive frames is one frame of all their samples (they continue one sequence).
 
 use super::vpl::sphere_scene;
-use bounce_graph::frame::{Component, FrameSettings, Method, ReferenceEstimator, Renderer};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::{point_light, Scene};
 use bounce_tests::TestGpu;
 use glam::Vec3;
 use std::f32::consts::PI;
 
-const ESTIMATORS: [ReferenceEstimator; 2] = [ReferenceEstimator::Mis, ReferenceEstimator::Cosine];
-
-fn name(e: ReferenceEstimator) -> &'static str {
-    match e {
-        ReferenceEstimator::Mis => "mis",
-        ReferenceEstimator::Cosine => "cosine",
-    }
-}
-
-/// The reference's indirect image: `spp` samples of estimator `e`, `w` × `h`.
-fn reference(r: &mut Renderer, e: ReferenceEstimator, spp: u32, seed: u64, w: u32, h: u32) -> Vec<[f32; 3]> {
-    reference_with(r, FrameSettings { reference_estimator: e, spp, seed, ..FrameSettings::default() }, w, h)
+/// The reference's indirect image: `spp` samples, `w` × `h`.
+fn reference(r: &mut Renderer, spp: u32, seed: u64, w: u32, h: u32) -> Vec<[f32; 3]> {
+    reference_with(r, FrameSettings { spp, seed, ..FrameSettings::default() }, w, h)
 }
 
 fn reference_with(r: &mut Renderer, base: FrameSettings, w: u32, h: u32) -> Vec<[f32; 3]> {
@@ -55,7 +44,7 @@ fn channel_mean(img: &[[f32; 3]], c: usize) -> f64 {
 /// Inside a closed sphere the bounce radiance is ρ²·ΣI/(πR²) per channel everywhere (tests/tests/vpl.rs),
 /// whatever the lights' positions: with one light, and with a second of another colour and power.
 #[test]
-fn both_estimators_match_the_sphere_closed_form_with_one_and_two_lights() {
+fn the_reference_matches_the_sphere_closed_form_with_one_and_two_lights() {
     let (radius, rho) = (1.0f32, 0.5f32);
     let one = sphere_scene(radius, 48, rho, Vec3::new(0.25, 0.3, -0.15), 2.0);
     let mut two = one.clone();
@@ -65,19 +54,18 @@ fn both_estimators_match_the_sphere_closed_form_with_one_and_two_lights() {
         let total: Vec3 = scene.lights.iter().map(|l| Vec3::from_slice(&l.intensity[..3])).sum();
         let want = total * rho * rho / (PI * radius * radius);
         let mut r = Renderer::new(&gpu, scene).unwrap();
-        for e in ESTIMATORS {
-            let img = reference(&mut r, e, 64, 1, 16, 16);
+        {
+            let img = reference(&mut r, 64, 1, 16, 16);
             for c in 0..3 {
                 let (m, w) = (channel_mean(&img, c), want[c] as f64);
                 eprintln!(
-                    "{} reference, sphere, {} light(s), channel {c}: {m:.5} vs closed form {w:.5} ({:+.2}%)",
-                    name(e),
+                    "mis reference, sphere, {} light(s), channel {c}: {m:.5} vs closed form {w:.5} ({:+.2}%)",
                     scene.lights.len(),
                     100.0 * (m - w) / w
                 );
                 // 1 %: the tessellation's 0.5 % (see sphere_closed_form_all_and_uniform) and the noise of
                 // 64 samples averaged over 256 pixels (below 0.3 % for either estimator here).
-                assert!(((m - w) / w).abs() < 0.01, "{}: {m} vs {w}", name(e));
+                assert!(((m - w) / w).abs() < 0.01, "mis: {m} vs {w}");
             }
         }
     }
@@ -94,7 +82,7 @@ fn cornell_three_lights() -> Scene {
 
 /// Each estimator against the independent CPU one-bounce tracer on the Cornell box (one light; three).
 #[test]
-fn both_estimators_match_the_cpu_tracer_in_the_cornell_box() {
+fn the_reference_matches_the_cpu_tracer_in_the_cornell_box() {
     let gpu = TestGpu::new();
     let (w, h) = (20, 20);
     for scene in [Scene::load(&bounce_tests::default_scene()).unwrap(), cornell_three_lights()] {
@@ -102,45 +90,22 @@ fn both_estimators_match_the_cpu_tracer_in_the_cornell_box() {
         let cpu: Vec<[f32; 3]> =
             bounce_oracles::cpu_ref::render_indirect(&scene, &bvh, w, h, 1024, 5).iter().map(|(m, _)| *m).collect();
         let mut r = Renderer::new(&gpu, &scene).unwrap();
-        for e in ESTIMATORS {
-            let img = reference(&mut r, e, 512, 1, w, h);
+        {
+            let img = reference(&mut r, 512, 1, w, h);
             let (mg, mc) = (bounce_tests::mean(&img), bounce_tests::mean(&cpu));
             let err = bounce_tests::rel_mse(&img, &cpu);
             eprintln!(
-                "{} reference vs cpu tracer, Cornell box, {} light(s): mean {mg:.5} vs {mc:.5} ({:+.2}%), relMSE {err:.4}",
-                name(e),
+                "mis reference vs cpu tracer, Cornell box, {} light(s): mean {mg:.5} vs {mc:.5} ({:+.2}%), relMSE {err:.4}",
                 scene.lights.len(),
                 100.0 * (mg - mc) / mc
             );
             // The 1024-sample CPU tracer carries relMSE ≈ 0.0066 of noise on the one-light box; the
             // 512-sample cosine estimate about as much again (stratified: less than twice its 1024's),
             // the MIS estimate far less. The image means agree to about 1 %.
-            assert!(err <= 0.03, "{}: relMSE {err} between two unbiased estimates of one integral", name(e));
-            assert!(((mg - mc) / mc).abs() <= 0.03, "{}: means {mg} vs {mc}", name(e));
+            assert!(err <= 0.03, "mis: relMSE {err} between two unbiased estimates of one integral");
+            assert!(((mg - mc) / mc).abs() <= 0.03, "mis: means {mg} vs {mc}");
         }
     }
-}
-
-/// The MIS estimator's image mean over K seeds against the cosine estimator's: two unbiased estimators
-/// of one integral, so their difference is within 4 combined standard errors (of the means over
-/// seeds: stratified samples are not independent within a frame, but the seeds' frames are).
-#[test]
-fn the_mis_and_cosine_means_agree_within_their_standard_errors() {
-    let scene = cornell_three_lights();
-    let gpu = TestGpu::new();
-    let mut r = Renderer::new(&gpu, &scene).unwrap();
-    let k = 12;
-    let mut stats = vec![];
-    for e in ESTIMATORS {
-        let means: Vec<f64> = (0..k).map(|seed| bounce_tests::mean(&reference(&mut r, e, 16, seed, 16, 16))).collect();
-        let m = means.iter().sum::<f64>() / k as f64;
-        let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64;
-        eprintln!("{}: image mean {m:.5} ± {:.5} over {k} seeds", name(e), (var / k as f64).sqrt());
-        stats.push((m, var / k as f64));
-    }
-    let ((m0, v0), (m1, v1)) = (stats[0], stats[1]);
-    let se = (v0 + v1).sqrt();
-    assert!((m0 - m1).abs() <= 4.0 * se, "mis {m0} vs cosine {m1}: {} standard errors", (m0 - m1).abs() / se);
 }
 
 /// The samples of a frame are indexed globally, so splitting them into other submissions gives the same
@@ -151,10 +116,9 @@ fn a_reference_frame_does_not_depend_on_its_chunks() {
     let scene = cornell_three_lights();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
-    for e in ESTIMATORS {
+    {
         let mut run = |chunk: Option<u32>, seed| {
             let s = FrameSettings {
-                reference_estimator: e,
                 spp: 13,
                 seed,
                 reference_chunk: chunk.and_then(std::num::NonZeroU32::new),
@@ -164,9 +128,9 @@ fn a_reference_frame_does_not_depend_on_its_chunks() {
         };
         let whole = run(Some(13), 3);
         for chunk in [None, Some(1), Some(5)] {
-            assert!(run(chunk, 3) == whole, "{}: chunks of {chunk:?} gave another image", name(e));
+            assert!(run(chunk, 3) == whole, "mis: chunks of {chunk:?} gave another image");
         }
-        assert!(run(None, 4) != whole, "{}: another seed gave the same image", name(e));
+        assert!(run(None, 4) != whole, "mis: another seed gave the same image");
     }
 }
 
@@ -180,8 +144,8 @@ fn progressive_reference_frames_are_one_sequence() {
     let scene = cornell_three_lights();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
-    for e in ESTIMATORS {
-        let base = FrameSettings { reference_estimator: e, spp: 2, seed: 7, ..FrameSettings::default() };
+    {
+        let base = FrameSettings { spp: 2, seed: 7, ..FrameSettings::default() };
         let mut mean = |base: &FrameSettings| {
             let mut sum = vec![[0.0f64; 3]; 16 * 16];
             for k in 0..4 {
@@ -203,18 +167,18 @@ fn progressive_reference_frames_are_one_sequence() {
                 .fold(0.0, f64::max)
         };
         let scale = whole.iter().flat_map(|p| p.iter().map(|&c| c as f64)).fold(0.0, f64::max);
-        assert!(scale > 0.0, "{}: a black image", name(e));
+        assert!(scale > 0.0, "mis: a black image");
         let tol = 1e-5 * scale;
         assert!(
             dev(&frames) <= tol,
             "{}: frames differ from one frame of their samples by {:.3e} (tolerance {tol:.3e})",
-            name(e),
+            "mis",
             dev(&frames)
         );
         assert!(
             dev(&other) > 100.0 * tol,
             "{}: another seed's frames match ({:.3e}): the check cannot tell",
-            name(e),
+            "mis",
             dev(&other)
         );
     }

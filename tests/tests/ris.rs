@@ -79,36 +79,33 @@ fn ris_is_unbiased_without_reuse_and_with_spatial_reuse() {
     }
 }
 
-/// A CDF source (gbg) and the voxel-visibility-aware target (`--target-floor 0.3`, glsl/ris.comp's
-/// target_at), with exact visibility in the shade and two spatial passes (whose weights evaluate the same
-/// target at each neighbour): still unbiased against `all`. The target also changes the image, so the
-/// march is really in it.
+/// A CDF source (gbg), with exact visibility in the shade and two spatial passes (whose weights evaluate
+/// the same target at each neighbour): still unbiased against `all`. The source also changes the image,
+/// so the CDF is really in it.
 #[test]
-fn ris_with_a_cdf_source_and_the_voxel_target_is_unbiased() {
+fn ris_with_a_cdf_source_is_unbiased() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = SIZE;
     let all = all(&mut r, Visibility::Exact);
-    let settings = |seed, floor| {
+    let settings = |seed, source| {
         let mut s = ris(Visibility::Exact, seed, 2, 0.0);
-        s.ris.source = RisSource::Gbg;
-        s.ris.target_floor = floor;
+        s.ris.source = source;
         s
     };
-    converges_to("ris (gbg source, target floor 0.3, exact, 2 spatial passes)", &all, |seed| {
-        indirect_with(&mut r, settings(seed, 0.3), w, h, res, vox)
+    converges_to("ris (gbg source, exact, 2 spatial passes)", &all, |seed| {
+        indirect_with(&mut r, settings(seed, RisSource::Gbg), w, h, res, vox)
     });
-    let plain = indirect_with(&mut r, settings(5, 1.0), w, h, res, vox);
-    let marched = indirect_with(&mut r, settings(5, 0.3), w, h, res, vox);
-    assert_ne!(plain, marched, "the voxel target changed nothing");
+    let uniform = indirect_with(&mut r, settings(5, RisSource::Uniform), w, h, res, vox);
+    let gbg = indirect_with(&mut r, settings(5, RisSource::Gbg), w, h, res, vox);
+    assert_ne!(uniform, gbg, "the gbg source changed nothing");
 }
 
 /// Candidates from the presampled pool (`--pool-tiles`, glsl/ris.comp's RIS_PRESAMPLE): a pixel's
 /// candidates are entries of a shared tile, correlated with its neighbours' but each a draw of the
 /// source, so the estimate stays unbiased against `all`, without reuse and with two spatial passes; a
-/// gbg source included (its probabilities travel with the pool's entries) and the voxel-visibility
-/// target. And the pool is really used:
+/// gbg source included (its probabilities travel with the pool's entries). And the pool is really used:
 /// the image differs from the per-pixel draws'.
 #[test]
 fn ris_from_a_presampled_pool_is_unbiased() {
@@ -127,12 +124,6 @@ fn ris_from_a_presampled_pool_is_unbiased() {
         let name = format!("ris (pool of 3 tiles, {source:?} source, {reuse} spatial passes, exact)");
         converges_to(&name, &all, |seed| indirect_with(&mut r, settings(seed, reuse, source, 3), w, h, res, vox));
     }
-    // With the voxel-visibility target (its own pool variant).
-    converges_to("ris (pool of 3 tiles, target floor 0.3, exact)", &all, |seed| {
-        let mut s = settings(seed, 0, RisSource::Uniform, 3);
-        s.ris.target_floor = 0.3;
-        indirect_with(&mut r, s, w, h, res, vox)
-    });
     // The near window (on by default in the runs above, where it covers the small map's whole face) as a
     // strict part of a face: 5 × 5 texels, half of the candidates.
     converges_to("ris (pool of 3 tiles, near window 5 × 5 for half the candidates, exact)", &all, |seed| {
@@ -499,13 +490,11 @@ fn ris_rejects_bad_flag_combinations() {
     };
     let cases = [
         ("psm", with(&|s| s.visibility = Visibility::Psm)),
-        ("psm", with(&|s| s.visibility = Visibility::PsmExact)),
         ("--candidates", with(&|s| s.ris.candidates = 0)),
         ("--spatial-neighbors", with(&|s| s.ris.spatial_neighbors = 9)),
         ("--spatial-neighbors", with(&|s| s.ris.spatial_neighbors = 0)),
         ("--spatial-radius", with(&|s| s.ris.spatial_radius = f32::NAN)),
         ("--temporal-cap", with(&|s| s.ris.temporal_cap = -1.0)),
-        ("--target-floor", with(&|s| s.ris.target_floor = 0.0)),
         ("--pool-tiles", with(&|s| s.ris.pool_tiles = 4097)),
         ("--learn-visibility", with(&|s| s.ris.learn_visibility = 1.5)),
         ("--learn-visibility", with(&|s| s.ris.learn_visibility = 0.1)), // base has reuse

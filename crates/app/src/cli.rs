@@ -11,8 +11,7 @@
 
 use bounce_device::GpuOptions;
 use bounce_graph::frame::{
-    Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, ReferenceEstimator, RisSettings, RisSource,
-    ShadowRays, Visibility, VplKernel,
+    Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, RisSettings, RisSource, Visibility, VplKernel,
 };
 use bounce_graph::scene::Scene;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -107,15 +106,6 @@ pub const RIS_SOURCES: Choices<RisSource> = Choices(&[
     ("gbg", RisSource::Gbg, "The gathering-based global CDF (--gather-rays)"),
 ]);
 
-pub const REFERENCE_ESTIMATORS: Choices<ReferenceEstimator> = Choices(&[
-    (
-        "mis",
-        ReferenceEstimator::Mis,
-        "Per sample a cosine direction at x and a light-side point (balance heuristic), stratified",
-    ),
-    ("cosine", ReferenceEstimator::Cosine, "The cosine direction at x alone, stratified"),
-]);
-
 pub const VISIBILITIES: Choices<Visibility> = Choices(&[
     ("voxel", Visibility::Voxel, "Amanatides–Woo march through the voxel grid (the thesis's ch. 7)"),
     ("exact", Visibility::Exact, "Default. Exact shadow rays against the triangles (BVH)"),
@@ -123,21 +113,6 @@ pub const VISIBILITIES: Choices<Visibility> = Choices(&[
         "psm",
         Visibility::Psm,
         "Per-VPL paraboloid shadow maps (thesis ch. 6) for one shared set of --vpls VPLs per frame",
-    ),
-    ("psm-exact", Visibility::PsmExact, "The shared set of `psm` with exact shadow rays (the maps' own error)"),
-    (
-        "hybrid",
-        Visibility::Hybrid,
-        "Exact's answer: a march through a grid of triangle lists, testing each cell's own triangles",
-    ),
-]);
-
-pub const SHADOW_RAYS: Choices<ShadowRays> = Choices(&[
-    ("queue", ShadowRays::Queue, "Default. Each invocation traces its own rays back to back"),
-    (
-        "pool",
-        ShadowRays::Pool,
-        "A subgroup's invocations share their rays (needs subgroup ballot and arithmetic operations)",
     ),
 ]);
 
@@ -178,7 +153,7 @@ pub const DEFAULT_SPP: u32 = 256;
 /// `render --time-limit`'s method when neither --method nor --vpls is given: the path tracer. Its progressive frames
 /// continue one stratified sample sequence per pixel, and at equal time it had the lowest error of every
 /// method on every scene of the suite, below ris and below the Mitsuba MIS tracer of
-/// `scripts/compare-mitsuba.py` (BENCHMARKS.md, "The path tracer's frames").
+/// `lab/compare-mitsuba.py` (BENCHMARKS.md, "The path tracer's frames").
 pub const TIME_LIMIT_METHOD: Method = Method::Reference;
 /// The reference's samples per pixel per progressive frame under `render --time-limit` when --spp is
 /// not given. Frames of one sequence differ only in how many samples the budget holds: a frame costs a
@@ -262,9 +237,6 @@ pub struct FrameArgs {
     /// Voxels along the longest side of the scene (cubic cells).
     #[arg(long, default_value_t = 128)]
     pub voxels: u32,
-    /// Clamp 1/d² below this distance, as a fraction of the scene diagonal (0: off, unbiased).
-    #[arg(long, default_value_t = 0.0)]
-    pub clamp: f32,
     /// A VPL's falloff with distance.
     #[arg(long, value_parser = VPL_KERNELS, default_value = "patch")]
     pub vpl_kernel: VplKernel,
@@ -287,25 +259,13 @@ pub struct FrameArgs {
     /// MIS weights (--method mis).
     #[arg(long, value_parser = MIS_WEIGHTS, default_value = "consistent")]
     pub mis_weights: MisWeights,
-    /// Samples per pixel of --method reference (default 256: with `mis`, its own noise is ≈ relMSE 1e-4
-    /// on the default scene at 128², in 1/9 of the time the cosine-only 4096 took for 0.0016); under
-    /// `render --time-limit`, per frame (default 8).
+    /// Samples per pixel of --method reference (default 256: its own noise is ≈ relMSE 1e-4 on the
+    /// default scene at 128²); under `render --time-limit`, per frame (default 8).
     #[arg(long)]
     pub spp: Option<u32>,
-    /// The reference's estimator (`mis`: one sample is one point of each strategy).
-    #[arg(long, value_parser = REFERENCE_ESTIMATORS, default_value = "mis")]
-    pub reference_estimator: ReferenceEstimator,
     /// Visibility of the VPL gather.
     #[arg(long, value_parser = VISIBILITIES, default_value = "exact")]
     pub visibility: Visibility,
-    /// How the gather's exact shadow rays are spread over a subgroup's lanes (the same images).
-    #[arg(long, value_parser = SHADOW_RAYS, default_value = "queue")]
-    pub shadow_rays: ShadowRays,
-    /// The exact shadow rays of the gather, mis and ris's shade skip the empty half-ball around each of
-    /// their ends, found once per pixel and per VPL: `on` or `off` (the same images; off walks whole
-    /// segments).
-    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
-    pub end_balls: bool,
     /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
     #[arg(long, default_value_t = 256)]
     pub psm_res: u32,
@@ -331,6 +291,26 @@ pub struct FrameArgs {
     /// own shadow ray (1 to 4; default 1, or chosen per view under `render --time-limit` without --vpls).
     #[arg(long)]
     pub picks: Option<u32>,
+    /// Switches that exist for A/B measurement (the `lab` cargo feature; BENCHMARKS.md says what each
+    /// measured): ris's reuse, pool and near window, learned visibility, control variate, the 1/d² clamp.
+    #[cfg(feature = "lab")]
+    #[command(flatten)]
+    pub lab: LabArgs,
+    /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layers; fail if they report anything.
+    #[arg(long)]
+    pub validation: bool,
+}
+
+/// The A/B switches of the `lab` cargo feature (left out of the default build; CI builds it once).
+#[cfg(feature = "lab")]
+#[derive(Args, Debug)]
+pub struct LabArgs {
+    /// Clamp 1/d² below this distance, as a fraction of the scene diagonal (0: off, unbiased).
+    #[arg(long, default_value_t = 0.0)]
+    pub clamp: f32,
     /// Spatial reuse passes of --method ris (0: none).
     #[arg(long, default_value_t = RisSettings::default().spatial_passes)]
     pub spatial_passes: u32,
@@ -344,10 +324,6 @@ pub struct FrameArgs {
     /// at most this many times --candidates (0: no temporal reuse).
     #[arg(long, default_value_t = RisSettings::default().temporal_cap)]
     pub temporal_cap: f32,
-    /// --method ris's target weighs a VPL the voxel march calls occluded by this (in (0, 1]; 1: the
-    /// unshadowed target, no march).
-    #[arg(long, default_value_t = RisSettings::default().target_floor)]
-    pub target_floor: f32,
     /// --method ris draws its candidates from a pool of this many tiles of 1024 source draws, made once
     /// per frame (0: each pixel draws its own).
     #[arg(long, default_value_t = RisSettings::default().pool_tiles)]
@@ -369,26 +345,39 @@ pub struct FrameArgs {
     /// unshadowed sum minus the kept one's, mean 0; without reuse): `on` or `off`.
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub control_variate: bool,
-    /// Use the first Vulkan device whose name contains this (also: BOUNCE_DEVICE).
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Enable the Vulkan validation layers; fail if they report anything.
-    #[arg(long)]
-    pub validation: bool,
+}
+
+#[cfg(feature = "lab")]
+impl LabArgs {
+    /// `s` with these switches.
+    fn apply(&self, s: &mut FrameSettings) {
+        s.clamp = self.clamp;
+        let r = &mut s.ris;
+        r.spatial_passes = self.spatial_passes;
+        r.spatial_neighbors = self.spatial_neighbors;
+        r.spatial_radius = self.spatial_radius;
+        r.temporal_cap = self.temporal_cap;
+        r.pool_tiles = self.pool_tiles;
+        if let Some(n) = self.near_candidates {
+            r.near_candidates = n;
+        }
+        r.near_radius = self.near_radius;
+        r.learn_visibility = self.learn_visibility.floor();
+        r.learn_auto = self.learn_visibility == Learn::Auto;
+        r.control_variate = self.control_variate;
+    }
 }
 
 impl FrameArgs {
     /// The frame settings these flags give a `width` × `height` image; what they do not set (component,
     /// method, VPLs, seed, the graph's internal knobs) keeps `FrameSettings::default()`.
     pub fn settings(&self, width: u32, height: u32) -> FrameSettings {
-        FrameSettings {
+        #[allow(unused_mut)] // the `lab` feature's switches change it
+        let mut s = FrameSettings {
             width,
             height,
             spp: self.spp.unwrap_or(DEFAULT_SPP),
-            reference_estimator: self.reference_estimator,
             visibility: self.visibility,
-            shadow_rays: self.shadow_rays,
-            end_balls: self.end_balls,
             psm_res: self.psm_res,
             light_map: match self.light_map {
                 LightMap::Rsm { .. } => LightMap::Rsm { fov_deg: self.rsm_fov },
@@ -404,28 +393,27 @@ impl FrameArgs {
             dprsm_res: self.dprsm_res,
             shadow_res: self.shadow_res,
             voxels: self.voxels,
-            clamp: self.clamp,
             vpl_kernel: self.vpl_kernel,
             ris: RisSettings {
                 source: self.source.unwrap_or(RisSettings::default().source),
                 candidates: self.candidates.unwrap_or(RisSettings::default().candidates),
-                spatial_passes: self.spatial_passes,
-                spatial_neighbors: self.spatial_neighbors,
-                spatial_radius: self.spatial_radius,
-                temporal_cap: self.temporal_cap,
-                target_floor: self.target_floor,
-                pool_tiles: self.pool_tiles,
-                near_candidates: self.near_candidates.unwrap_or(RisSettings::default().near_candidates),
-                near_radius: self.near_radius,
-                learn_visibility: self.learn_visibility.floor(),
-                learn_auto: self.learn_visibility == Learn::Auto,
-                learn_tile: 0,
-                candidates_chunk: None,
-                control_variate: self.control_variate,
                 picks: self.picks.unwrap_or(RisSettings::default().picks),
+                ..RisSettings::default()
             },
             ..FrameSettings::default()
-        }
+        };
+        #[cfg(feature = "lab")]
+        self.lab.apply(&mut s);
+        s
+    }
+
+    /// Whether the command line chose ris's near-window candidates itself (the `lab` feature's
+    /// `--near-candidates`).
+    pub fn near_candidates_given(&self) -> bool {
+        #[cfg(feature = "lab")]
+        return self.lab.near_candidates.is_some();
+        #[cfg(not(feature = "lab"))]
+        false
     }
 
     /// The device to open: `--device`, `--validation`, no window.
@@ -688,12 +676,14 @@ mod tests {
 }
 
 /// `--learn-visibility`: `auto`, `off`, or a floor δ.
+#[cfg(feature = "lab")]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Learn {
     Auto,
     Floor(f32),
 }
 
+#[cfg(feature = "lab")]
 impl Learn {
     /// The floor δ_L the settings carry (0: off, or left to `auto`).
     pub fn floor(self) -> f32 {
@@ -704,6 +694,7 @@ impl Learn {
     }
 }
 
+#[cfg(feature = "lab")]
 fn parse_learn(s: &str) -> Result<Learn, String> {
     match s {
         "auto" => Ok(Learn::Auto),
@@ -712,6 +703,7 @@ fn parse_learn(s: &str) -> Result<Learn, String> {
     }
 }
 
+#[cfg(feature = "lab")]
 fn parse_on_off(s: &str) -> Result<bool, String> {
     match s {
         "on" => Ok(true),

@@ -20,6 +20,26 @@ use cli::{Cli, Command};
 use std::ffi::OsString;
 use std::io::Write;
 
+/// The command-line reference (`docs/cli.md`): every command's `--help`, as clap prints it, under a
+/// heading each. A test keeps the file equal to it (`BOUNCE_UPDATE_DOCS=1 cargo test cli_reference`
+/// rewrites it).
+pub fn cli_reference() -> String {
+    use clap::CommandFactory;
+    let mut cmd = Cli::command().term_width(100);
+    let mut md = String::from(
+        "# bounce command-line reference\n\nGenerated from the clap schema (`bounce <command> --help`); a test checks it.\n",
+    );
+    let top = cmd.render_long_help().to_string();
+    md += &format!("\n## bounce\n\n```text\n{}\n```\n", top.trim_end());
+    let names: Vec<String> = cmd.get_subcommands().map(|c| c.get_name().to_string()).collect();
+    for name in names {
+        let sub = cmd.find_subcommand_mut(&name).expect("listed above");
+        let help = sub.render_long_help().to_string();
+        md += &format!("\n## bounce {name}\n\n```text\n{}\n```\n", help.trim_end());
+    }
+    md
+}
+
 /// Runs the command line `args` (program name first); returns the exit code. Output goes to `out`,
 /// progress, warnings and the one-line error to `err`.
 pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32 {

@@ -25,9 +25,12 @@ impl Gpu {
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
+        // SAFETY: `*pool` is this device's command pool and `pool` (the guard) keeps it locked, which is the
+        // external synchronisation vkAllocateCommandBuffers needs; `info` asks for one primary buffer.
         let cmd = unsafe { d.allocate_command_buffers(&info) }.vk("vkAllocateCommandBuffers")?[0];
         // The pool stays locked while recording: one recording thread per device, by design.
         let result = (|| {
+            // SAFETY: `cmd` was just allocated (initial state) from the pool this thread keeps locked.
             unsafe {
                 d.begin_command_buffer(
                     cmd,
@@ -36,19 +39,34 @@ impl Gpu {
             }
             .vk("vkBeginCommandBuffer")?;
             let r = f(cmd);
+            // SAFETY: `cmd` was begun above and `f` only records into it (this crate's safe API never ends
+            // or resets it); its pool is still locked by this thread.
             unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+            // SAFETY: `d` is alive while `self` is; the fence is destroyed below on every path past here.
             let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
             let submit = [vk::SubmitInfo2::default()
                 .wait_semaphore_infos(wait)
                 .signal_semaphore_infos(signal)
                 .command_buffer_infos(&cmds)];
-            let waited = unsafe { d.queue_submit2(self.queue, &submit, fence) }
-                .vk("vkQueueSubmit2")
-                .and_then(|_| unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+            // SAFETY: `cmd` is executable (ended above); `fence` is new and unsignalled; `submit` and `cmds`
+            // are locals alive across the call. The queue is externally synchronised by the pool lock held
+            // here, which every `submit` takes (but see `Gpu::wait_idle` and `Swapchain`'s present, which
+            // use the queue without it). Caller contract for `wait`/`signal` (not checked): binary
+            // semaphores of this device, each waited one with a signal pending (the swapchain's acquire).
+            let submitted = unsafe { d.queue_submit2(self.queue, &submit, fence) }.vk("vkQueueSubmit2");
+            let waited = submitted.and_then(|_| {
+                // SAFETY: `fence` is a live fence of this device, just submitted with `cmd`.
+                unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+            });
+            // SAFETY: the fence is no longer in use: either the wait above saw it signalled or the submission
+            // failed and never used it. NOTE: if the wait itself fails (out of memory, device lost) the
+            // submission may still be pending here.
             unsafe { d.destroy_fence(fence, None) };
             waited.map(|_| r)
         })();
+        // SAFETY: `cmd` came from `*pool`, which this thread still holds locked, and it is not pending: its
+        // submission was waited for, or it was never submitted (same NOTE as the fence above on a failed wait).
         unsafe { d.free_command_buffers(*pool, &[cmd]) };
         drop(pool);
         result
@@ -168,6 +186,12 @@ impl DescriptorWrites {
                 }
             })
             .collect();
+        // SAFETY: each write points into `buffers`, `images` or `views` (one element, matching its
+        // descriptor count), all alive across the call. Caller contract (not checked): `cmd` is recording
+        // under `Gpu::submit`'s pool lock, `layout` is a layout of this device whose set 0 is a push-
+        // descriptor layout with these bindings and types (as `ComputePipeline`/`GraphicsPipeline` make),
+        // and the buffers, views and samplers written are still alive when the submission executes (this
+        // struct stores raw handles, not borrows).
         unsafe { gpu.push_descriptor.cmd_push_descriptor_set(cmd, bind_point, layout, 0, &writes) };
     }
 }

@@ -61,11 +61,15 @@ unsafe extern "system" fn debug_callback(
     if !counted || data.is_null() || user.is_null() {
         return vk::FALSE;
     }
+    // SAFETY: `data` is non-null (checked above), and the Vulkan spec keeps the callback data and every
+    // string it points to valid for the duration of this call; the reference does not outlive the call.
     let data = unsafe { &*data };
     let text = |p: *const std::ffi::c_char| {
         if p.is_null() {
             String::new()
         } else {
+            // SAFETY: `p` is non-null (checked) and is one of the callback data's NUL-terminated strings,
+            // valid until the callback returns; it is copied into an owned `String` before that.
             unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
         }
     };
@@ -73,6 +77,10 @@ unsafe extern "system" fn debug_callback(
     if SUPPRESSED_VUIDS.contains(&id.as_str()) {
         return vk::FALSE;
     }
+    // SAFETY: `user` is non-null (checked) and is the `Arc::as_ptr` of the `ValidationLog` that
+    // `create_messenger` registered; `Shared` keeps that `Arc` (its `validation` field) alive until after
+    // `Shared::drop` has destroyed the messenger, so the log is alive whenever the layer can call back.
+    // The log is `Sync` (a `Mutex` inside), so callbacks from several threads at once are fine.
     let log = unsafe { &*(user as *const ValidationLog) };
     log.push(format!("[{severity:?}] {id}: {}", text(data.p_message)));
     vk::FALSE
@@ -136,6 +144,9 @@ impl std::fmt::Debug for Gpu {
 }
 
 fn load_entry() -> Result<ash::Entry> {
+    // SAFETY: loading libvulkan runs the system Vulkan loader's initialisation code, which bounce has to
+    // trust to use Vulkan at all. The returned `Entry` keeps the library loaded while any clone lives, and
+    // `Shared::entry` is dropped only after `Shared::drop` has destroyed the instance.
     unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))
 }
 
@@ -149,10 +160,13 @@ fn version_string(v: u32) -> String {
 
 /// Device features bounce needs, with the reason for each (for the error message).
 fn check_suitable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::result::Result<(), String> {
+    // SAFETY: `instance` is alive and `pd` was enumerated from it (both callers pass handles from
+    // `instance.enumerate_physical_devices()`).
     let props = unsafe { instance.get_physical_device_properties(pd) };
     if props.api_version < vk::API_VERSION_1_3 {
         return Err(format!("Vulkan 1.3 (it has {})", version_string(props.api_version)));
     }
+    // SAFETY: as above: `pd` belongs to the live `instance`.
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     let has = |n: &CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(n));
     if !has(khr::push_descriptor::NAME) {
@@ -161,6 +175,8 @@ fn check_suitable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::resu
     let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13).push_next(&mut v12);
+    // SAFETY: `pd` belongs to the live `instance` (1.3, so vkGetPhysicalDeviceFeatures2 is core); the pNext
+    // chain points at `v13` and `v12`, locals that outlive the call (ash's `push_next` borrows them).
     unsafe { instance.get_physical_device_features2(pd, &mut f2) };
     let f = f2.features;
     for (ok, what) in [
@@ -179,6 +195,7 @@ fn check_suitable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::resu
             return Err(what.into());
         }
     }
+    // SAFETY: `pd` belongs to the live `instance`.
     let qf = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     if !qf.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)) {
         return Err("a queue with graphics and compute".into());
@@ -198,6 +215,7 @@ fn create_instance(
     let mut layers = vec![];
     let mut exts: Vec<*const std::ffi::c_char> = extra_exts.to_vec();
     if validation {
+        // SAFETY: a global command: it needs only the loaded loader in `entry`.
         let available =
             unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
         if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
@@ -207,6 +225,7 @@ fn create_instance(
         // Synchronization validation checks every barrier the graph derives (lavapipe runs commands in
         // order, so a missing barrier could not fail a test otherwise). It needs the layer's
         // VK_EXT_validation_features; a layer without it is too old for bounce's tests.
+        // SAFETY: a global command on the loaded loader; the layer name is a 'static NUL-terminated string.
         let layer_exts = unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
             .vk("vkEnumerateInstanceExtensionProperties")?;
         if !layer_exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::validation_features::NAME)) {
@@ -214,6 +233,7 @@ fn create_instance(
         }
         exts.push(ext::validation_features::NAME.as_ptr());
     }
+    // SAFETY: a global command: it needs only the loaded loader in `entry`.
     let has_debug_utils = unsafe { entry.enumerate_instance_extension_properties(None) }
         .unwrap_or_default()
         .iter()
@@ -230,6 +250,10 @@ fn create_instance(
     if validation {
         info = info.push_next(&mut features);
     }
+    // SAFETY: every pointer reachable from `info` (application info, layer and extension name arrays, the
+    // validation-features chain) points at locals of this function or at 'static C strings (`extra_exts`
+    // comes from `GpuOptions::instance_extensions`, `&'static CStr`), all alive across the call. The caller
+    // owns the returned instance and destroys it (`Shared::drop`, or its error path).
     unsafe { entry.create_instance(&info, None) }.map_err(|result| match result {
         vk::Result::ERROR_INCOMPATIBLE_DRIVER => Error::NoDevice(" (vkCreateInstance: incompatible driver)".into()),
         result => Error::Vk { call: "vkCreateInstance", result },
@@ -252,6 +276,9 @@ fn create_messenger(
         )
         .pfn_user_callback(Some(debug_callback))
         .user_data(Arc::as_ptr(log) as *mut c_void);
+    // SAFETY: `du` was loaded from the live `instance`; `debug_callback` has the PFN's signature and only
+    // dereferences `user` as `ValidationLog`, which the caller keeps alive (in `Shared`) until the messenger
+    // is destroyed, which happens before the instance (`Shared::drop`, or `with_instance`'s error path).
     let m = unsafe { du.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
     Ok((du, m))
 }
@@ -269,13 +296,20 @@ struct Picked {
 /// The device `opts` (or `BOUNCE_DEVICE`) names, else the most suitable one: discrete, integrated,
 /// virtual, then CPU; a device that lacks what bounce needs is an error naming what is missing.
 fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
+    // SAFETY: `instance` is a live instance (the caller destroys it only after this returns).
     let pds = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
     if pds.is_empty() {
         return Err(Error::NoDevice(String::new()));
     }
     let wanted = opts.device.clone().or_else(|| std::env::var("BOUNCE_DEVICE").ok()).filter(|s| !s.is_empty());
-    let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> =
-        pds.iter().map(|&pd| (pd, unsafe { instance.get_physical_device_properties(pd) })).collect();
+    let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> = pds
+        .iter()
+        .map(|&pd| {
+            // SAFETY: `pd` was just enumerated from the live `instance`.
+            let p = unsafe { instance.get_physical_device_properties(pd) };
+            (pd, p)
+        })
+        .collect();
     let (physical, properties) = if let Some(w) = &wanted {
         let wl = w.to_lowercase();
         *named.iter().find(|(_, p)| device_name(p).to_lowercase().contains(&wl)).ok_or_else(|| {
@@ -304,6 +338,7 @@ fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
             hint: "; update the driver (for lavapipe: `mesa-vulkan-drivers` from Debian 12 or newer)".into(),
         });
     }
+    // SAFETY: `physical` is one of the handles enumerated from the live `instance` above.
     let qfs = unsafe { instance.get_physical_device_queue_family_properties(physical) };
     let queue_family = qfs
         .iter()
@@ -311,6 +346,8 @@ fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
         .expect("check_suitable found a graphics+compute queue") as u32;
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    // SAFETY: `physical` belongs to the live `instance` and supports 1.3 (`check_suitable` passed), so
+    // VkPhysicalDeviceDriverProperties (1.2) is known to it; the chain points at the local `driver`.
     unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
     Ok(Picked {
         physical,
@@ -326,6 +363,9 @@ fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
 fn compute_subgroup_ops(instance: &ash::Instance, pd: vk::PhysicalDevice) -> vk::SubgroupFeatureFlags {
     let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
     let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub);
+    // SAFETY: `pd` was enumerated from the live `instance` (1.3 API, so the call is core); the chain points
+    // at the local `sub`, and a driver skips chained structures it does not know (spec, "Valid Usage for
+    // Structure Pointer Chains"), so this is also fine for `Gpu::enumerate`'s pre-1.1 devices.
     unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
     if sub.supported_stages.contains(vk::ShaderStageFlags::COMPUTE) {
         sub.supported_operations
@@ -340,6 +380,7 @@ fn create_device(instance: &ash::Instance, picked: &Picked, opts: &GpuOptions) -
     let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(picked.queue_family).queue_priorities(&prio)];
     let mut dev_exts = vec![khr::push_descriptor::NAME.as_ptr()];
     if opts.swapchain {
+        // SAFETY: `picked.physical` was enumerated from the live `instance`.
         let exts = unsafe { instance.enumerate_device_extension_properties(picked.physical) }.unwrap_or_default();
         if !exts.iter().any(|e| e.extension_name_as_c_str() == Ok(khr::swapchain::NAME)) {
             return Err(Error::MissingFeature {
@@ -369,6 +410,10 @@ fn create_device(instance: &ash::Instance, picked: &Picked, opts: &GpuOptions) -
         .queue_create_infos(&qinfo)
         .enabled_extension_names(&dev_exts)
         .push_next(&mut f2);
+    // SAFETY: `picked.physical` belongs to the live `instance`; `dinfo` and its chain (`qinfo` with `prio`,
+    // the 'static extension names, `f2` → `v13` → `v12`) are locals alive across the call. The queue family
+    // exists on this device (`pick_device`); every enabled feature and VK_KHR_push_descriptor were checked by
+    // `check_suitable`, VK_KHR_swapchain just above. The caller destroys the device before the instance.
     unsafe { instance.create_device(picked.physical, &dinfo, None) }
         .map_err(|result| Error::Vk { call: "vkCreateDevice", result })
 }
@@ -378,15 +423,20 @@ impl Gpu {
     pub fn enumerate() -> Result<Vec<DeviceInfo>> {
         let entry = load_entry()?;
         let instance = create_instance(&entry, false, &[])?;
+        // SAFETY: `instance` was just created and is destroyed only at the end of this function.
         let pds = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
         let mut out = vec![];
         for pd in pds {
+            // SAFETY: `pd` was enumerated from the live `instance`.
             let p = unsafe { instance.get_physical_device_properties(pd) };
             let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
             let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13);
+            // SAFETY: `pd` belongs to the live 1.3 `instance`; the chain points at the local `v13`, which a
+            // pre-1.3 driver skips (unknown chained structures are ignored, per the spec).
             unsafe { instance.get_physical_device_features2(pd, &mut f2) };
             let f = f2.features;
             let l = p.limits;
+            // SAFETY: `pd` was enumerated from the live `instance`.
             let qf = unsafe { instance.get_physical_device_queue_family_properties(pd) };
             let ts_bits = qf.first().map(|q| q.timestamp_valid_bits).unwrap_or(0);
             out.push(DeviceInfo {
@@ -418,6 +468,8 @@ impl Gpu {
                 suitable: check_suitable(&instance, pd),
             });
         }
+        // SAFETY: this instance has no child objects (no device or messenger was created from it; physical
+        // devices are not created objects) and is not used after this line.
         unsafe { instance.destroy_instance(None) };
         Ok(out)
     }
@@ -431,6 +483,9 @@ impl Gpu {
         match Self::with_instance(entry.clone(), instance.clone(), opts) {
             Ok(g) => Ok(g),
             Err(e) => {
+                // SAFETY: `with_instance` failed, and each of its error paths destroys what it created from
+                // the instance (device, messenger) before returning; nothing else holds this instance, and
+                // `entry` (the loader) is still alive here.
                 unsafe { instance.destroy_instance(None) };
                 Err(e)
             }
@@ -439,6 +494,7 @@ impl Gpu {
 
     fn with_instance(entry: ash::Entry, instance: ash::Instance, opts: &GpuOptions) -> Result<Gpu> {
         let validation = Arc::new(ValidationLog::default());
+        // SAFETY: a global command: it needs only the loaded loader in `entry`.
         let has_debug_utils = unsafe { entry.enumerate_instance_extension_properties(None) }
             .unwrap_or_default()
             .iter()
@@ -455,6 +511,11 @@ impl Gpu {
         });
         if made.is_err() {
             if let Some((du, m)) = &messenger {
+                // SAFETY: `m` was created from `instance` by `create_messenger` and nothing else will destroy
+                // it: `made` is an error, so no `Shared` took the copy handed to `with_device`; the device made
+                // on this path (if any) was already destroyed. NOTE: by now the `ValidationLog` that `m`'s user
+                // data points at has been dropped (the `validation` Arc moved into the closure above and went
+                // with it), so this relies on no callback firing during the destroy call itself.
                 unsafe { du.destroy_debug_utils_messenger(*m, None) };
             }
         }
@@ -474,9 +535,13 @@ impl Gpu {
         messenger: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     ) -> Result<Gpu> {
         let fail = |e: Error| {
+            // SAFETY: `device` was created by the caller and no `Gpu` owns it yet; every path that calls
+            // `fail` has destroyed the device's children first (the allocator is dropped before it), and the
+            // device is not used after `fail` returns.
             unsafe { device.destroy_device(None) };
             e
         };
+        // SAFETY: `create_device` asked for exactly one queue (index 0) of `picked.queue_family`.
         let queue = unsafe { device.get_device_queue(picked.queue_family, 0) };
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
@@ -494,6 +559,8 @@ impl Gpu {
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(picked.queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER | vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: `device` is alive; the queue family is the one the device was created with. The pool is
+        // destroyed in `Shared::drop` (before the device) or is never made here.
         let command_pool = match unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool") {
             Ok(p) => p,
             Err(e) => {
@@ -554,6 +621,10 @@ impl Gpu {
             let Ok(c) = CString::new(name) else { return };
             let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&c);
             // A failed name is cosmetic; ignore it.
+            // SAFETY: `du` was loaded for `self.device`, and `info` borrows `c`, alive across the call.
+            // Caller contract (not checked): `handle` is an object of this device that no other thread is
+            // using (vkSetDebugUtilsObjectNameEXT synchronises it externally); bounce names only handles it
+            // has just created and not yet shared.
             let _ = unsafe { du.set_debug_utils_object_name(&info) };
         }
     }
@@ -563,17 +634,25 @@ impl Gpu {
         if let Some(du) = &self.debug_utils {
             let c = CString::new(name).unwrap_or_default();
             let label = vk::DebugUtilsLabelEXT::default().label_name(&c);
+            // SAFETY: `label` borrows `c` across the call. Caller contract (not checked): `cmd` is the command
+            // buffer `Gpu::submit` passed to its closure, so it is in the recording state and its pool is
+            // locked by this thread for the whole recording.
             unsafe { du.cmd_begin_debug_utils_label(cmd, &label) };
         }
     }
 
     pub fn end_label(&self, cmd: vk::CommandBuffer) {
         if let Some(du) = &self.debug_utils {
+            // SAFETY: caller contract, as in `begin_label`: `cmd` is `Gpu::submit`'s command buffer, recording
+            // under the pool lock, with a label region opened by `begin_label` still open.
             unsafe { du.cmd_end_debug_utils_label(cmd) };
         }
     }
 
     pub fn wait_idle(&self) -> Result<()> {
+        // SAFETY: `self.device` is alive while `self` is. NOTE: vkDeviceWaitIdle also requires host access
+        // to the device's queue to be externally synchronised; that holds only while no other thread is in
+        // `submit`/`submit_synced` or presenting on a clone of this `Gpu` (not enforced: no lock is taken).
         unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
         Ok(())
     }
@@ -585,16 +664,27 @@ impl Gpu {
 
 impl Drop for Shared {
     fn drop(&mut self) {
-        unsafe {
-            let _ = self.device.device_wait_idle();
-            self.device
-                .destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(PoisonError::into_inner), None);
-            ManuallyDrop::drop(&mut self.allocator);
-            self.device.destroy_device(None);
-            if let Some((du, m)) = self.messenger.take() {
-                du.destroy_debug_utils_messenger(m, None);
-            }
-            self.instance.destroy_instance(None);
+        // SAFETY: the last `Gpu` is gone, so no other thread can touch the queue (vkDeviceWaitIdle's external
+        // synchronisation), and every resource that held a clone has already been destroyed.
+        let _ = unsafe { self.device.device_wait_idle() };
+        let pool = *self.command_pool.get_mut().unwrap_or_else(PoisonError::into_inner);
+        // SAFETY: the device is idle, so no command buffer of the pool is pending; the pool belongs to
+        // `self.device` and nothing can lock it any more (`&mut self`).
+        unsafe { self.device.destroy_command_pool(pool, None) };
+        // SAFETY: this is the only place the allocator is dropped and the field is not touched afterwards.
+        // It frees its memory blocks through `self.device`, still alive here; every allocation was already
+        // returned by the `Buffer`/`Image` drops (each of which held a `Gpu`).
+        unsafe { ManuallyDrop::drop(&mut self.allocator) };
+        // SAFETY: every child of the device is gone: resources (they held `Gpu` clones), the command pool and
+        // the allocator's memory above; the device is idle and not used after this.
+        unsafe { self.device.destroy_device(None) };
+        if let Some((du, m)) = self.messenger.take() {
+            // SAFETY: `m` was created from `self.instance`, which is still alive, and its user data
+            // (`self.validation`) is alive too: fields are dropped only after this body.
+            unsafe { du.destroy_debug_utils_messenger(m, None) };
         }
+        // SAFETY: the instance's children (device, messenger) were destroyed above; `self.entry`, which keeps
+        // the loader loaded, is dropped only after this body.
+        unsafe { self.instance.destroy_instance(None) };
     }
 }

@@ -22,6 +22,8 @@
 //! 4. **Errors**: [`Error`] covers what a caller cannot prevent (no device, missing feature, out of memory,
 //!    device lost, any failing Vulkan call, named). Contract violations are bugs and panic.
 
+#![warn(clippy::undocumented_unsafe_blocks)]
+
 mod command;
 mod error;
 mod gpu;

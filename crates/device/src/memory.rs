@@ -54,7 +54,10 @@ impl Buffer {
         // Zero-sized buffers are invalid in Vulkan; an empty upload still gets a valid 4-byte buffer.
         let size = desc.size.max(4);
         let info = vk::BufferCreateInfo::default().size(size).usage(desc.usage);
+        // SAFETY: `gpu.device` is alive and `info` is a local with a non-zero size. The buffer is destroyed
+        // on the allocation-failure path below or by `Buffer::drop` (which holds a `Gpu`).
         let raw = unsafe { gpu.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        // SAFETY: `raw` was just created from `gpu.device`.
         let requirements = unsafe { gpu.device.get_buffer_memory_requirements(raw) };
         let allocation = gpu.allocator().allocate(&AllocationCreateDesc {
             name: &desc.name,
@@ -66,10 +69,14 @@ impl Buffer {
         let allocation = match allocation {
             Ok(a) => a,
             Err(source) => {
+                // SAFETY: `raw` was created above from this device and never bound or used.
                 unsafe { gpu.device.destroy_buffer(raw, None) };
                 return Err(Error::Alloc { name: desc.name.clone(), source });
             }
         };
+        // SAFETY: `raw` is not bound yet; the allocation was made by this device's allocator from `raw`'s own
+        // requirements (memory type, size, alignment), and it is freed only in `Buffer::drop`, after the
+        // buffer is destroyed.
         let bound = unsafe { gpu.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
         let mut buffer = Buffer {
             raw,
@@ -125,6 +132,10 @@ impl Buffer {
                 },
             )?;
             staging.mapped_mut().expect("CpuToGpu memory is mapped")[..data.len()].copy_from_slice(data);
+            // SAFETY: `cmd` is `submit`'s command buffer, recording. `staging` (TRANSFER_SRC) and `dst`
+            // (TRANSFER_DST) are live buffers of this device holding at least `data.len()` bytes, and both
+            // outlive the submission (`submit` waits for its fence). The host write above is visible to the
+            // copy: the memory is host-coherent and submission orders earlier host writes.
             gpu.submit(|cmd| unsafe {
                 let region = vk::BufferCopy::default().size(data.len() as u64);
                 gpu.device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[region]);
@@ -147,11 +158,15 @@ impl Buffer {
                 location: MemoryLocation::GpuToCpu,
             },
         )?;
-        gpu.submit(|cmd| unsafe {
+        gpu.submit(|cmd| {
             let mut state = Tracked::after(current, false);
             sync::transition(gpu, cmd, Target::Buffer(self.raw), &mut state, Access::TransferRead);
             let region = vk::BufferCopy::default().size(self.size);
-            gpu.device.cmd_copy_buffer(cmd, self.raw, staging.raw, &[region]);
+            // SAFETY: `cmd` is `submit`'s command buffer, recording. `self` and `staging` are live buffers of
+            // this device, both `self.size` bytes, alive until the submission completes (`submit` waits);
+            // the barrier just recorded orders the copy after `current`. Not checked: that `self` was made
+            // with TRANSFER_SRC usage (the caller's `BufferDesc`).
+            unsafe { gpu.device.cmd_copy_buffer(cmd, self.raw, staging.raw, &[region]) };
             let mut staged = Tracked::after(Access::TransferWrite, false);
             sync::transition(gpu, cmd, Target::Buffer(staging.raw), &mut staged, Access::HostRead);
         })?;
@@ -172,6 +187,10 @@ fn texel_view(gpu: &Gpu, b: &Buffer, format: vk::Format, texel_bytes: u64) -> Re
         });
     }
     let info = vk::BufferViewCreateInfo::default().buffer(b.raw).format(format).offset(0).range(texels * texel_bytes);
+    // SAFETY: `b.raw` is a live, bound buffer of this device made with UNIFORM_TEXEL_BUFFER usage (both
+    // callers ensure it); the range is a whole number of texels within its size and within
+    // maxTexelBufferElements (checked above), and R32_UINT / R32G32B32A32_UINT are mandatory uniform-texel-
+    // buffer formats. The view is destroyed before the buffer (`Buffer::drop`, `TexelBuffer::drop`).
     let view = unsafe { gpu.device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
     gpu.set_name(view, &b.name);
     Ok(view)
@@ -180,8 +199,13 @@ fn texel_view(gpu: &Gpu, b: &Buffer, format: vk::Format, texel_bytes: u64) -> Re
 impl Drop for Buffer {
     fn drop(&mut self) {
         for v in [self.texel_view.take(), self.texel_view4.take()].into_iter().flatten() {
+            // SAFETY: `v` was created from `self.raw` by `self.gpu.device` (alive: this `Gpu` clone), is
+            // destroyed once (`take`), and no pending command buffer uses it: every submission waits for its
+            // fence before returning.
             unsafe { self.gpu.device.destroy_buffer_view(v, None) };
         }
+        // SAFETY: as above: a buffer of this live device, no longer used by the GPU; its views are gone and
+        // its memory is freed only after this.
         unsafe { self.gpu.device.destroy_buffer(self.raw, None) };
         if let Some(a) = self.allocation.take() {
             let _ = self.gpu.allocator().free(a);
@@ -209,6 +233,8 @@ impl TexelBuffer {
 
 impl Drop for TexelBuffer {
     fn drop(&mut self) {
+        // SAFETY: `self.view` was created from `self.buffer` by its (live) device and is destroyed here, before
+        // the `buffer` field drops; no pending command buffer uses it (every submission waits for its fence).
         unsafe { self.buffer.gpu.device.destroy_buffer_view(self.view, None) };
     }
 }
@@ -318,7 +344,11 @@ impl Image {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(desc.usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: `gpu.device` is alive; extent and layer count are within the device limits (checked
+        // above), with one mip level and one sample. Not checked: that the format supports `desc.usage`
+        // (the caller's `ImageDesc`). The image is destroyed below on failure or by `Image::drop`.
         let raw = unsafe { gpu.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        // SAFETY: `raw` was just created from `gpu.device`.
         let requirements = unsafe { gpu.device.get_image_memory_requirements(raw) };
         let allocation = match gpu.allocator().allocate(&AllocationCreateDesc {
             name: &desc.name,
@@ -329,6 +359,7 @@ impl Image {
         }) {
             Ok(a) => a,
             Err(source) => {
+                // SAFETY: `raw` was created above from this device and never bound or used.
                 unsafe { gpu.device.destroy_image(raw, None) };
                 return Err(Error::Alloc { name: desc.name.clone(), source });
             }
@@ -341,6 +372,9 @@ impl Image {
             gpu: gpu.clone(),
         };
         let a = image.allocation.as_ref().unwrap();
+        // SAFETY: `raw` is not bound yet; `a` was allocated by this device's allocator from `raw`'s own
+        // requirements (non-linear, as the image is OPTIMAL-tiled), and is freed only in `Image::drop`, after
+        // the image is destroyed.
         unsafe { gpu.device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
         // Views exist only for usages that take one (a transfer-only image has none).
         let viewable = vk::ImageUsageFlags::SAMPLED
@@ -357,6 +391,10 @@ impl Image {
             .view_type(if desc.array { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D })
             .format(desc.format)
             .subresource_range(image.full_range());
+        // SAFETY: `raw` is a live image of this device, bound to memory above; the view has its format and
+        // covers all its layers and its one mip level with its aspect. Not checked: a non-`array` desc must
+        // have one layer for a TYPE_2D view (`ImageDesc`'s constructors ensure it; its fields are public).
+        // The view is destroyed before the image in `Image::drop`.
         image.view = unsafe { gpu.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
         gpu.set_name(raw, &desc.name);
         gpu.set_name(image.view, &desc.name);
@@ -394,7 +432,7 @@ impl Image {
                 location: MemoryLocation::GpuToCpu,
             },
         )?;
-        gpu.submit(|cmd| unsafe {
+        gpu.submit(|cmd| {
             let mut state = Tracked::after(current, self.desc.is_depth());
             sync::transition(gpu, cmd, Target::Image(self), &mut state, Access::TransferRead);
             let region = vk::BufferImageCopy::default()
@@ -402,13 +440,20 @@ impl Image {
                     vk::ImageSubresourceLayers::default().aspect_mask(self.aspect()).layer_count(self.desc.layers),
                 )
                 .image_extent(vk::Extent3D { width: self.desc.width, height: self.desc.height, depth: 1 });
-            gpu.device.cmd_copy_image_to_buffer(
-                cmd,
-                self.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                staging.raw,
-                &[region],
-            );
+            // SAFETY: `cmd` is `submit`'s command buffer, recording. The transition just recorded put the
+            // image in TRANSFER_SRC_OPTIMAL; the region is its whole single-aspect extent, all layers, mip 0;
+            // `staging` holds exactly that many tightly packed texels (`texel_size` panics for formats it
+            // does not know). Both outlive the submission (`submit` waits). Not checked: that the image was
+            // made with TRANSFER_SRC usage (the caller's `ImageDesc`).
+            unsafe {
+                gpu.device.cmd_copy_image_to_buffer(
+                    cmd,
+                    self.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    staging.raw,
+                    &[region],
+                )
+            };
             let mut staged = Tracked::after(Access::TransferWrite, false);
             sync::transition(gpu, cmd, Target::Buffer(staging.raw), &mut staged, Access::HostRead);
         })?;
@@ -419,6 +464,9 @@ impl Image {
 
 impl Drop for Image {
     fn drop(&mut self) {
+        // SAFETY: the view (if any) and the image were created from `self.gpu.device`, alive through this
+        // `Gpu` clone; the view goes first, the memory only after; no pending command buffer uses them, since
+        // every submission waits for its fence before returning.
         unsafe {
             if self.view != vk::ImageView::null() {
                 self.gpu.device.destroy_image_view(self.view, None);
@@ -448,6 +496,7 @@ impl Sampler {
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .max_lod(0.0);
+        // SAFETY: `gpu.device` is alive and `info` is a local; the sampler is destroyed in `Sampler::drop`.
         let raw = unsafe { gpu.device.create_sampler(&info, None) }.vk("vkCreateSampler")?;
         Ok(Sampler { raw, gpu: gpu.clone() })
     }
@@ -455,6 +504,8 @@ impl Sampler {
 
 impl Drop for Sampler {
     fn drop(&mut self) {
+        // SAFETY: created from `self.gpu.device`, alive through this clone; no pending command buffer uses it,
+        // since every submission waits for its fence before returning.
         unsafe { self.gpu.device.destroy_sampler(self.raw, None) };
     }
 }

@@ -50,6 +50,10 @@ fn make_layouts(gpu: &Gpu, bindings: &[Binding], push_constant_size: u32, name: 
     let info = vk::DescriptorSetLayoutCreateInfo::default()
         .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
         .bindings(&b);
+    // SAFETY: `gpu.device` is alive; `info` borrows the local `b`; PUSH_DESCRIPTOR_KHR is allowed because
+    // `create_device` enables VK_KHR_push_descriptor. Not checked: distinct binding numbers and at most
+    // maxPushDescriptors of them (the caller's `bindings`). Destroyed below on failure or by the pipeline's
+    // `Drop`.
     let set = unsafe { gpu.device.create_descriptor_set_layout(&info, None) }.vk("vkCreateDescriptorSetLayout")?;
     gpu.set_name(set, name);
     let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_constant_size }];
@@ -58,9 +62,12 @@ fn make_layouts(gpu: &Gpu, bindings: &[Binding], push_constant_size: u32, name: 
     if push_constant_size > 0 {
         pinfo = pinfo.push_constant_ranges(&ranges);
     }
+    // SAFETY: `pinfo` borrows `sets` (the live `set` just made) and `ranges`, locals alive across the call.
+    // Not checked: `push_constant_size` a multiple of 4 and within maxPushConstantsSize.
     let pipeline = match unsafe { gpu.device.create_pipeline_layout(&pinfo, None) } {
         Ok(p) => p,
         Err(result) => {
+            // SAFETY: `set` was created above from this device and nothing references it.
             unsafe { gpu.device.destroy_descriptor_set_layout(set, None) };
             return Err(crate::Error::Vk { call: "vkCreatePipelineLayout", result });
         }
@@ -70,6 +77,10 @@ fn make_layouts(gpu: &Gpu, bindings: &[Binding], push_constant_size: u32, name: 
 
 fn shader_module(gpu: &Gpu, words: &[u32]) -> Result<vk::ShaderModule> {
     let info = vk::ShaderModuleCreateInfo::default().code(words);
+    // SAFETY: `words` is a `u32` slice (aligned, a whole number of words) alive across the call; callers
+    // destroy the module right after creating their pipeline. NOTE, not checked: the spec requires `words`
+    // to be valid SPIR-V for this device, and this safe path accepts any words (bounce passes only
+    // shaderc output).
     unsafe { gpu.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")
 }
 
@@ -116,7 +127,12 @@ impl ComputePipeline {
             .name(c"main")
             .specialization_info(&si);
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(me.layout)];
+        // SAFETY: `module` is live, `me.layout` was made by `make_layouts` from this device, and `info`,
+        // `stage` and `si` (borrowing `entries` and `data`, consistent: 4 bytes per constant) are locals
+        // alive across the call. Not checked: that the shader's interface matches the layout.
         let r = unsafe { gpu.device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        // SAFETY: pipeline creation has returned, and a pipeline does not need its module afterwards; the
+        // module is destroyed once, whether creation succeeded or not.
         unsafe { gpu.device.destroy_shader_module(module, None) };
         me.pipeline = r.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
         gpu.set_name(me.pipeline, name);
@@ -126,18 +142,25 @@ impl ComputePipeline {
     /// Bind the pipeline and push its descriptors and constants.
     pub fn bind(&self, cmd: vk::CommandBuffer, writes: &crate::DescriptorWrites, push: &[u8]) {
         let d = &self.gpu.device;
-        unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            writes.push(&self.gpu, cmd, vk::PipelineBindPoint::COMPUTE, self.layout);
-            if !push.is_empty() {
+        // SAFETY: `self.pipeline` is a live compute pipeline of this device (owned by `self`). Caller contract
+        // (not checked): `cmd` is `Gpu::submit`'s command buffer, recording under its pool lock, and `self`
+        // outlives the submission.
+        unsafe { d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline) };
+        writes.push(&self.gpu, cmd, vk::PipelineBindPoint::COMPUTE, self.layout);
+        if !push.is_empty() {
+            // SAFETY: `self.layout` is alive (owned by `self`) and the stage flags are exactly those of its
+            // push-constant range; `push` is read only during the call (ash passes its length). Caller
+            // contract, as for the bind. NOTE, not checked: `push.len()` must be a multiple of 4 and at most
+            // the `push_constant_size` the pipeline was made with (0: the layout has no range at all).
+            unsafe {
                 d.cmd_push_constants(
                     cmd,
                     self.layout,
                     vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE,
                     0,
                     push,
-                );
-            }
+                )
+            };
         }
     }
 
@@ -152,12 +175,18 @@ impl ComputePipeline {
     ) {
         self.bind(cmd, writes, push);
         let g = |n: u32, l: u32| n.div_ceil(l).max(1);
+        // SAFETY: `bind` just bound this pipeline and pushed its descriptors on `cmd`; group counts are >= 1.
+        // Caller contract, as for `bind`, plus outside a rendering instance. Not checked: the counts against
+        // maxComputeWorkGroupCount.
         unsafe { self.gpu.device.cmd_dispatch(cmd, g(size[0], local[0]), g(size[1], local[1]), g(size[2], local[2])) };
     }
 }
 
 impl Drop for ComputePipeline {
     fn drop(&mut self) {
+        // SAFETY: all three were created from `self.gpu.device`, alive through this `Gpu` clone, and are
+        // destroyed once; `pipeline` may still be null (creation failed), which vkDestroyPipeline accepts. No
+        // pending command buffer uses them: every submission waits for its fence before returning.
         unsafe {
             self.gpu.device.destroy_pipeline(self.pipeline, None);
             self.gpu.device.destroy_pipeline_layout(self.layout, None);
@@ -248,8 +277,13 @@ impl GraphicsPipeline {
             .dynamic_state(&dy)
             .layout(me.layout)
             .push_next(&mut rendering)];
+        // SAFETY: the modules are live, `me.layout` was made by `make_layouts` from this device, and every
+        // state structure `info` points at (stages, `si`, `rendering` in the pNext chain, blend attachments
+        // matching `color_formats`) is a local alive across the call; dynamic rendering is enabled by
+        // `create_device`. Not checked: that the shaders' interface matches the layout.
         let r = unsafe { gpu.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
         for (_, m) in modules {
+            // SAFETY: pipeline creation has returned and no longer needs the module; each is destroyed once.
             unsafe { gpu.device.destroy_shader_module(m, None) };
         }
         me.pipeline = r.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
@@ -260,34 +294,46 @@ impl GraphicsPipeline {
     /// Bind the pipeline, set a full-extent viewport and scissor, push descriptors and constants.
     pub fn bind(&self, cmd: vk::CommandBuffer, extent: vk::Extent2D, writes: &crate::DescriptorWrites, push: &[u8]) {
         let d = &self.gpu.device;
+        let vp = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: extent.width as f32,
+            height: extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // SAFETY: `self.pipeline` is a live graphics pipeline of this device (owned by `self`) with dynamic
+        // viewport and scissor, one each, as set here. Caller contract (not checked): `cmd` is
+        // `Gpu::submit`'s command buffer, recording under its pool lock, and `self` outlives the submission.
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
-            let vp = vk::Viewport {
-                x: 0.0,
-                y: 0.0,
-                width: extent.width as f32,
-                height: extent.height as f32,
-                min_depth: 0.0,
-                max_depth: 1.0,
-            };
             d.cmd_set_viewport(cmd, 0, &[vp]);
             d.cmd_set_scissor(cmd, 0, &[vk::Rect2D { offset: vk::Offset2D::default(), extent }]);
-            writes.push(&self.gpu, cmd, vk::PipelineBindPoint::GRAPHICS, self.layout);
-            if !push.is_empty() {
+        }
+        writes.push(&self.gpu, cmd, vk::PipelineBindPoint::GRAPHICS, self.layout);
+        if !push.is_empty() {
+            // SAFETY: `self.layout` is alive (owned by `self`) and the stage flags are exactly those of its
+            // push-constant range; `push` is read only during the call (ash passes its length). Caller
+            // contract, as for the bind. NOTE, not checked: `push.len()` must be a multiple of 4 and at most
+            // the `push_constant_size` the pipeline was made with (0: the layout has no range at all).
+            unsafe {
                 d.cmd_push_constants(
                     cmd,
                     self.layout,
                     vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE,
                     0,
                     push,
-                );
-            }
+                )
+            };
         }
     }
 }
 
 impl Drop for GraphicsPipeline {
     fn drop(&mut self) {
+        // SAFETY: all three were created from `self.gpu.device`, alive through this `Gpu` clone, and are
+        // destroyed once; `pipeline` may still be null (creation failed), which vkDestroyPipeline accepts. No
+        // pending command buffer uses them: every submission waits for its fence before returning.
         unsafe {
             self.gpu.device.destroy_pipeline(self.pipeline, None);
             self.gpu.device.destroy_pipeline_layout(self.layout, None);

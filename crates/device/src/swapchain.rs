@@ -47,11 +47,17 @@ impl Swapchain {
     pub fn new(gpu: &Gpu, surface: vk::SurfaceKHR, width: u32, height: u32, vsync: bool) -> Result<Swapchain> {
         let surface_fn = khr::surface::Instance::new(&gpu.entry, &gpu.instance);
         let swapchain_fn = khr::swapchain::Device::new(&gpu.instance, &gpu.device);
+        // SAFETY: `surface_fn` was loaded from this `Gpu`'s live entry and instance, and `gpu.physical` /
+        // `gpu.queue_family` are this device's. Caller contract (not checked: a raw handle): `surface` is a
+        // live surface created from `gpu.instance` (which implies VK_KHR_surface is enabled on it) and owned
+        // by nobody else.
         let supported =
             unsafe { surface_fn.get_physical_device_surface_support(gpu.physical, gpu.queue_family, surface) }
                 .unwrap_or(false);
         let d = &gpu.device;
         if !supported {
+            // SAFETY: this function owns `surface` (caller contract above); no swapchain was created on it and it
+            // is destroyed once, before the instance (held alive by `gpu`).
             unsafe { surface_fn.destroy_surface(surface, None) };
             return Err(Error::MissingFeature {
                 device: gpu.name.clone(),
@@ -59,6 +65,7 @@ impl Swapchain {
                 hint: String::new(),
             });
         }
+        // SAFETY: `d` is alive; the semaphore is destroyed in `Swapchain::drop`.
         let acquired =
             unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?;
         let mut s = Swapchain {
@@ -84,12 +91,19 @@ impl Swapchain {
     /// where it fixes one).
     pub fn recreate(&mut self, width: u32, height: u32) -> Result<()> {
         let d = &self.gpu.device;
+        // SAFETY: `d` is alive (this `Gpu` clone). NOTE: vkDeviceWaitIdle needs the queue externally
+        // synchronised, which holds only while no other thread submits on a clone of this `Gpu` (not
+        // enforced, as for `Gpu::wait_idle`).
         unsafe { d.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
         let pd = self.gpu.physical;
+        // SAFETY: `self.surface` is the live surface this swapchain owns, created from the instance `pd` was
+        // enumerated from; `surface_fn` was loaded from that instance.
         let caps = unsafe { self.surface_fn.get_physical_device_surface_capabilities(pd, self.surface) }
             .vk("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
+        // SAFETY: as above.
         let formats = unsafe { self.surface_fn.get_physical_device_surface_formats(pd, self.surface) }
             .vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
+        // SAFETY: as above.
         let modes = unsafe { self.surface_fn.get_physical_device_surface_present_modes(pd, self.surface) }
             .vk("vkGetPhysicalDeviceSurfacePresentModesKHR")?;
         let format = [vk::Format::B8G8R8A8_UNORM, vk::Format::R8G8B8A8_UNORM]
@@ -141,16 +155,29 @@ impl Swapchain {
             .present_mode(present_mode)
             .clipped(true)
             .old_swapchain(self.raw);
+        // SAFETY: the surface is live and supports presentation from this queue family (checked in `new`);
+        // format, usage (TRANSFER_DST, checked), extent (the surface's, or clamped into its range), image count
+        // and present mode (listed, or FIFO, always supported) come from the surface's own queries;
+        // `old_swapchain` is null or this surface's current swapchain. NOTE, not checked: the device must
+        // have VK_KHR_swapchain enabled (`GpuOptions::swapchain`; `Gpu` does not record it), and the extent
+        // must be non-zero (a minimised window can report 0×0).
         let raw = unsafe { self.swapchain_fn.create_swapchain(&info, None) }.vk("vkCreateSwapchainKHR")?;
         if self.raw != vk::SwapchainKHR::null() {
+            // SAFETY: the old swapchain was retired by the create above and the device is idle (waited above),
+            // so no pending command buffer writes its images; it is destroyed once, as `self.raw` is replaced.
             unsafe { self.swapchain_fn.destroy_swapchain(self.raw, None) };
         }
         self.raw = raw;
+        // SAFETY: `raw` is the swapchain just created from this device.
         self.images = unsafe { self.swapchain_fn.get_swapchain_images(raw) }.vk("vkGetSwapchainImagesKHR")?;
         for s in self.copied.drain(..) {
+            // SAFETY: the device is idle, so the submissions that signalled `s` are complete; each semaphore is
+            // destroyed once (`drain`). NOTE: vkDeviceWaitIdle does not formally cover a present's wait on `s`
+            // (only VK_EXT_swapchain_maintenance1's present fences do); this relies on the idle device.
             unsafe { d.destroy_semaphore(s, None) };
         }
         for _ in 0..self.images.len() {
+            // SAFETY: `d` is alive; these are destroyed by the next `recreate` or by `Swapchain::drop`.
             let s = unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?;
             self.copied.push(s);
         }
@@ -174,20 +201,28 @@ impl Swapchain {
             depth: 1,
         });
         let d = self.gpu.device.clone();
-        self.submit_and_present(index, |gpu, cmd| unsafe {
+        self.submit_and_present(index, |gpu, cmd| {
             let mut from = Tracked::after(last, false);
             sync::transition(gpu, cmd, Target::Image(src), &mut from, Access::TransferRead);
             let target = Target::External { image, range: color_range() };
             let mut state = Tracked::after(Access::Acquired, false);
             sync::transition(gpu, cmd, target, &mut state, Access::TransferWrite);
-            d.cmd_copy_image(
-                cmd,
-                src.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[region],
-            );
+            // SAFETY: `cmd` is `submit_synced`'s command buffer, recording. The transitions just recorded put
+            // `src` in TRANSFER_SRC_OPTIMAL and `image` (the swapchain image just acquired, alive while
+            // `self.raw` is, which cannot change under `&mut self`) in TRANSFER_DST_OPTIMAL; the region is one
+            // colour layer within both extents. `src` is borrowed past the submission, which is waited for.
+            // Not checked (documented caller contract): `src` is a one-layer 32-bit colour image (size-
+            // compatible with the swapchain format) made with TRANSFER_SRC usage.
+            unsafe {
+                d.cmd_copy_image(
+                    cmd,
+                    src.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
+            };
             sync::transition(gpu, cmd, target, &mut state, Access::Present);
         })
         .map(|p| (p, Access::TransferRead))
@@ -195,6 +230,11 @@ impl Swapchain {
 
     /// The next image's index, `None` when the swapchain is out of date.
     fn acquire(&mut self) -> Result<Option<u32>> {
+        // SAFETY: `self.raw` is this swapchain's live handle; `self.acquired` is unsignalled with no pending
+        // operation, because every successful acquire is followed by `submit_and_present`, whose submission
+        // waits on it and is itself waited for. NOTE: if an error is returned between a successful acquire
+        // and that submission (e.g. the staging allocation in `present_rgba8`), the semaphore stays signalled
+        // and the next acquire breaks this rule.
         match unsafe { self.swapchain_fn.acquire_next_image(self.raw, u64::MAX, self.acquired, vk::Fence::null()) } {
             Ok((index, _suboptimal)) => Ok(Some(index)),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(None),
@@ -218,6 +258,10 @@ impl Swapchain {
         let indices = [index];
         let present =
             vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
+        // SAFETY: `index` was acquired from the live `self.raw` and not presented yet; `copied[index]` was
+        // signalled by the submission just waited for; `present` borrows locals alive across the call. NOTE:
+        // the queue must be externally synchronised, but the present does not hold the command-pool lock
+        // that `submit` takes, so another thread submitting on a clone of this `Gpu` would race with it.
         match unsafe { self.swapchain_fn.queue_present(self.gpu.queue, &present) } {
             Ok(_) => Ok(Presented::Yes),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Presented::OutOfDate),
@@ -264,13 +308,21 @@ impl Swapchain {
                 height: height.min(self.extent.height),
                 depth: 1,
             });
-        self.submit_and_present(index, |gpu, cmd| unsafe {
+        self.submit_and_present(index, |gpu, cmd| {
             // The barriers come from the access table like every other: acquired (the semaphore's wait
             // at the transfer stage, old contents discarded) → copy destination → presentation.
             let target = Target::External { image, range: color_range() };
             let mut state = Tracked::after(Access::Acquired, false);
             sync::transition(gpu, cmd, target, &mut state, Access::TransferWrite);
-            d.cmd_copy_buffer_to_image(cmd, staging_raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy]);
+            // SAFETY: `cmd` is `submit_synced`'s command buffer, recording; `image` is the swapchain image
+            // just acquired, in TRANSFER_DST_OPTIMAL after the transition above; `staging_raw` is
+            // `self.staging`, alive and unchanged until the submission (waited for) completes, holding at least
+            // 4 × width × height bytes, which bounds every row the copy reads (row length `width`, at most
+            // `height` rows). The staging texels have the swapchain format's byte order (swizzled above).
+            // Not checked: a zero `width` or `height` makes an invalid zero-sized copy.
+            unsafe {
+                d.cmd_copy_buffer_to_image(cmd, staging_raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy])
+            };
             sync::transition(gpu, cmd, target, &mut state, Access::Present);
         })
     }
@@ -284,12 +336,21 @@ fn color_range() -> vk::ImageSubresourceRange {
 impl Drop for Swapchain {
     fn drop(&mut self) {
         let d = &self.gpu.device;
+        // SAFETY: `d` is alive (this `Gpu` clone). Same NOTE on the queue's external synchronisation as in
+        // `recreate`.
+        let _ = unsafe { d.device_wait_idle() };
+        // SAFETY: the device is idle, so no pending submission waits on or signals these semaphores (same
+        // NOTE on presents as in `recreate`); each is destroyed once.
         unsafe {
-            let _ = d.device_wait_idle();
             for s in self.copied.drain(..) {
                 d.destroy_semaphore(s, None);
             }
             d.destroy_semaphore(self.acquired, None);
+        }
+        // SAFETY: no pending command buffer writes the swapchain's images (device idle); the swapchain is
+        // destroyed before its surface, and the surface before the instance, which this `Gpu` clone keeps
+        // alive; the surface is owned by this swapchain (taken in `new`).
+        unsafe {
             if self.raw != vk::SwapchainKHR::null() {
                 self.swapchain_fn.destroy_swapchain(self.raw, None);
             }

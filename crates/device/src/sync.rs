@@ -259,6 +259,10 @@ fn record(gpu: &Gpu, cmd: vk::CommandBuffer, target: Target, b: &Barrier) {
                 .dst_access_mask(d.access)
                 .buffer(buffer)
                 .size(vk::WHOLE_SIZE)];
+            // SAFETY: `bb` is a local alive across the call; synchronization2 is enabled by `create_device`,
+            // and the stages and accesses come from the access table. Caller contract of `transition` (not
+            // checked): `cmd` is `Gpu::submit`'s command buffer, recording under its pool lock, and `buffer`
+            // is a live buffer of this device that outlives the submission.
             unsafe { gpu.device.cmd_pipeline_barrier2(cmd, &dep.buffer_memory_barriers(&bb)) };
             return;
         }
@@ -274,6 +278,11 @@ fn record(gpu: &Gpu, cmd: vk::CommandBuffer, target: Target, b: &Barrier) {
         .new_layout(b.new_layout)
         .image(image)
         .subresource_range(range)];
+    // SAFETY: `ib` is a local alive across the call; synchronization2 is enabled by `create_device`; equal
+    // (zero) queue family indices mean no ownership transfer; stages, accesses and layouts come from the
+    // access table. Caller contract of `transition` (not checked): `cmd` is recording under `Gpu::submit`'s
+    // pool lock, and `image` (borrowed for `Target::Image`, raw for `Target::External`) is a live image of
+    // this device, `range` within it, that outlives the submission.
     unsafe { gpu.device.cmd_pipeline_barrier2(cmd, &dep.image_memory_barriers(&ib)) };
 }
 

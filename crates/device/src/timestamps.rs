@@ -18,6 +18,8 @@ impl TimestampPool {
             vk::QueryPool::null()
         } else {
             let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
+            // SAFETY: `gpu.device` is alive; `capacity` > 0 here. The pool keeps a `Gpu` clone and destroys the
+            // query pool in `Drop`, before the device can go.
             unsafe { gpu.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?
         };
         Ok(TimestampPool { pool, capacity, used: 0, gpu: gpu.clone() })
@@ -31,6 +33,9 @@ impl TimestampPool {
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
         self.used = 0;
         if self.enabled() {
+            // SAFETY: `self.pool` is a live pool of this device and 0..capacity is its whole range. Caller
+            // contract (not checked): `cmd` is `Gpu::submit`'s command buffer, recording under its pool lock,
+            // outside a rendering instance.
             unsafe { self.gpu.device.cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
         }
     }
@@ -42,6 +47,9 @@ impl TimestampPool {
         }
         let q = self.used;
         self.used += 1;
+        // SAFETY: `q` < `capacity` (checked above), so the query exists in the live `self.pool`;
+        // synchronization2 is enabled by `create_device`. Caller contract (not checked): `cmd` is recording
+        // (as for `reset`) and `reset` was recorded before this write.
         unsafe { self.gpu.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, q) };
         Some(q)
     }
@@ -52,6 +60,9 @@ impl TimestampPool {
             return Ok(vec![]);
         }
         let mut out = vec![0u64; self.used as usize];
+        // SAFETY: `self.pool` is alive and queries 0..used exist (`used` <= `capacity`); `out` holds `used`
+        // u64s, matching TYPE_64 and the stride ash passes (size_of::<u64>). Caller contract: called after
+        // the fence of the submission that wrote them, else WAIT may block (a hang, not memory unsafety).
         unsafe {
             self.gpu.device.get_query_pool_results(
                 self.pool,
@@ -77,6 +88,8 @@ impl TimestampPool {
 impl Drop for TimestampPool {
     fn drop(&mut self) {
         if self.enabled() {
+            // SAFETY: the pool was created from `self.gpu.device`, which this `Gpu` clone keeps alive; no
+            // pending command buffer uses it, since every submission waits for its fence before returning.
             unsafe { self.gpu.device.destroy_query_pool(self.pool, None) };
         }
     }

@@ -1,69 +1,12 @@
-//! `#[repr(C)]` + `bytemuck::Pod` mirrors of `glsl/shared/types.glsl`. Every type carries size and offset
-//! asserts; the lavapipe `layout_echo` test checks that the GPU agrees.
+//! `#[repr(C)]` + `bytemuck::Pod` mirrors of `glsl/shared/types.glsl`: the frame's uniforms and the
+//! passes' push constants (the scene's own structs are `bounce_scene::layout`'s). Every type carries size
+//! and offset asserts; the lavapipe `layout_echo` test checks that the GPU agrees.
 
 use bytemuck::{Pod, Zeroable};
 use std::mem::{offset_of, size_of};
 
-/// One vertex of the flat triangle list (triangle `t` owns vertices `3t..3t+3`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Vertex {
-    /// xyz world position, w texture u.
-    pub position_u: [f32; 4],
-    /// xyz unit shading normal, w texture v.
-    pub normal_v: [f32; 4],
-}
-const _: () = assert!(size_of::<Vertex>() == 32);
-const _: () = assert!(offset_of!(Vertex, normal_v) == 16);
-
-impl Vertex {
-    pub fn position(&self) -> glam::Vec3 {
-        glam::Vec3::from_slice(&self.position_u[..3])
-    }
-    pub fn normal(&self) -> glam::Vec3 {
-        glam::Vec3::from_slice(&self.normal_v[..3])
-    }
-    pub fn uv(&self) -> glam::Vec2 {
-        glam::Vec2::new(self.position_u[3], self.normal_v[3])
-    }
-}
-
-/// rgb Kd (linear) and the texture index as a float (-1: none).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Material {
-    pub kd_tex: [f32; 4],
-}
-const _: () = assert!(size_of::<Material>() == 16);
-
-impl Material {
-    pub fn kd(&self) -> glam::Vec3 {
-        glam::Vec3::from_slice(&self.kd_tex[..3])
-    }
-    pub fn texture(&self) -> Option<usize> {
-        (self.kd_tex[3] >= 0.0).then_some(self.kd_tex[3] as usize)
-    }
-}
-
-/// A texture's place in the packed sRGB RGBA8 texel buffer.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct TextureInfo {
-    pub offset: u32,
-    pub width: u32,
-    pub height: u32,
-    pub pad: u32,
-}
-const _: () = assert!(size_of::<TextureInfo>() == 16);
-
-/// An isotropic point light.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Light {
-    pub position: [f32; 4],
-    pub intensity: [f32; 4],
-}
-const _: () = assert!(size_of::<Light>() == 32);
+// The scene's structs (its vertices, materials, textures and lights) live with the scene.
+pub use bounce_scene::layout::{Light, Material, TextureInfo, Vertex};
 
 /// Per-frame constants (one uniform buffer for every pass).
 #[repr(C)]
@@ -80,14 +23,12 @@ pub struct FrameUniforms {
     pub voxel_dims: [u32; 4],
     /// The VPL map kind (`LIGHT_MAP_*`), faces per light, tan(fov/2) bits (perspective faces), unused.
     pub light_map: [u32; 4],
-    /// `--visibility hybrid`'s list grid: cells per axis, voxel cells per list cell.
-    pub cells: [u32; 4],
     /// x: the weight s of a VPL's patch area in its kernel 1/√(d⁴ + (s·A_v)²) (`--vpl-kernel`; 0: 1/d²),
     /// yzw unused.
     pub vpl: [f32; 4],
 }
-const _: () = assert!(size_of::<FrameUniforms>() == 240);
-const _: () = assert!(offset_of!(FrameUniforms, vpl) == 224);
+const _: () = assert!(size_of::<FrameUniforms>() == 224);
+const _: () = assert!(offset_of!(FrameUniforms, vpl) == 208);
 const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 160);
 const _: () = assert!(offset_of!(FrameUniforms, eye) == 64);
 const _: () = assert!(offset_of!(FrameUniforms, size) == 112);
@@ -143,8 +84,6 @@ pub struct RisPush {
     pub radius: f32,
     pub history_cap: f32,
     pub history: u32,
-    /// δ: the target weighs a VPL the voxel march calls occluded by δ (1: the unshadowed target).
-    pub target_floor: f32,
     /// Candidates from a presampled pool of `pool_tiles` × `RIS_POOL_TILE` VPLs (0: drawn per pixel).
     pub pool_tiles: u32,
     /// δ_L: the target weighs a VPL by max(V̂, δ_L), V̂ the visibility learned from earlier frames' shadow
@@ -163,6 +102,7 @@ pub struct RisPush {
     /// K: VPLs each reservoir's candidates keep, independently, each traced by its own shadow ray; the
     /// reservoirs (layers) are `reservoirs` / K candidate streams of K picks.
     pub picks: u32,
+    pub pad: u32,
 }
 const _: () = assert!(size_of::<RisPush>() == 64);
 

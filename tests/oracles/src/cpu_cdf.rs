@@ -28,7 +28,7 @@
 //! points (`glsl/shared/owen_sobol.glsl`).
 
 /// Floats in the CDF header (`CDF_HEADER` of `glsl/shared/bindings.glsl`).
-pub const HEADER: usize = bounce_graph::bindings::CDF_HEADER as usize;
+pub const HEADER: usize = bounce_scene::bindings::CDF_HEADER as usize;
 
 /// A weight as the CDF counts it: `x > 0 && x < 1e30 ? x : 0` (NaN, ±∞, negatives and ≥ 1e30 → 0).
 pub fn sanitise(x: f32) -> f32 {

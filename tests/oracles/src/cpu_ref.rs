@@ -14,19 +14,19 @@
 //!
 //! Everything geometric is done in f64 so that the reference is limited by the scene's f32 data,
 //! not by its own arithmetic: differences against the GPU are then the GPU's. The tree is the
-//! renderer's ([`bounce_graph::bvh::build`]): only which triangles are tested depends on it, and the
+//! renderer's ([`bounce_scene::bvh::build`]): only which triangles are tested depends on it, and the
 //! brute-force comparison in the unit tests checks that the traversal misses none.
 //!
 //! Used by the integration tests and `tests/src/bin/make_references.rs`.
 
-pub use bounce_graph::bvh::Bvh;
-use bounce_graph::bvh::{BvhNode, BvhTri, MEDIAN_DEPTH};
-use bounce_graph::scene::Scene;
+pub use bounce_scene::bvh::Bvh;
+use bounce_scene::bvh::{BvhNode, BvhTri, MEDIAN_DEPTH};
+use bounce_scene::scene::Scene;
 use glam::{DVec3, Vec2, Vec3};
 
 /// Relative epsilon of segment visibility tests: [`Trace::occluded`] only counts hits with
 /// `t ∈ (SHADOW_EPS, 1 − SHADOW_EPS)` of the segment. It is the renderer's
-/// ([`bounce_graph::bvh::SHADOW_EPS`], `BVH_SHADOW_EPS` of `bindings.glsl`) before its rounding to f32
+/// ([`bounce_scene::bvh::SHADOW_EPS`], `BVH_SHADOW_EPS` of `bindings.glsl`) before its rounding to f32
 /// (in f64 here, because the reference tests segments in f64; `tests/tests/bvh.rs` checks that the two
 /// agree).
 /// Relative (not absolute) so it scales with the scene: it keeps the origin's own triangle (hit at
@@ -267,7 +267,7 @@ pub fn texel_coords(uv: Vec2, w: u32, h: u32) -> (u32, u32) {
 /// Linear albedo of material `material` at texture coordinate `uv` (Kd × decoded texel).
 pub fn albedo(scene: &Scene, material: u32, uv: Vec2) -> Vec3 {
     let Some(m) = scene.materials.get(material as usize) else {
-        return Vec3::splat(bounce_graph::scene::DEFAULT_ALBEDO);
+        return Vec3::splat(bounce_scene::scene::DEFAULT_ALBEDO);
     };
     let kd = m.kd();
     let Some(info) = m.texture().and_then(|t| scene.textures.get(t)) else {
@@ -559,9 +559,9 @@ pub fn render_indirect(scene: &Scene, bvh: &Bvh, w: u32, h: u32, spp: u32, seed:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use bounce_graph::camera::Camera;
-    use bounce_graph::scene::point_light;
-    use bounce_graph::shader_types::{Material, TextureInfo, Vertex};
+    use bounce_scene::camera::Camera;
+    use bounce_scene::layout::{Material, TextureInfo, Vertex};
+    use bounce_scene::scene::point_light;
     use std::f32::consts::PI;
 
     /// A 20×20 floor quad at y = 0 (two triangles, counter-clockwise seen from +y).
@@ -782,7 +782,7 @@ mod tests {
     #[test]
     fn bvh_matches_brute_force_on_the_cornell_box() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
-        let scene = bounce_graph::scene::load(&path).expect("cornell box loads");
+        let scene = bounce_scene::scene::load(&path).expect("cornell box loads");
         let hits = check_bvh_against_brute_force(&scene, 20_000, 0x9e3779b97f4a7c15);
         assert!(hits > 10_000, "{hits}");
     }
@@ -813,7 +813,7 @@ mod tests {
     #[test]
     fn cornell_box_direct_image_is_sane() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell-box/scene.toml");
-        let scene = bounce_graph::scene::load(&path).expect("cornell box loads");
+        let scene = bounce_scene::scene::load(&path).expect("cornell box loads");
         let bvh = Bvh::new(&scene);
         let n = 64;
         let img = render_direct_with(&scene, &bvh, n, n);

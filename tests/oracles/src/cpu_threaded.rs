@@ -1,11 +1,11 @@
 //! CPU twin of the shadow rays' stackless walk (`bvh_any_hit` in `glsl/shared/bvh.glsl`) over the
-//! renderer's threaded BVH records ([`bounce_graph::bvh::FlatBvh::threaded`]), in f64: the records it
-//! reads and whether a triangle crosses the segment. With [`crate::cpu_cells::brute_force`] (every
+//! renderer's threaded BVH records ([`bounce_scene::bvh::FlatBvh::threaded`]), in f64: the records it
+//! reads and whether a triangle crosses the segment. With [`crate::cpu_segment::brute_force`] (every
 //! triangle) it checks the layout's claim: a box's link skips only triangles inside that box, so the walk
 //! misses no occluder. `march-length` reports its records per ray for BENCHMARKS.md.
 
-use crate::cpu_cells::crosses;
-use bounce_graph::bvh::{GpuBvhTri, GpuThreadRec, THREAD_TRI};
+use crate::cpu_segment::crosses;
+use bounce_scene::bvh::{GpuBvhTri, GpuThreadRec, THREAD_TRI};
 use glam::DVec3;
 
 /// What one walk did.

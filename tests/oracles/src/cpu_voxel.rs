@@ -15,10 +15,10 @@
 //! 2.5 ulp off. That is why the arithmetic below is written component by component instead of with
 //! glam's `dot`/`cross`.
 
-use bounce_graph::bindings::{VOXEL_EPS, VOXEL_NEVER};
-pub use bounce_graph::bindings::{VOXEL_MIN_DIR, VOXEL_OFFSET_CELLS};
-use bounce_graph::passes::voxelize::VoxelGridSpec;
-use bounce_graph::scene::Scene;
+use bounce_scene::bindings::{VOXEL_EPS, VOXEL_NEVER};
+pub use bounce_scene::bindings::{VOXEL_MIN_DIR, VOXEL_OFFSET_CELLS};
+use bounce_scene::grid::VoxelGridSpec;
+use bounce_scene::scene::Scene;
 use glam::{IVec3, Vec3};
 
 /// Half size of a grown cell in grid units: ½ + ε (exact: ε is a power of two).

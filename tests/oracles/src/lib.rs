@@ -1,8 +1,8 @@
 //! bounce-oracles: the independent references the tests judge the renderer by. None of it runs in a
-//! frame; the renderer (`bounce-graph`) does not depend on it.
+//! frame; the renderer (`bounce-graph`) does not depend on it, and it depends on the scene crate alone.
 //!
 //! - [`cpu_ref`]: the exact CPU reference renderer (f64 ray casting over the renderer's SAH tree,
-//!   [`bounce_graph::bvh::Bvh`]): direct light per pixel, with the edge classification the per-pixel
+//!   [`bounce_scene::bvh::Bvh`]): direct light per pixel, with the edge classification the per-pixel
 //!   comparisons need, and a Monte Carlo one-bounce reference. `tests/src/bin/make_references.rs`
 //!   renders the committed reference images with it.
 //! - [`cpu_voxel`]: the CPU twin of the voxelizer and the voxel march (same f32 operations in the same
@@ -17,9 +17,9 @@
 //! Users: the integration tests (`tests/tests`), the tools in `tests/src/bin`, and the fuzz target.
 
 pub mod cpu_cdf;
-pub mod cpu_cells;
 pub mod cpu_end_balls;
 pub mod cpu_ref;
+pub mod cpu_segment;
 pub mod cpu_sobol;
 pub mod cpu_threaded;
 pub mod cpu_voxel;

@@ -15,7 +15,7 @@
 //!
 //! A part that is absent leaves its file absent, so missing-file paths are exercised too.
 
-use bounce_graph::scene::Scene;
+use bounce_scene::scene::Scene;
 use std::path::Path;
 
 /// The part separator.

@@ -27,7 +27,6 @@ use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
 use bounce_graph::frame::progressive::render_for;
-use bounce_graph::frame::settings::ReferenceEstimator;
 use bounce_graph::frame::{Component, FrameOutput, FrameSettings, LightMap, Method, Renderer, Visibility, VplKernel};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -193,9 +192,7 @@ impl Reference {
             scene.parent().and_then(|p| p.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let mut kind = self.kind();
         if self != Reference::All {
-            if base.reference_estimator == ReferenceEstimator::Mis {
-                kind += "-mis"; // caches of earlier runs, named without it, hold the cosine estimator
-            }
+            kind += "-mis"; // caches of earlier runs, named without it, hold the cosine estimator
             kind += &format!("-seed{PATH_REFERENCE_SEED}"); // earlier caches used the runs' seed 1
         } else {
             match base.light_map {

@@ -262,7 +262,7 @@ fn ris_frame_budget(
     err: &mut dyn Write,
 ) -> Result<()> {
     let blocked = renderer.blocked_share(settings.width, settings.height)?;
-    let (r, m, n, k) = if a.frame.candidates.is_none() && a.frame.near_candidates.is_none() {
+    let (r, m, n, k) = if a.frame.candidates.is_none() && !a.frame.near_candidates_given() {
         if blocked.is_some_and(|b| b < bounce_graph::passes::ris::AUTO_LEARN_BLOCKED) {
             crate::cli::RIS_FRAME_OPEN
         } else {

@@ -32,7 +32,7 @@ pub struct Keys {
     pub direct: u64,
     /// Importance and CDF: the VPLs, the grid, the importance parameters, and for every kind that draws
     /// gather points the G-buffer and the seed (`uniform`'s validity depends on the maps alone), and for
-    /// gbg whether its rays are traced (`exact`, `hybrid`), and the VPL kernel (importance weighs each
+    /// gbg whether its rays are traced (`exact`), and the VPL kernel (importance weighs each
     /// VPL by its unshadowed contribution).
     pub cdf: u64,
 }
@@ -57,8 +57,8 @@ impl Keys {
         let per_pixel = (p.kind != ImportanceKind::Uniform).then_some((gbuffer, p.seed));
         let params =
             (p.kind, p.samples, p.min_d2.to_bits(), p.fixed_scale.to_bits(), s.vpl_kernel.area_weight().to_bits());
-        // gbg's rays find their hits through the visibility's structure: the hybrid's exact hits differ.
-        let traced = matches!(p.kind, ImportanceKind::Gbg { .. }) && s.visibility.traces_gathering();
+        // gbg's rays find their hits through the BVH (exact) or the voxel grid: different hits.
+        let traced = matches!(p.kind, ImportanceKind::Gbg { .. }) && s.visibility.uses_bvh();
         Keys {
             voxels,
             vpls,

@@ -13,6 +13,6 @@ pub mod settings;
 pub use recipe::build_frame;
 pub use renderer::{FrameOutput, FrameState, RenderContext, Renderer};
 pub use settings::{
-    Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, ReferenceEstimator, RisSettings, RisSource,
-    SettingsError, ShadowRays, Visibility, VplKernel,
+    Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, RisSettings, RisSource, SettingsError,
+    Visibility, VplKernel,
 };

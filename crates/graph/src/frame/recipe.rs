@@ -73,10 +73,9 @@ pub fn build_frame<'a>(
     chunk: Range<u32>,
 ) -> anyhow::Result<FrameOut> {
     let (f, k) = (i.f, &i.keys);
-    // The voxel grid only where something marches it: exact and hybrid rays need none; ris's target
-    // marches it under `--target-floor` < 1.
-    let marched = !s.visibility.traces_gathering() || (s.method == Method::Ris && s.ris.target_floor < 1.0);
-    let voxels = marched.then(|| g.cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid)));
+    // The voxel grid only where something marches it: exact rays need none.
+    let voxels =
+        s.visibility.marches_voxels().then(|| g.cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid)));
     let vpls = g.cached("vpls", &k.vpls, |g| r.dprsm.add(g, f));
     let shadow = g.cached("shadow", &k.shadow, |g| r.dprsm.add_depth(g, f));
     let gbuffer = g.cached("gbuffer", &k.gbuffer, |g| r.gbuffer.add(g, f));
@@ -95,9 +94,8 @@ pub fn build_frame<'a>(
             g_albedo: gbuffer.albedo,
             direct: combined,
         };
-        let bvh = f.bvh.expect("the reference traces the BVH (the renderer builds it first)");
         let (push, per_dispatch) = (reference_push(s, chunk), i.reference_per_dispatch);
-        r.reference.add(g, f, bvh, io, &mut out, &mut sq, push, s.reference_estimator, per_dispatch);
+        r.reference.add(g, f, io, &mut out, &mut sq, push, per_dispatch);
         return Ok(FrameOut { radiance: out, second_moment: Some(sq), cdf: None });
     }
     let p = i.importance;
@@ -111,10 +109,9 @@ pub fn build_frame<'a>(
     });
     let mut inputs = GatherInputs::new(&gbuffer, &vpls, voxels, cdf.importance, cdf.cdf, combined);
     if s.uses_end_balls() {
-        let bvh = f.bvh.expect("exact visibility binds the BVH (the renderer builds it first)");
         inputs.ends = Some(EndBallImages {
-            pixels: g.cached("end_balls.pixels", &k.gbuffer, |g| r.end_balls.add_pixels(g, f, bvh, &gbuffer)),
-            vpls: g.cached("end_balls.vpls", &k.vpls, |g| r.end_balls.add_vpls(g, f, bvh, &vpls)),
+            pixels: g.cached("end_balls.pixels", &k.gbuffer, |g| r.end_balls.add_pixels(g, f, &gbuffer)),
+            vpls: g.cached("end_balls.vpls", &k.vpls, |g| r.end_balls.add_vpls(g, f, &vpls)),
         });
     }
     let push = gather_push(s, f, p, chunk);
@@ -238,17 +235,12 @@ pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
         neighbors: ris.spatial_neighbors,
         radius: ris.spatial_radius,
         history_cap: ris.temporal_cap,
-        target_floor: ris.target_floor,
         pool_tiles: ris.pool_tiles,
         learned: ris.learn_visibility,
         vis_tile: crate::passes::ris::vis_tile(s.width, s.height, ris.learn_tile),
         vis_cell: crate::passes::ris::vis_cell(s.dprsm_res),
-        // The near window needs the pool and a target without the voxel march: off otherwise.
-        near_candidates: if ris.pool_tiles > 0 && ris.target_floor >= 1.0 {
-            ris.near_candidates.min(ris.candidates.saturating_sub(1))
-        } else {
-            0
-        },
+        // The near window needs the pool: off otherwise.
+        near_candidates: if ris.pool_tiles > 0 { ris.near_candidates.min(ris.candidates.saturating_sub(1)) } else { 0 },
         near_radius: ris.near_radius,
         // The control variate's mean is 0 given a reservoir's own candidates: without reuse only. With one
         // candidate it is 0 outright (U_g = g(y) W), so it is not computed.

@@ -11,13 +11,9 @@
 use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
 use super::recipe::{build_frame, seed32, RecipeInputs};
-use super::settings::{
-    reject, Component, FrameSettings, LightMap, Method, RisSettings, SettingsError, ShadowRays, Visibility,
-};
-use crate::bindings::HYBRID_MAX_TESTS;
-use crate::bvh::cells::{CellLists, GpuCells};
-use crate::bvh::GpuBvh;
+use super::settings::{reject, Component, FrameSettings, LightMap, Method, RisSettings, SettingsError, Visibility};
 use crate::camera::Camera;
+use crate::gpu_bvh::GpuBvh;
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Graph, PassTiming, Persistent, Retained};
 use crate::passes::cdf_reduce::CdfReduce;
@@ -27,13 +23,13 @@ use crate::passes::reference::Reference;
 use crate::passes::voxelize::{self, VoxelGridSpec};
 use crate::passes::{FrameInputs, Passes};
 use crate::scene::Scene;
-use crate::shader_types::{FrameUniforms, Light, Vertex};
+use crate::shader_types::{FrameUniforms, Light};
 use anyhow::{Context, Result};
 use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, MemoryLocation};
 use glam::Vec3;
 
 /// What does not change from frame to frame: the device, the uploaded scene, every pass's pipelines,
-/// and the scene's BVH (built on first use).
+/// and the scene's BVH (built with the scene: every exact ray and the reference trace it).
 pub struct RenderContext {
     pub gpu: Gpu,
     pub scene: GpuScene,
@@ -41,17 +37,13 @@ pub struct RenderContext {
     /// The largest intensity component of any light (for the gbg fixed-point scale): the current
     /// lights', set before each frame.
     max_intensity: f32,
-    /// The scene's triangles, kept for the BVH.
-    vertices: Vec<Vertex>,
-    bvh: Option<GpuBvh>,
-    /// The BVH's triangles in its leaf order, kept for the cell lists (which index them).
+    bvh: GpuBvh,
+    /// The BVH's triangles in its leaf order, kept for the host's ray queries.
     bvh_tris: Vec<crate::bvh::GpuBvhTri>,
     /// Its nodes, kept for the host's ray queries ([`crate::bvh::query`]).
     bvh_nodes: Vec<crate::bvh::GpuBvhNode>,
     /// `--learn-visibility auto`'s blocked share for the last view asked about: (view key, share).
     blocked: Option<(u64, Option<f32>)>,
-    /// `--visibility hybrid`'s per-cell triangle lists, for the last grid asked for.
-    cells: Option<GpuCells>,
 }
 
 /// What changes from frame to frame: the camera, the lights, and the resources the graph keeps across
@@ -101,17 +93,16 @@ impl FrameOutput {
 
 impl Renderer {
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<Self> {
+        let flat = crate::bvh::FlatBvh::new(&crate::bvh::Bvh::from_vertices(&scene.vertices), &scene.vertices);
         let ctx = RenderContext {
             gpu: gpu.clone(),
             scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
             passes: Passes::new(gpu, !scene.textures.is_empty())?,
             max_intensity: max_intensity(&scene.lights),
-            vertices: scene.vertices.clone(),
-            bvh: None,
-            bvh_tris: Vec::new(),
-            bvh_nodes: Vec::new(),
+            bvh: GpuBvh::upload(gpu, &flat).context("uploading the BVH")?,
+            bvh_tris: flat.tris,
+            bvh_nodes: flat.nodes,
             blocked: None,
-            cells: None,
         };
         let state = FrameState { camera: scene.camera, lights: scene.lights.clone(), retained: Retained::default() };
         Ok(Renderer { ctx, state })
@@ -177,29 +168,9 @@ impl Renderer {
         self.ctx.uniform_buffer(s, &self.state.camera)
     }
 
-    /// The BVH of the scene, built on first use.
-    pub fn bvh(&mut self) -> Result<&GpuBvh> {
-        if self.ctx.bvh.is_none() {
-            let cpu = crate::bvh::Bvh::from_vertices(&self.ctx.vertices);
-            let flat = crate::bvh::FlatBvh::new(&cpu, &self.ctx.vertices);
-            self.ctx.bvh = Some(GpuBvh::upload(&self.ctx.gpu, &flat).context("uploading the BVH")?);
-            self.ctx.bvh_tris = flat.tris;
-            self.ctx.bvh_nodes = flat.nodes;
-        }
-        Ok(self.ctx.bvh.as_ref().expect("set above"))
-    }
-
-    /// `--visibility hybrid`'s per-cell triangle lists over the grid of `s`, built (with the BVH) on
-    /// first use and again when the grid changes.
-    pub fn cells(&mut self, s: &FrameSettings) -> Result<&GpuCells> {
-        self.bvh()?;
-        let spec = self.ctx.voxel_spec(s);
-        if self.ctx.cells.as_ref().is_none_or(|c| c.spec != spec) {
-            self.ctx.cells = None;
-            let lists = CellLists::build(&self.ctx.bvh_tris, &spec);
-            self.ctx.cells = Some(GpuCells::upload(&self.ctx.gpu, &lists, spec).context("uploading the cell lists")?);
-        }
-        Ok(self.ctx.cells.as_ref().expect("set above"))
+    /// The BVH of the scene.
+    pub fn bvh(&self) -> &GpuBvh {
+        &self.ctx.bvh
     }
 
     /// Build, execute and read back one frame.
@@ -233,7 +204,6 @@ impl Renderer {
     /// `--learn-visibility auto`'s share of the unshadowed transport into the current view that visibility
     /// blocks ([`crate::passes::ris::blocked_share`]), computed once per view and size.
     pub fn blocked_share(&mut self, width: u32, height: u32) -> Result<Option<f32>> {
-        self.bvh()?;
         let c = &self.state.camera;
         let key = crate::graph::fingerprint(&(
             super::keys::view_key(c, width, height),
@@ -268,7 +238,7 @@ impl Renderer {
     /// `s` with `--learn-visibility auto` decided for the current view (None: `s` as it is).
     fn auto_learn(&mut self, s: &FrameSettings) -> Result<Option<FrameSettings>> {
         let r = &s.ris;
-        let allowed = r.pool_tiles > 0 && r.spatial_passes == 0 && r.temporal_cap == 0.0 && r.target_floor >= 1.0;
+        let allowed = r.pool_tiles > 0 && r.spatial_passes == 0 && r.temporal_cap == 0.0;
         if s.method != Method::Ris || !r.learn_auto || r.learn_visibility > 0.0 || !allowed {
             return Ok(None);
         }
@@ -295,13 +265,6 @@ impl Renderer {
         let s = auto.as_ref().unwrap_or(s);
         self.ctx.scene.write_lights(&self.state.lights)?;
         self.ctx.max_intensity = max_intensity(&self.state.lights);
-        let reference = s.method == Method::Reference && s.component != Component::Direct;
-        if s.visibility.uses_bvh() || reference {
-            self.bvh()?;
-        }
-        if s.visibility == Visibility::Hybrid {
-            self.cells(s)?;
-        }
         let uniforms = self.uniform_buffer(s)?;
         let (ctx, state) = (&self.ctx, &mut self.state);
         let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
@@ -419,15 +382,9 @@ impl RenderContext {
         let faces = s.light_map.faces() * self.scene.light_count;
         let grid_march = dims.x + dims.y + dims.z + 3;
         // A shadow ray's (exact: the threaded any-hit walk) and a first-hit ray's (MIS's gathering rays).
-        let occlusion = match (&self.bvh, s.visibility) {
-            // The exact gather's pool (glsl/shared/shadow_queue.glsl): a block of SHADOW_QUEUE rays loops
-            // at most SHADOW_QUEUE · (M + 1) + M times, per VPL M + 1 + M / SHADOW_QUEUE.
-            (Some(b), Visibility::Exact) if s.shadow_rays == ShadowRays::Pool => {
-                let m = b.max_iterations_occluded();
-                m + 1 + m.div_ceil(crate::bindings::SHADOW_QUEUE)
-            }
-            (Some(b), Visibility::Exact | Visibility::PsmExact) => b.max_iterations_occluded(),
-            _ => self.trace_iterations(s).unwrap_or(grid_march),
+        let occlusion = match s.visibility {
+            Visibility::Exact => self.bvh.max_iterations_occluded(),
+            _ => grid_march,
         };
         let march = self.trace_iterations(s).unwrap_or(grid_march);
         // draw_vpl: its two binary searches (≤ 32 each), the sections and faces.
@@ -442,18 +399,9 @@ impl RenderContext {
         ((limit.saturating_sub(64)) / per_vpl).max(1)
     }
 
-    /// Loop iterations of one traced ray (exact or hybrid visibility), `None` for the voxel march. Hybrid:
-    /// the march over the list grid (one iteration per plane crossed), at most HYBRID_MAX_TESTS triangle tests, and one
-    /// BVH traversal that finishes a ray whose cells hold more (glsl/shared/hybrid.glsl).
+    /// Loop iterations of one traced ray (exact visibility), `None` for the voxel march.
     fn trace_iterations(&self, s: &FrameSettings) -> Option<u32> {
-        let b = self.bvh.as_ref()?;
-        let spec = self.voxel_spec(s);
-        let d = CellLists::list_grid(&spec, CellLists::factor(&spec, self.bvh_tris.len())).dims;
-        match s.visibility {
-            Visibility::Hybrid => Some(d.x + d.y + d.z + 3 + HYBRID_MAX_TESTS + b.max_iterations_per_ray()),
-            v if v.uses_bvh() => Some(b.max_iterations_per_ray()),
-            _ => None,
-        }
+        s.visibility.uses_bvh().then(|| self.bvh.max_iterations_per_ray())
     }
 
     /// Traced rays per invocation and dispatch under the loop limit (gbg's importance rays), each with
@@ -485,13 +433,9 @@ impl RenderContext {
                 self.gpu.loop_iteration_limit,
                 importance.kind.method_sections(),
                 s.light_map.faces() * self.scene.light_count,
-                self.ris_target_iterations(s),
                 s.ris.pool_tiles > 0,
             ),
-            reference_per_dispatch: self
-                .bvh
-                .as_ref()
-                .map_or(1, |b| Reference::per_dispatch(&self.gpu, b, self.scene.light_count, s.reference_estimator)),
+            reference_per_dispatch: Reference::per_dispatch(&self.gpu, &self.bvh, self.scene.light_count),
         }
     }
 
@@ -596,19 +540,16 @@ impl RenderContext {
             shadow: [s.shadow_bias * diag, s.shadow_slope_bias, 0.0, 0.0],
             voxel_origin,
             voxel_dims,
-            cells: self.cells.as_ref().filter(|c| c.spec == self.voxel_spec(s)).map_or([0; 4], |c| c.grid),
             vpl: [s.vpl_kernel.area_weight(), 0.0, 0.0, 0.0],
         }
     }
 
     /// The per-frame inputs every pass reads, for settings `s` and their uniform buffer.
     pub fn frame_inputs<'a>(&'a self, s: &FrameSettings, uniforms: &'a Buffer) -> FrameInputs<'a> {
-        let traced = s.visibility.uses_bvh() || (s.method == Method::Reference && s.component != Component::Direct);
         FrameInputs {
-            bvh: if traced { self.bvh.as_ref() } else { None },
-            cells: if s.visibility == Visibility::Hybrid { self.cells.as_ref() } else { None },
+            visibility: s.visibility,
+            bvh: &self.bvh,
             traces_per_dispatch: self.traces_per_dispatch(s),
-            exact_rays: s.visibility.traces_gathering(),
             scene: &self.scene,
             uniforms,
             width: s.width,
@@ -617,7 +558,6 @@ impl RenderContext {
             dprsm_res: s.dprsm_res,
             vpl_faces: s.light_map.faces(),
             vpls_per_dispatch: self.vpls_per_dispatch(s),
-            shadow_pool: s.shadow_rays == ShadowRays::Pool,
         }
     }
 
@@ -682,25 +622,12 @@ impl RenderContext {
         }
         voxelize::check_grid(&self.gpu, &self.voxel_spec(s)).map_err(|e| SettingsError(e.to_string()))?;
         if let (Method::Ris, Some(limit)) = (s.method, self.gpu.loop_iteration_limit) {
-            // A spatial pass evaluates (k + 1)² targets per reservoir, each with a march under --target-floor.
+            // A spatial pass evaluates (k + 1)² targets per reservoir.
             let evals = (s.ris.spatial_neighbors + 1).pow(2);
-            if evals * (self.ris_target_iterations(s) + 64) + 256 > limit {
-                reject!(
-                    "ris: {evals} target evaluations of a spatial pass, each marching {} cells, overrun this device's loop limit ({limit}); lower --spatial-neighbors or --voxels, or use --target-floor 1",
-                    self.ris_target_iterations(s)
-                );
+            if evals * 64 + 256 > limit {
+                reject!("ris: {evals} target evaluations of a spatial pass overrun this device's loop limit ({limit}); lower --spatial-neighbors");
             }
         }
         Ok(())
-    }
-
-    /// Loop iterations of one ris target evaluation: the voxel march under --target-floor < 1.
-    fn ris_target_iterations(&self, s: &FrameSettings) -> u32 {
-        let d = self.voxel_spec(s).dims;
-        if s.ris.target_floor < 1.0 {
-            d.x + d.y + d.z + 3
-        } else {
-            0
-        }
     }
 }

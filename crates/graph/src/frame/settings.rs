@@ -100,21 +100,18 @@ pub struct RisSettings {
     /// Temporal reuse across frames of one view: the history's confidence is capped at this many times
     /// M (0: no temporal reuse).
     pub temporal_cap: f32,
-    /// δ in (0, 1]: the target weighs a VPL the voxel march calls occluded by δ (1: the unshadowed
-    /// target, no march). Any δ > 0 keeps the estimate unbiased (glsl/ris.comp, `target_at`).
-    pub target_floor: f32,
     /// Candidates from a pool presampled once per frame: this many tiles of `RIS_POOL_TILE` source draws
     /// (RTXDI's light tiles), a candidate costing three texel fetches instead of a draw (0: each pixel
     /// draws its own, stratified).
     pub pool_tiles: u32,
     /// δ_L in (0, 1], or 0 for off: the target weighs a VPL by max(V̂, δ_L), V̂ the fraction of earlier
     /// frames' shadow rays from the pixel's screen tile to the VPL's light-map cell that were unoccluded
-    /// (progressive frames of one view; needs the pool, no reuse and the unshadowed target).
+    /// (progressive frames of one view; needs the pool and no reuse).
     pub learn_visibility: f32,
     /// `--learn-visibility auto` (the default): with `learn_visibility` 0, the renderer turns learning on
     /// (δ_L = `passes::ris::AUTO_LEARN_FLOOR`) for a view where visibility blocks most of the unshadowed
     /// transport (`passes::ris::blocked_share` ≥ `AUTO_LEARN_BLOCKED`, estimated once per view on the
-    /// CPU), when the other settings allow it (the pool, no reuse, the unshadowed target).
+    /// CPU), when the other settings allow it (the pool, no reuse).
     pub learn_auto: bool,
     /// The learned visibility's smallest screen tile, pixels (0: 16). `auto` sets it from the view's
     /// blocked share (`passes::ris::auto_vis_tile`).
@@ -124,7 +121,7 @@ pub struct RisSettings {
     /// with the pool's by balance weights (multiple-importance RIS, unbiased). It proposes the VPLs next
     /// to the pixel, whose kernel makes the target's tail, which a pool of source draws almost never
     /// holds. At most M − 1 are used (the pool's candidates keep every VPL drawable). Only with the pool
-    /// and without the voxel target (`target_floor` 1; off otherwise).
+    /// (off otherwise).
     pub near_candidates: u32,
     /// The near window's half-width, texels.
     pub near_radius: u32,
@@ -159,7 +156,6 @@ impl Default for RisSettings {
             spatial_neighbors: 4,
             spatial_radius: 16.0,
             temporal_cap: 0.0,
-            target_floor: 1.0,
             pool_tiles: 16,
             learn_visibility: 0.0,
             learn_auto: true,
@@ -175,57 +171,36 @@ impl Default for RisSettings {
     }
 }
 
-/// How the gather's exact shadow rays are spread over a subgroup's lanes (`--shadow-rays`). Every ray
-/// gets the same answer either way, so the images are the same, bit for bit; only the time differs
-/// (BENCHMARKS.md, "The gather's shadow rays shared by a subgroup").
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ShadowRays {
-    /// Each invocation walks its own queued rays back to back (`glsl/shared/shadow_queue.glsl`): the
-    /// faster on lavapipe's large scenes.
-    #[default]
-    Queue,
-    /// A subgroup's invocations share their rays through shared memory, so a lane whose ray is done
-    /// takes the next one whoever queued it (`shadow_pool_trace`): the lanes stay busy to the end of a
-    /// block. Needs subgroup ballot and arithmetic in compute shaders.
-    Pool,
-}
-
-/// How the VPL gather tests visibility.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// How the VPL gather tests visibility: one value from the command line to the shaders
+/// (`glsl/shared/visibility.glsl` answers "is this segment open" for each).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Visibility {
     /// Amanatides–Woo march through the voxel grid (the thesis's; 3–9 % dark on thin-walled and
     /// cluttered rooms, seams at junctions).
     Voxel,
     /// The default: shadow rays against the triangles (BVH); gbg's importance rays and mis's gathering
     /// rays hit the real surfaces, with no visibility bias. The gather's rays cost 0.4–0.8× the voxel
-    /// march on lavapipe's small scenes and 1.25–1.6× on Sibenik and Conference; on an H200 0.2–0.3×,
+    /// march on lavapipe's small scenes and 1.2–1.6× on Sibenik and Conference; on an H200 0.2–0.3×,
     /// and 0.97–1.12× on the large two (BENCHMARKS.md).
     Exact,
     /// Per-VPL paraboloid shadow maps (thesis ch. 6) for a shared set of `vpls` VPLs per frame
     /// (`passes/psm.rs`).
     Psm,
-    /// The shared set of `Psm` with exact shadow rays: the maps' own error, on identical VPLs.
-    PsmExact,
-    /// `Exact`'s answer, found by a march through a grid of triangle lists that tests each entered
-    /// cell's own triangles (`glsl/shared/hybrid.glsl`, `bvh/cells.rs`). Measured slower than the BVH on
-    /// lavapipe (1.1–2× on the small scenes, 1.5× on Sibenik), so not the default.
-    Hybrid,
 }
 
 impl Visibility {
-    /// Whether the gather's shadow rays go through the BVH.
+    /// Whether the frame's shadow rays (and gbg's importance rays) go through the BVH.
     pub fn uses_bvh(self) -> bool {
-        matches!(self, Visibility::Exact | Visibility::PsmExact | Visibility::Hybrid)
+        self == Visibility::Exact
     }
-    /// Whether gbg's importance rays find the real surface they hit (`Exact`, `Hybrid`) rather than the
-    /// first occupied voxel. Not `PsmExact`: it must draw the same shared set as `Psm`, so that the two
-    /// differ by the maps alone.
-    pub fn traces_gathering(self) -> bool {
-        matches!(self, Visibility::Exact | Visibility::Hybrid)
-    }
-    /// Whether the frame gathers a shared VPL set (`Psm`, `PsmExact`).
+    /// Whether the frame gathers a shared VPL set (`Psm`).
     pub fn shared_set(self) -> bool {
-        matches!(self, Visibility::Psm | Visibility::PsmExact)
+        self == Visibility::Psm
+    }
+    /// Whether something of the frame marches the voxel grid: the voxel visibility, and `psm`'s
+    /// gbg/mis gathering rays (the shared set keeps the thesis's voxel gathering).
+    pub fn marches_voxels(self) -> bool {
+        self != Visibility::Exact
     }
 }
 
@@ -338,16 +313,6 @@ impl Method {
     }
 }
 
-/// How `Method::Reference` draws its bounce points (`glsl/reference.comp`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ReferenceEstimator {
-    /// A cosine direction at x and a light-side point (a light, a uniform direction from it, its first
-    /// hit) per sample, combined by the balance heuristic.
-    Mis,
-    /// The cosine direction at x alone.
-    Cosine,
-}
-
 /// How a CDF method chooses the paraboloid face of a sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FaceMode {
@@ -395,23 +360,21 @@ pub struct FrameSettings {
     pub defensive: f32,
     pub face: FaceMode,
     pub mis_weights: MisWeights,
-    /// Samples per pixel of the reference integrator (under `ReferenceEstimator::Mis`, a sample is one
-    /// point of each strategy).
+    /// Samples per pixel of the reference integrator (a sample is one point of each of its two
+    /// strategies).
     pub spp: u32,
     /// The reference's first sample index: its samples are `sample_offset .. sample_offset + spp` of
     /// the pixel's Owen-scrambled Sobol sequence for `seed`. Progressive frames keep the seed and move
     /// this on by `spp` ([`super::progressive`]), so F frames are the first F · spp points of one
     /// stratified sequence instead of F independent scrambles of its first `spp`.
     pub sample_offset: u32,
-    pub reference_estimator: ReferenceEstimator,
     /// Samples per submission of the reference (`None`: a few dispatches' worth under the device's loop
     /// limit, at most 64). The image does not depend on it.
     pub reference_chunk: Option<std::num::NonZeroU32>,
     pub visibility: Visibility,
-    /// How the gather's exact shadow rays are scheduled (`Visibility::Exact` only; the same images).
-    pub shadow_rays: ShadowRays,
-    /// The exact shadow rays of the gather (queue or pool), mis and ris's shade skip their ends' empty balls
-    /// (`passes/end_balls.rs`; the same images, fewer BVH records per ray).
+    /// The exact shadow rays of the gather, mis and ris's shade skip their ends' empty balls
+    /// (`passes/end_balls.rs`): the same images with fewer BVH records per ray. Not a command-line
+    /// option; the tests turn it off to show that the images do not change.
     pub end_balls: bool,
     /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
     /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
@@ -450,10 +413,8 @@ impl Default for FrameSettings {
             mis_weights: MisWeights::Consistent,
             spp: 256,
             sample_offset: 0,
-            reference_estimator: ReferenceEstimator::Mis,
             reference_chunk: None,
             visibility: Visibility::Exact,
-            shadow_rays: ShadowRays::Queue,
             end_balls: true,
             shadow_res: 2048,
             shadow_bias: 1e-5,
@@ -499,19 +460,6 @@ impl FrameSettings {
         Ok(())
     }
 
-    /// `--shadow-rays pool`: the gather's exact rays, on a device that has what the pool needs.
-    fn validate_shadow_rays(&self, gpu: &Gpu) -> Result<(), SettingsError> {
-        if self.shadow_rays == ShadowRays::Pool {
-            if self.visibility != Visibility::Exact {
-                reject!("--shadow-rays pool schedules the gather's exact shadow rays: it needs --visibility exact");
-            }
-            if let Err(what) = crate::passes::gather::pool_support(gpu) {
-                reject!("--shadow-rays pool needs {what}, which {} lacks", gpu.name);
-            }
-        }
-        Ok(())
-    }
-
     /// `Method::Ris`'s settings against each other and the device's limits (other methods ignore them).
     fn validate_ris(&self, gpu: &Gpu) -> Result<(), SettingsError> {
         if self.method != Method::Ris {
@@ -519,7 +467,7 @@ impl FrameSettings {
         }
         let r = &self.ris;
         if self.visibility.shared_set() {
-            reject!("--method ris tests visibility per pixel and sample: --visibility psm/psm-exact share one VPL set across pixels (use voxel, exact or hybrid)");
+            reject!("--method ris tests visibility per pixel and sample: --visibility psm shares one VPL set across pixels (use voxel or exact)");
         }
         if !(1..=1024).contains(&r.candidates) {
             reject!("--candidates must be between 1 and 1024 (got {})", r.candidates);
@@ -541,19 +489,11 @@ impl FrameSettings {
         if !(r.spatial_radius.is_finite() && r.spatial_radius >= 1.0 && r.spatial_radius <= 1024.0) {
             reject!("--spatial-radius must be between 1 and 1024 pixels (got {})", r.spatial_radius);
         }
-        if !(r.target_floor > 0.0 && r.target_floor <= 1.0) {
-            reject!(
-                "--target-floor must be in (0, 1] (got {}): 0 would leave VPLs the march wrongly hides undrawable",
-                r.target_floor
-            );
-        }
         if !(r.learn_visibility >= 0.0 && r.learn_visibility <= 1.0) {
             reject!("--learn-visibility must be in [0, 1] (got {})", r.learn_visibility);
         }
-        if r.learn_visibility > 0.0
-            && (r.pool_tiles == 0 || r.spatial_passes > 0 || r.temporal_cap > 0.0 || r.target_floor < 1.0)
-        {
-            reject!("--learn-visibility needs the pool (--pool-tiles ≥ 1), no reuse (--spatial-passes 0, --temporal-cap 0) and --target-floor 1");
+        if r.learn_visibility > 0.0 && (r.pool_tiles == 0 || r.spatial_passes > 0 || r.temporal_cap > 0.0) {
+            reject!("--learn-visibility needs the pool (--pool-tiles ≥ 1) and no reuse (--spatial-passes 0, --temporal-cap 0)");
         }
         if r.near_radius > 1024 {
             reject!("--near-radius must be at most 1024 texels (got {})", r.near_radius);
@@ -622,7 +562,6 @@ impl FrameSettings {
                 );
             }
         }
-        self.validate_shadow_rays(gpu)?;
         self.validate_ris(gpu)?;
         self.validate_samples()?;
         if !(1..=1024).contains(&self.voxels) {

@@ -33,7 +33,7 @@
 
 use super::FrameInputs;
 use crate::bindings::*;
-use crate::bvh::GpuBvh;
+use crate::gpu_bvh::GpuBvh;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle, PassContext};
 use crate::passes::dprsm::DprsmOut;
@@ -93,13 +93,7 @@ impl EndBalls {
     }
 
     /// The balls of the G-buffer's points.
-    pub fn add_pixels<'a>(
-        &'a self,
-        g: &mut Graph<'a>,
-        f: FrameInputs<'a>,
-        bvh: &'a GpuBvh,
-        gb: &GBufferOut,
-    ) -> Handle<Image> {
+    pub fn add_pixels<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, gb: &GBufferOut) -> Handle<Image> {
         let desc = Self::desc("end_balls.pixels", f.width, f.height);
         let mut out = g.create_image(desc);
         let (gb, o) = (*gb, out);
@@ -110,7 +104,7 @@ impl EndBalls {
             .record(move |ctx| {
                 let s = self.sampler.raw;
                 let w = self
-                    .writes(f, bvh, ctx, &o)
+                    .writes(f, ctx, &o)
                     .sampled_image(B_GATHER_GPOSITION, ctx.image(&gb.position), s)
                     .sampled_image(B_GATHER_GNORMAL, ctx.image(&gb.normal), s);
                 self.pixels.dispatch(ctx.cmd, &w, &[], [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
@@ -119,13 +113,7 @@ impl EndBalls {
     }
 
     /// The balls of the VPLs (one per texel of the VPL maps).
-    pub fn add_vpls<'a>(
-        &'a self,
-        g: &mut Graph<'a>,
-        f: FrameInputs<'a>,
-        bvh: &'a GpuBvh,
-        vpls: &DprsmOut,
-    ) -> Handle<Image> {
+    pub fn add_vpls<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, vpls: &DprsmOut) -> Handle<Image> {
         let layers = f.vpl_faces * f.scene.light_count;
         let desc = Self::desc("end_balls.vpls", f.dprsm_res, f.dprsm_res).layers(layers);
         let mut out = g.create_image(desc);
@@ -134,8 +122,7 @@ impl EndBalls {
             .read(&position, Access::ComputeRead)
             .overwrite(&mut out, Access::ComputeWrite)
             .record(move |ctx| {
-                let w =
-                    self.writes(f, bvh, ctx, &o).sampled_image(B_VPL_POSITION, ctx.image(&position), self.sampler.raw);
+                let w = self.writes(f, ctx, &o).sampled_image(B_VPL_POSITION, ctx.image(&position), self.sampler.raw);
                 let size = [f.dprsm_res, f.dprsm_res, layers];
                 self.vpls.dispatch(ctx.cmd, &w, &[], size, [WG_2D, WG_2D, 1]);
             });
@@ -143,7 +130,7 @@ impl EndBalls {
     }
 
     /// What both dispatches bind: the scene, the BVH and the output.
-    fn writes(&self, f: FrameInputs, bvh: &GpuBvh, ctx: &PassContext, out: &Handle<Image>) -> DescriptorWrites {
-        bvh.writes(f.scene.writes(f.uniforms)).storage_image(B_END_BALL_OUT, ctx.image(out))
+    fn writes(&self, f: FrameInputs, ctx: &PassContext, out: &Handle<Image>) -> DescriptorWrites {
+        f.bvh.writes(f.scene.writes(f.uniforms)).storage_image(B_END_BALL_OUT, ctx.image(out))
     }
 }

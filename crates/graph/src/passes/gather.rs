@@ -4,15 +4,12 @@
 //!
 //! Φ_v is the VPL's reflected flux (see `dprsm.rs`); Φ_v · cos θ_v / π is its radiant intensity toward
 //! x (a Lambertian emitter). V comes from an Amanatides–Woo march through the voxel grid
-//! (`glsl/shared/voxel.glsl` states where the march starts and stops), or from shadow rays against the
-//! BVH: everywhere (`--visibility exact`), or found by a march through the grid that tests each cell's
-//! own triangles (`hybrid`: `glsl/shared/hybrid.glsl`, the same answer). Exact rays are traced from a
+//! (`glsl/shared/voxel.glsl` states where the march starts and stops), from shadow rays against the
+//! BVH (`--visibility exact`), or from per-VPL shadow maps (`psm`). Exact rays are traced from a
 //! per-invocation queue (`glsl/shared/shadow_queue.glsl`): each block of 32 samples is drawn first and
 //! its rays walked back to back, so a SIMD lane whose ray is done starts its next at once instead of
 //! waiting for the vector's longest (the same answers and sums, bit for bit; 5–20 % less gather time on
-//! lavapipe, BENCHMARKS.md). `--shadow-rays pool` shares the queues of a subgroup's invocations, so a
-//! lane whose ray is done takes the next ray whoever queued it (`shadow_pool_trace`; the same images;
-//! a variant of its own, made where the device has the subgroup operations it needs). Modes:
+//! lavapipe, BENCHMARKS.md). Modes:
 //! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
 //! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
 //!   (converged) VPL estimate, against which every sampling method is judged.
@@ -32,6 +29,7 @@
 
 use super::FrameInputs;
 use crate::bindings::*;
+use crate::frame::Visibility;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::PassContext;
 use crate::graph::{Graph, Handle};
@@ -45,76 +43,43 @@ use bounce_device::{vk, Binding, Buffer, ComputePipeline, DescriptorWrites, Gpu,
 
 pub struct Gather {
     name: &'static str,
-    /// The voxel, exact and hybrid variants.
+    /// The voxel and exact variants.
     vis: VisibilityVariants,
     /// The `--visibility psm` variant (the frame's shared VPL set and its shadow maps).
     psm: ComputePipeline,
-    /// The `--visibility psm-exact` variant (the shared set with exact rays; binds the BVH).
-    psm_exact: ComputePipeline,
-    /// The exact variant with `--shadow-rays pool` (the gather's own shader only, where the device can
-    /// run it: [`pool_support`]).
-    pool: Option<ComputePipeline>,
     sampler: Sampler,
 }
 
-/// Shared memory of the pool (`glsl/shared/shadow_queue.glsl`): per invocation SHADOW_QUEUE entries
-/// (a uvec2 each), its ray origin (a vec3, 16 bytes with padding), its answer bits, and (`gather.comp`)
-/// its x and pixel ball for the end balls' windows (two vec4).
-pub const POOL_SHARED_BYTES: u32 = WG_2D * WG_2D * (8 * SHADOW_QUEUE + 16 + 4 + 32);
-
-/// Whether `gpu` can run `--shadow-rays pool`, else what it lacks: subgroup ballot and arithmetic in
-/// compute shaders, and [`POOL_SHARED_BYTES`] of shared memory.
-pub fn pool_support(gpu: &Gpu) -> Result<(), String> {
-    let need =
-        vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::BALLOT | vk::SubgroupFeatureFlags::ARITHMETIC;
-    if !gpu.compute_subgroup_ops.contains(need) {
-        return Err(format!(
-            "subgroup ballot and arithmetic operations in compute shaders (it has {:?})",
-            gpu.compute_subgroup_ops
-        ));
-    }
-    let shared = gpu.limits().max_compute_shared_memory_size;
-    if shared < POOL_SHARED_BYTES {
-        return Err(format!("{POOL_SHARED_BYTES} bytes of compute shared memory (it has {shared})"));
-    }
-    Ok(())
-}
-
-/// One shader in its three per-pixel visibility variants (`voxel.glsl`'s march; `EXACT_VISIBILITY`, which
-/// also binds the BVH; `HYBRID_VISIBILITY`, which also binds the BVH and the triangle lists), and the
-/// choice among them for a frame: the gather and ris's shade share it.
+/// One shader in its two per-pixel visibility variants (`voxel.glsl`'s march; `EXACT_VISIBILITY`, which
+/// also binds the BVH and the end balls), and the choice between them for a frame: the gather, mis and
+/// ris's shade share it.
 pub struct VisibilityVariants {
     voxel: ComputePipeline,
     exact: ComputePipeline,
-    hybrid: ComputePipeline,
 }
 
 impl VisibilityVariants {
-    /// `spirv`: the voxel, exact and hybrid variants; `bindings`: what all three bind.
+    /// `spirv`: the voxel and exact variants; `bindings`: what both bind.
     pub fn new(
         gpu: &Gpu,
         name: &'static str,
-        spirv: [&[u8]; 3],
+        spirv: [&[u8]; 2],
         mut bindings: Vec<Binding>,
         push: u32,
     ) -> Result<Self> {
-        let [voxel, exact, hybrid] = spirv;
+        let [voxel, exact] = spirv;
         let voxel = ComputePipeline::new(gpu, name, &crate::spirv(voxel), &bindings, push, &[])?;
-        bindings.extend(crate::bvh::GpuBvh::bindings());
-        // Only the gather's exact variant reads the end balls; the others' layouts may hold them unused.
+        bindings.extend(crate::gpu_bvh::GpuBvh::bindings());
         bindings.extend(crate::passes::end_balls::gather_bindings());
         let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
-        bindings.extend(crate::bvh::cells::GpuCells::bindings());
-        let hybrid = ComputePipeline::new(gpu, name, &crate::spirv(hybrid), &bindings, push, &[])?;
-        Ok(VisibilityVariants { voxel, exact, hybrid })
+        Ok(VisibilityVariants { voxel, exact })
     }
 
-    /// The frame's variant, with `w` plus what it binds (the BVH, the lists).
+    /// The frame's variant, with `w` plus what it binds (the BVH).
     pub fn pick(&self, f: &FrameInputs, w: DescriptorWrites) -> (&ComputePipeline, DescriptorWrites) {
-        match (f.bvh, f.cells) {
-            (Some(bvh), Some(cells)) => (&self.hybrid, cells.writes(bvh.writes(w))),
-            (Some(bvh), None) => (&self.exact, bvh.writes(w)),
-            _ => (&self.voxel, w),
+        match f.visibility {
+            Visibility::Exact => (&self.exact, f.bvh.writes(w)),
+            Visibility::Voxel | Visibility::Psm => (&self.voxel, w),
         }
     }
 }
@@ -149,9 +114,9 @@ pub struct GatherInputs {
     pub cdf: Handle<Buffer>,
     /// Added to the result when set (the combined component).
     pub direct: Option<Handle<Image>>,
-    /// `--visibility psm`/`psm-exact`: the frame's shared VPL set and (psm) its shadow maps.
+    /// `--visibility psm`: the frame's shared VPL set and its shadow maps.
     pub psm: Option<crate::passes::psm::PsmOut>,
-    /// The exact gather's end balls (`--end-balls on`): its rays skip them.
+    /// The exact gather's end balls: its rays skip them.
     pub ends: Option<crate::passes::end_balls::EndBallImages>,
 }
 
@@ -220,8 +185,8 @@ impl GatherInputs {
     }
 }
 
-/// The end balls' writes and the push's `end_balls`, for a layout that holds their bindings (the exact and
-/// hybrid variants): the balls when the frame has them, else stand-ins of the same view types (the
+/// The end balls' writes and the push's `end_balls`, for a layout that holds their bindings (the exact
+/// variants): the balls when the frame has them, else stand-ins of the same view types (the
 /// G-buffer normal, the VPL normals), which the shader then does not read.
 pub(crate) fn end_ball_writes(
     ctx: &PassContext,
@@ -239,19 +204,7 @@ pub(crate) fn end_ball_writes(
 impl Gather {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         use shaders::*;
-        let mut gather = Self::with_shaders(
-            gpu,
-            "gather",
-            [GATHER_COMP, GATHER_EXACT_COMP, GATHER_PSM_COMP, GATHER_PSM_EXACT_COMP, GATHER_HYBRID_COMP],
-        )?;
-        if pool_support(gpu).is_ok() {
-            let (mut bindings, push) = Self::bindings();
-            bindings.extend(crate::bvh::GpuBvh::bindings());
-            bindings.extend(crate::passes::end_balls::gather_bindings());
-            gather.pool =
-                Some(ComputePipeline::new(gpu, "gather", &crate::spirv(GATHER_EXACT_POOL_COMP), &bindings, push, &[])?);
-        }
-        Ok(gather)
+        Self::with_shaders(gpu, "gather", [GATHER_COMP, GATHER_EXACT_COMP, GATHER_PSM_COMP])
     }
 
     fn bindings() -> (Vec<Binding>, u32) {
@@ -260,22 +213,17 @@ impl Gather {
         (bindings, std::mem::size_of::<GatherPush>() as u32)
     }
 
-    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. The five
-    /// SPIR-V variants: voxel visibility; exact visibility (also binds the BVH); `psm` (also binds the
-    /// shared set and its maps); `psm-exact` (the shared set and the BVH); `hybrid` (binds the BVH and
-    /// the per-cell triangle lists).
-    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 5]) -> Result<Self> {
-        let [spirv, exact, psm, psm_exact, hybrid] = spirv;
+    /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. The three
+    /// SPIR-V variants, one per [`Visibility`]: the voxel march; exact rays (also binds the BVH and the
+    /// end balls); `psm` (also binds the shared set and its maps).
+    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 3]) -> Result<Self> {
+        let [spirv, exact, psm] = spirv;
         let (bindings, push) = Self::bindings();
         let mut b = bindings.clone();
-        b.extend(crate::passes::psm::gather_bindings(true));
+        b.extend(crate::passes::psm::gather_bindings());
         let psm = ComputePipeline::new(gpu, name, &crate::spirv(psm), &b, push, &[])?;
-        let mut b = bindings.clone();
-        b.extend(crate::passes::psm::gather_bindings(false));
-        b.extend(crate::bvh::GpuBvh::bindings());
-        let psm_exact = ComputePipeline::new(gpu, name, &crate::spirv(psm_exact), &b, push, &[])?;
-        let vis = VisibilityVariants::new(gpu, name, [spirv, exact, hybrid], bindings, push)?;
-        Ok(Gather { name, vis, psm, psm_exact, pool: None, sampler: Sampler::nearest(gpu)? })
+        let vis = VisibilityVariants::new(gpu, name, [spirv, exact], bindings, push)?;
+        Ok(Gather { name, vis, psm, sampler: Sampler::nearest(gpu)? })
     }
 
     /// The shader variant of the frame's visibility, with what it binds besides the common set.
@@ -286,31 +234,26 @@ impl Gather {
         i: &GatherInputs,
         writes: DescriptorWrites,
     ) -> (&ComputePipeline, DescriptorWrites, u32) {
-        let (pipeline, writes) = match (&i.psm, f.bvh) {
-            (Some(p), Some(bvh)) => {
-                (&self.psm_exact, bvh.writes(writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views))))
-            }
-            (Some(p), None) => (
-                &self.psm,
-                writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views)).sampled_image(
+        match (f.visibility, &i.psm) {
+            (Visibility::Psm, Some(p)) => {
+                let writes = writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views)).sampled_image(
                     B_PSM_DEPTH,
                     ctx.image(&p.depth),
                     self.sampler.raw,
-                ),
-            ),
-            (None, Some(bvh)) => {
-                // The exact, hybrid and pool layouts hold the end balls' bindings.
-                let (writes, on) = end_ball_writes(ctx, i, writes, self.sampler.raw);
-                let (pipeline, writes) = match &self.pool {
-                    Some(pool) if f.shadow_pool && f.cells.is_none() => (pool, bvh.writes(writes)),
-                    // `mis` shares this pass's recording and has no pool variant.
-                    _ => self.vis.pick(&f, writes),
-                };
-                return (pipeline, writes, on);
+                );
+                (&self.psm, writes, 0)
             }
-            (None, None) => self.vis.pick(&f, writes),
-        };
-        (pipeline, writes, 0)
+            (Visibility::Exact, _) => {
+                // The exact layout holds the end balls' bindings.
+                let (writes, on) = end_ball_writes(ctx, i, writes, self.sampler.raw);
+                let (pipeline, writes) = self.vis.pick(&f, writes);
+                (pipeline, writes, on)
+            }
+            _ => {
+                let (pipeline, writes) = self.vis.pick(&f, writes);
+                (pipeline, writes, 0)
+            }
+        }
     }
 
     /// Record the gather of `push.first..push.last` (VPLs for `GATHER_ALL`, sample indices for
@@ -338,10 +281,7 @@ impl Gather {
             b = b.read(&h, Access::ComputeRead);
         }
         if let Some(p) = &i.psm {
-            b = b.read(&p.views, Access::ComputeRead);
-            if f.bvh.is_none() {
-                b = b.read(&p.depth, Access::ComputeRead);
-            }
+            b = b.read(&p.views, Access::ComputeRead).read(&p.depth, Access::ComputeRead);
         }
         b = if push.accumulate != 0 {
             b.write(out, Access::ComputeWrite)

@@ -21,6 +21,7 @@
 
 use super::FrameInputs;
 use crate::bindings::*;
+use crate::frame::Visibility;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle, PassContext};
 use crate::passes::dprsm::DprsmOut;
@@ -76,8 +77,6 @@ pub struct Importance {
     gbg: ComputePipeline,
     /// gbg's scatter with `--visibility exact`: each ray's real first hit (binds the BVH).
     gbg_exact: ComputePipeline,
-    /// The same with `--visibility hybrid` (binds the BVH and the cell lists).
-    gbg_hybrid: ComputePipeline,
     sampler: Sampler,
 }
 
@@ -111,13 +110,10 @@ impl Importance {
             push,
             &[],
         )?;
-        bindings.extend(crate::bvh::GpuBvh::bindings());
+        bindings.extend(crate::gpu_bvh::GpuBvh::bindings());
         let spirv = crate::spirv(shaders::IMPORTANCE_GBG_EXACT_COMP);
         let gbg_exact = ComputePipeline::new(gpu, "importance_gbg", &spirv, &bindings, push, &[])?;
-        bindings.extend(crate::bvh::cells::GpuCells::bindings());
-        let spirv = crate::spirv(shaders::IMPORTANCE_GBG_HYBRID_COMP);
-        let gbg_hybrid = ComputePipeline::new(gpu, "importance_gbg", &spirv, &bindings, push, &[])?;
-        Ok(Importance { pipeline, gbg, gbg_exact, gbg_hybrid, sampler: Sampler::nearest(gpu)? })
+        Ok(Importance { pipeline, gbg, gbg_exact, sampler: Sampler::nearest(gpu)? })
     }
 
     /// Number of texels (VPL slots) of the reflective DPRSM.
@@ -208,10 +204,9 @@ impl Importance {
             ctx.serialize(&out);
             // The voxel march's rays all fit one dispatch; traced rays go in shares under the loop limit.
             let chunk = f.traces_per_dispatch.max(1);
-            let (scatter, chunk, writes) = match (f.cells, f.bvh) {
-                (Some(cells), Some(bvh)) => (&self.gbg_hybrid, chunk, cells.writes(bvh.writes(writes))),
-                (None, Some(bvh)) if f.exact_rays => (&self.gbg_exact, chunk, bvh.writes(writes)),
-                _ => (&self.gbg, rays.max(1), writes),
+            let (scatter, chunk, writes) = match f.visibility {
+                Visibility::Exact => (&self.gbg_exact, chunk, f.bvh.writes(writes)),
+                Visibility::Voxel | Visibility::Psm => (&self.gbg, rays.max(1), writes),
             };
             for first in (0..rays).step_by(chunk as usize) {
                 if first > 0 {

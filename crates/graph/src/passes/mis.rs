@@ -24,5 +24,5 @@ use bounce_device::Gpu;
 /// The `mis` pass: the gather's recording with `glsl/mis.comp`.
 pub fn create(gpu: &Gpu) -> Result<Gather> {
     use shaders::*;
-    Gather::with_shaders(gpu, "mis", [MIS_COMP, MIS_EXACT_COMP, MIS_PSM_COMP, MIS_PSM_EXACT_COMP, MIS_HYBRID_COMP])
+    Gather::with_shaders(gpu, "mis", [MIS_COMP, MIS_EXACT_COMP, MIS_PSM_COMP])
 }

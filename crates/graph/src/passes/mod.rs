@@ -73,23 +73,17 @@ pub struct FrameInputs<'a> {
     pub dprsm_res: u32,
     /// Faces of each light's VPL map (`--light-map`: 2 dprsm, 1 rsm, 6 cube).
     pub vpl_faces: u32,
-    /// The scene's BVH when the gather tests visibility with exact shadow rays (`--visibility exact`,
-    /// `hybrid`); `None`: the voxel march.
-    pub bvh: Option<&'a crate::bvh::GpuBvh>,
-    /// With `bvh`: the per-cell triangle lists of `--visibility hybrid` (the rays march the grid and test
-    /// each cell's own triangles; crates/graph/src/bvh/cells.rs).
-    pub cells: Option<&'a crate::bvh::cells::GpuCells>,
-    /// Exact or hybrid rays one invocation may trace in one dispatch under the device's loop limit (gbg's
+    /// How the frame's VPL passes test visibility: each picks its shader variant by it.
+    pub visibility: crate::frame::Visibility,
+    /// The scene's BVH: the exact visibility's shadow rays and gbg's importance rays, the reference's
+    /// paths and the end balls trace it.
+    pub bvh: &'a crate::gpu_bvh::GpuBvh,
+    /// Exact rays one invocation may trace in one dispatch under the device's loop limit (gbg's
     /// importance rays are split over dispatches by it).
     pub traces_per_dispatch: u32,
-    /// gbg's importance rays find real hits (`--visibility exact`: the BVH; `hybrid`: also `cells`).
-    pub exact_rays: bool,
     /// VPLs one gather dispatch may evaluate per pixel, so that no invocation exceeds the driver's loop
     /// iteration limit (`Gpu::loop_iteration_limit`); `u32::MAX` where there is none.
     pub vpls_per_dispatch: u32,
-    /// The gather's exact rays go to its subgroup's pool (`--shadow-rays pool`), not one queue per
-    /// invocation.
-    pub shadow_pool: bool,
 }
 
 use crate::bindings::*;

@@ -11,10 +11,8 @@
 //! unbiased for the VPL sum given V_psm, exactly as the per-pixel draws are (each pixel's N samples are
 //! the same N draws from the same mixture; the pixels' errors are correlated instead of independent:
 //! the structured noise of the thesis's Fig. 6.1). V_psm compares x's distance with the map's texel
-//! along x's direction, with the direct light's bias (`glsl/shared/psm.glsl`); `--visibility
-//! psm-exact` uses the same shared set with exact shadow rays, so that the maps' own error can be
-//! measured on identical VPLs. Under `mis` the shared set is its CDF strategy's samples, and its
-//! gathering rays keep their own (voxel or exact) visibility: `glsl/mis.comp` states what that blend
+//! along x's direction, with the direct light's bias (`glsl/shared/psm.glsl`). Under `mis` the shared
+//! set is its CDF strategy's samples, and its gathering rays march the voxel grid: `glsl/mis.comp` states what that blend
 //! estimates.
 //!
 //! Memory: N layers of `--psm-res`² f32 depth (N · res² · 4 bytes: 64 maps at 256² are 16 MiB), bounded
@@ -133,11 +131,7 @@ impl Psm {
     }
 }
 
-/// Binding declarations the gather adds for `--visibility psm` (maps) or `psm-exact` (views only).
-pub fn gather_bindings(with_maps: bool) -> Vec<Binding> {
-    let mut b = vec![Binding::storage_buffer(B_PSM_VIEWS)];
-    if with_maps {
-        b.push(Binding::sampled_image(B_PSM_DEPTH));
-    }
-    b
+/// Binding declarations the gather adds for `--visibility psm`: the shared set's views and maps.
+pub fn gather_bindings() -> Vec<Binding> {
+    vec![Binding::storage_buffer(B_PSM_VIEWS), Binding::sampled_image(B_PSM_DEPTH)]
 }

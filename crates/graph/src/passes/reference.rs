@@ -1,10 +1,7 @@
 //! reference: the exact one-bounce integrator (the scene contract's `indirect`), traced against the real
-//! triangles through the BVH (`crate::bvh`, `glsl/shared/bvh.glsl`). The estimators are stated in
+//! triangles through the BVH (`crate::bvh`, `glsl/shared/bvh.glsl`). The estimator is stated in
 //! `glsl/reference.comp`: two-strategy MIS (a cosine direction at x and a light-side point y, balance
-//! heuristic, one of each per sample) by default, the cosine strategy alone as `reference.cosine.comp`.
-//! The variant is a shader row, not a push-constant branch, because the two differ in their per-sample
-//! loop budget (`per_dispatch`) and the cosine-only pipeline then carries none of the light side's code.
-//! Both draw Owen-scrambled Sobol points indexed by the global sample index, so a frame's image does not
+//! heuristic, one of each per sample). It draws Owen-scrambled Sobol points indexed by the global sample index, so a frame's image does not
 //! depend on how its samples are split. Inputs: the G-buffer (primary hits), the scene and BVH buffers,
 //! and the direct image for the combined component. Outputs: Σ L_k / N (RGBA32F, plus the direct image
 //! when asked) and Σ L_k² / N, accumulated over dispatches of at most `per_dispatch` samples (lavapipe's
@@ -12,8 +9,7 @@
 
 use super::FrameInputs;
 use crate::bindings::*;
-use crate::bvh::GpuBvh;
-use crate::frame::ReferenceEstimator;
+use crate::gpu_bvh::GpuBvh;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
 use crate::shader_types::GatherPush;
@@ -23,8 +19,7 @@ use bounce_device::sync::Access;
 use bounce_device::{Binding, ComputePipeline, Gpu, Image, Sampler};
 
 pub struct Reference {
-    mis: ComputePipeline,
-    cosine: ComputePipeline,
+    pipeline: ComputePipeline,
     sampler: Sampler,
 }
 
@@ -50,26 +45,21 @@ impl Reference {
         bindings.extend(GpuBvh::bindings());
         let push = std::mem::size_of::<GatherPush>() as u32;
         let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
-        let pipeline =
-            |name, spirv: &[u8]| ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, push, &spec);
+        let spirv = crate::spirv(shaders::REFERENCE_COMP);
         Ok(Reference {
-            mis: pipeline("reference", shaders::REFERENCE_COMP)?,
-            cosine: pipeline("reference.cosine", shaders::REFERENCE_COSINE_COMP)?,
+            pipeline: ComputePipeline::new(gpu, "reference", &spirv, &bindings, push, &spec)?,
             sampler: Sampler::nearest(gpu)?,
         })
     }
 
     /// Samples one dispatch may take under the device's loop iteration limit. Per sample an invocation
-    /// traces per strategy one first hit and `lights` shadow rays (the shadow rays at y; under MIS the
-    /// light side's x ↔ y ray replaces the drawing light's own), each bounded by its own traversal's
-    /// bound, and over the lights twice more under MIS (the pick, the densities), plus 8 for the rest
-    /// (the Sobol points have no loop).
-    pub fn per_dispatch(gpu: &Gpu, bvh: &GpuBvh, lights: u32, estimator: ReferenceEstimator) -> u32 {
+    /// traces per strategy (two) one first hit and `lights` shadow rays (the shadow rays at y; the light
+    /// side's x ↔ y ray replaces the drawing light's own), each bounded by its own traversal's bound, and
+    /// over the lights twice more (the pick, the densities), plus 8 for the rest (the Sobol points have
+    /// no loop).
+    pub fn per_dispatch(gpu: &Gpu, bvh: &GpuBvh, lights: u32) -> u32 {
         let Some(limit) = gpu.loop_iteration_limit else { return u32::MAX };
-        let strategies = match estimator {
-            ReferenceEstimator::Mis => 2,
-            ReferenceEstimator::Cosine => 1,
-        };
+        let strategies = 2;
         // First hits (bvh_closest_walk) and shadow rays walk the same threaded records.
         let rays = (1 + lights) * bvh.max_iterations_occluded();
         let per_sample = strategies * (rays + 2 * lights) + 8;
@@ -83,18 +73,13 @@ impl Reference {
         &'a self,
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
-        bvh: &'a GpuBvh,
         io: ReferenceIo,
         sum: &mut Handle<Image>,
         sq: &mut Handle<Image>,
         push: GatherPush,
-        estimator: ReferenceEstimator,
         per_dispatch: u32,
     ) {
-        let pipeline = match estimator {
-            ReferenceEstimator::Mis => &self.mis,
-            ReferenceEstimator::Cosine => &self.cosine,
-        };
+        let pipeline = &self.pipeline;
         let (hs, hq) = (*sum, *sq);
         let mut b = g
             .add_pass("reference")
@@ -115,7 +100,7 @@ impl Reference {
                 (Some(d), 1) => ctx.image(d),
                 _ => ctx.image(&io.g_albedo),
             };
-            let writes = bvh.writes(
+            let writes = f.bvh.writes(
                 super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&io.g_position, &io.g_normal, &io.g_albedo], s)
                     .sampled_image(B_GATHER_DIRECT, direct, s)
                     .storage_image(B_GATHER_OUT, ctx.image(&hs))

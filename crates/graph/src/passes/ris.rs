@@ -57,7 +57,7 @@
 //!   only if their normal and eye distance are close (a deterministic function of the two G-buffer
 //!   texels).
 //! - `ris_shade` (W × H): L(x) = 1/R Σ_r f(y_r) V(y_r) W_r, f the unshadowed RGB contribution and V the
-//!   gather's visibility (`contribution()`: voxel march, exact or hybrid shadow rays). Exact rays go
+//!   gather's visibility (`contribution()`: voxel march or exact shadow rays). Exact rays go
 //!   through the gather's queue (`glsl/shared/shadow_queue.glsl`): a block's rays are traced back to
 //!   back first, then its reservoirs are shaded in order with their answers (the same image).
 //! - With `--control-variate on` (the default; only without reuse, and with M > 1) each reservoir's
@@ -107,6 +107,7 @@
 use super::gather::{GatherInputs, VisibilityVariants};
 use super::FrameInputs;
 use crate::bindings::*;
+use crate::frame::Visibility;
 use crate::graph::{Graph, Handle, PassBuilder, PassContext};
 use crate::shader_types::{GatherPush, Reservoir, RisPush, RisPushBlock};
 use crate::shaders;
@@ -146,15 +147,14 @@ impl Picked {
 
 pub struct Ris {
     gpu: Gpu,
-    /// The initial and spatial stages with the unshadowed target ([0]) and the voxel-visibility one ([1],
-    /// `--target-floor` < 1: only these read the voxel grid).
-    initial: [Picked; 2],
-    spatial: [ComputePipeline; 2],
+    /// The initial stage drawing its own candidates (`--pool-tiles 0`), and the spatial stage.
+    initial: Picked,
+    spatial: ComputePipeline,
     /// The pool's presampling (any source, and the uniform source with faces by Russian roulette, whose
     /// mixture is one CDF) and the initial stage that draws from it (`--pool-tiles` > 0).
     presample: ComputePipeline,
     presample_uniform: ComputePipeline,
-    initial_pool: [Picked; 2],
+    initial_pool: Picked,
     /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
     initial_pool_learned: Picked,
     /// The near window's variants, `[multi][uniform]`: one light's window, or every light's (scenes with
@@ -162,7 +162,7 @@ pub struct Ris {
     initial_pool_near: [[Picked; 2]; 2],
     /// The same with the learned visibility.
     initial_pool_learned_near: [[Picked; 2]; 2],
-    /// The shade in the gather's visibility variants (voxel, exact, hybrid).
+    /// The shade in the gather's per-pixel visibility variants (voxel, exact).
     shade: VisibilityVariants,
     sampler: Sampler,
 }
@@ -300,14 +300,12 @@ pub fn vis_bytes(width: u32, height: u32, tile: u32, res: u32, faces: u32) -> u6
 
 /// Candidates per initial dispatch under a loop iteration `limit`: per candidate `draw_vpl`'s loops (two
 /// binary searches, ≤ 32 each, the sections 3 · `sections`, the faces
-/// 2 · `faces` · (`sections` + 1)), or none for a candidate from the pool (`pool`), the target's own
-/// loops (`target`: the voxel march under `--target-floor` < 1) and 64 for the rest; 128 kept for the
-/// history's combination and the code outside.
-pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, target: u32, pool: bool) -> u32 {
+/// 2 · `faces` · (`sections` + 1)), or none for a candidate from the pool (`pool`), and 64 for the rest;
+/// 128 kept for the history's combination and the code outside.
+pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, pool: bool) -> u32 {
     let Some(limit) = limit else { return u32::MAX };
     let draw = if pool { 0 } else { 2 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2) };
-    let per = 64 + draw + target;
-    (limit.saturating_sub(128 + target) / per).max(1)
+    (limit.saturating_sub(128) / (64 + draw)).max(1)
 }
 
 impl Ris {
@@ -315,17 +313,10 @@ impl Ris {
         use shaders::*;
         let base = super::gather::sampling_bindings;
         let push = std::mem::size_of::<RisPushBlock>() as u32;
-        // Two variants of one stage over the same bindings.
-        let pair = |name, spirv: [&[u8]; 2], b: &[Binding]| -> Result<[ComputePipeline; 2]> {
-            Ok([
-                ComputePipeline::new(gpu, name, &crate::spirv(spirv[0]), b, push, &[])?,
-                ComputePipeline::new(gpu, name, &crate::spirv(spirv[1]), b, push, &[])?,
-            ])
-        };
-        let stage = |name, spirv: [&[u8]; 2], extra: &[Binding]| {
+        let stage = |name, spirv: &[u8], extra: &[Binding]| {
             let mut b = base();
             b.extend_from_slice(extra);
-            pair(name, spirv, &b)
+            ComputePipeline::new(gpu, name, &crate::spirv(spirv), &b, push, &[])
         };
         // The initial stage's variants, each specialised per pick count (Picked).
         let picked_pair = |spirv: [&'static [u8]; 2], b: &[Binding]| -> Result<[Picked; 2]> {
@@ -333,17 +324,15 @@ impl Ris {
         };
         let mut b = base();
         b.extend([B_RIS_OUT, B_RIS_HISTORY, B_RIS_UNSHADOWED].map(Binding::storage_buffer));
-        let initial = picked_pair([RIS_INITIAL_COMP, RIS_INITIAL_VOXEL_TARGET_COMP], &b)?;
+        let initial = Picked::new(gpu, RIS_INITIAL_COMP, &b)?;
         let spatial = stage(
             "ris_spatial",
-            [RIS_SPATIAL_COMP, RIS_SPATIAL_VOXEL_TARGET_COMP],
+            RIS_SPATIAL_COMP,
             &[Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)],
         )?;
-        let [presample, presample_uniform] = stage(
-            "ris_presample",
-            [RIS_PRESAMPLE_COMP, RIS_PRESAMPLE_UNIFORM_COMP],
-            &[Binding::storage_buffer(B_RIS_POOL)],
-        )?;
+        let presample = stage("ris_presample", RIS_PRESAMPLE_COMP, &[Binding::storage_buffer(B_RIS_POOL)])?;
+        let presample_uniform =
+            stage("ris_presample", RIS_PRESAMPLE_UNIFORM_COMP, &[Binding::storage_buffer(B_RIS_POOL)])?;
         let mut b = base();
         b.extend([
             Binding::storage_buffer(B_RIS_OUT),
@@ -368,11 +357,11 @@ impl Ris {
             [RIS_INITIAL_POOL_NEAR_MULTI_COMP, RIS_INITIAL_POOL_NEAR_MULTI_UNIFORM_COMP],
             &b,
         )?;
-        let initial_pool = picked_pair([RIS_INITIAL_POOL_COMP, RIS_INITIAL_POOL_VOXEL_TARGET_COMP], &b)?;
+        let initial_pool = Picked::new(gpu, RIS_INITIAL_POOL_COMP, &b)?;
         let mut b = base();
         b.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV].map(Binding::storage_buffer));
         b.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
-        let variants = [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP, RIS_SHADE_HYBRID_COMP];
+        let variants = [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP];
         let shade = VisibilityVariants::new(gpu, "ris_shade", variants, b, push)?;
         Ok(Ris {
             gpu: gpu.clone(),
@@ -482,11 +471,9 @@ impl Ris {
         match (push.pool_tiles > 0, push.learned > 0.0) {
             (true, true) if push.near_candidates > 0 => &self.initial_pool_learned_near[multi][uniform],
             (true, true) => &self.initial_pool_learned,
-            (true, false) if push.near_candidates > 0 && Self::voxel_target(push) == 0 => {
-                &self.initial_pool_near[multi][uniform]
-            }
-            (true, false) => &self.initial_pool[Self::voxel_target(push)],
-            (false, _) => &self.initial[Self::voxel_target(push)],
+            (true, false) if push.near_candidates > 0 => &self.initial_pool_near[multi][uniform],
+            (true, false) => &self.initial_pool,
+            (false, _) => &self.initial,
         }
     }
 
@@ -495,11 +482,6 @@ impl Ris {
     pub fn prepare(&self, push: &RisPush, uniform_source: bool, multi: bool) -> Result<()> {
         self.initial_variant(push, uniform_source, multi).get(&self.gpu, push.picks)?;
         Ok(())
-    }
-
-    /// Which variant of the initial and spatial stages: 1 when the target marches the voxel grid.
-    fn voxel_target(push: &RisPush) -> usize {
-        (push.target_floor < 1.0) as usize
     }
 
     /// Declare the reads every stage shares.
@@ -616,13 +598,7 @@ impl Ris {
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o));
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
-            self.spatial[Self::voxel_target(&ris)].dispatch(
-                ctx.cmd,
-                &writes,
-                bytemuck::bytes_of(&block),
-                size,
-                [WG_2D, WG_2D, 1],
-            );
+            self.spatial.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
         });
     }
 
@@ -667,10 +643,10 @@ impl Ris {
                 .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
             // The gather's visibility variants, chosen and bound as the gather's (with the end balls where
-            // the layout has them: exact and hybrid).
-            let (writes, end_balls) = match f.bvh {
-                Some(_) => super::gather::end_ball_writes(ctx, &i, writes, self.sampler.raw),
-                None => (writes, 0),
+            // the layout has them: exact).
+            let (writes, end_balls) = match f.visibility {
+                Visibility::Exact => super::gather::end_ball_writes(ctx, &i, writes, self.sampler.raw),
+                _ => (writes, 0),
             };
             let (pipeline, writes) = self.shade.pick(&f, writes);
             // All reservoirs of a pixel, accumulated over dispatches as the gather's samples.
