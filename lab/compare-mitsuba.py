@@ -2,9 +2,9 @@
 """Peer comparison: a one-bounce MIS path tracer written with Mitsuba 3's Python API
 against every bounce method, at equal wall time, all judged against the same ground truth.
 
-The Mitsuba tracer computes the indirect component of bounce's scene contract (crates/graph/src/scene):
+The Mitsuba tracer computes the indirect component of bounce's scene contract (crates/scene/src/scene):
   L_ind(x) = ∫ albedo(x)/π · L_direct(y → x) cos θ_x dω
-at the pixel-centre primary hit x (the camera contract of crates/graph/src/camera.rs), with L_direct(y)
+at the pixel-centre primary hit x (the camera contract of crates/scene/src/camera.rs), with L_direct(y)
 the point lights' direct light at y (two-sided Lambertian, shading normal flipped toward x, exact shadow
 rays). Two strategies per sample, combined by the balance heuristic, both densities in area measure at y:
   * cosine sampling at x around the shading normal, first hit y:

@@ -66,44 +66,17 @@ const SHADERS: &[Shader] = &[
     file("mis.comp"),
     variant("mis.exact.comp", "mis.comp", &["EXACT_VISIBILITY"]),
     variant("mis.psm.comp", "mis.comp", &["PSM_VISIBILITY"]),
-    // ris: its stages, the shade with the gather's per-pixel visibility variants (voxel, exact).
-    variant("ris.initial.comp", "ris.comp", &["RIS_INITIAL"]),
-    variant("ris.presample.comp", "ris.comp", &["RIS_PRESAMPLE"]),
-    variant("ris.presample_uniform.comp", "ris.comp", &["RIS_PRESAMPLE", "RIS_UNIFORM_SOURCE"]),
-    variant("ris.initial_pool.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL"]),
-    variant("ris.initial_pool_learned.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED"]),
-    variant("ris.initial_pool_near.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR"]),
-    variant(
-        "ris.initial_pool_near_uniform.comp",
-        "ris.comp",
-        &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR", "RIS_UNIFORM_SOURCE"],
-    ),
-    variant("ris.initial_pool_learned_near.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR"]),
-    variant(
-        "ris.initial_pool_learned_near_uniform.comp",
-        "ris.comp",
-        &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_UNIFORM_SOURCE"],
-    ),
-    // The near window over every light's map (scenes with more than one light).
-    variant("ris.initial_pool_near_multi.comp", "ris.comp", &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR", "RIS_NEAR_MULTI"]),
-    variant(
-        "ris.initial_pool_near_multi_uniform.comp",
-        "ris.comp",
-        &["RIS_INITIAL", "RIS_POOL", "RIS_NEAR", "RIS_NEAR_MULTI", "RIS_UNIFORM_SOURCE"],
-    ),
-    variant(
-        "ris.initial_pool_learned_near_multi.comp",
-        "ris.comp",
-        &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_NEAR_MULTI"],
-    ),
-    variant(
-        "ris.initial_pool_learned_near_multi_uniform.comp",
-        "ris.comp",
-        &["RIS_INITIAL", "RIS_POOL", "RIS_LEARNED", "RIS_NEAR", "RIS_NEAR_MULTI", "RIS_UNIFORM_SOURCE"],
-    ),
-    variant("ris.spatial.comp", "ris.comp", &["RIS_SPATIAL"]),
-    variant("ris.shade.comp", "ris.comp", &["RIS_SHADE"]),
-    variant("ris.shade_exact.comp", "ris.comp", &["RIS_SHADE", "EXACT_VISIBILITY"]),
+    // ris: one file per stage (shared/ris.glsl is their common part). The initial stage draws its own
+    // candidates, or takes them from the pool (RIS_POOL), optionally with the learned visibility
+    // (RIS_LEARNED): the variants that bind something of their own; the rest are specialisations.
+    file("ris_presample.comp"),
+    file("ris_initial.comp"),
+    variant("ris_initial.pool.comp", "ris_initial.comp", &["RIS_POOL"]),
+    variant("ris_initial.pool_learned.comp", "ris_initial.comp", &["RIS_POOL", "RIS_LEARNED"]),
+    file("ris_temporal.comp"),
+    file("ris_spatial.comp"),
+    file("ris_shade.comp"),
+    variant("ris_shade.exact.comp", "ris_shade.comp", &["EXACT_VISIBILITY"]),
     // The reference: two-strategy MIS (cosine at x, light side at y).
     file("reference.comp"),
     // The viewer's presentation: running mean, Reinhard, sRGB8.

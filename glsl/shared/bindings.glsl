@@ -21,10 +21,15 @@ const float LUMINANCE_B = 0.114;
 // Specialisation constant ids. SPEC_TEXTURED: the scene has textures (false: albedo_at reads no
 // texture, so an untextured scene runs the shader variant without texture fetches).
 #define SPEC_TEXTURED 0
-// SPEC_RIS_PICKS: K, the picks per reservoir of ris's initial stage (ris.comp; RisPush::picks chooses the
-// pipeline), so that a frame runs only its own picks' code: llvmpipe runs an `if` body under masks even
-// when no lane takes it.
+// SPEC_RIS_PICKS: K, the picks per reservoir of ris's initial stage (ris_initial.comp; RisPush::picks
+// chooses the pipeline), so that a frame runs only its own picks' code: llvmpipe runs an `if` body under
+// masks even when no lane takes it. The same reason for ris's other specialisations, which bind nothing
+// of their own: SPEC_RIS_NEAR (the near window's candidates), SPEC_RIS_NEAR_LIGHTS (its windows: 1, or
+// RIS_NEAR_LIGHTS in scenes of more lights) and SPEC_RIS_UNIFORM_SOURCE (the uniform source's shortcut).
 #define SPEC_RIS_PICKS 1
+#define SPEC_RIS_NEAR 2
+#define SPEC_RIS_NEAR_LIGHTS 3
+#define SPEC_RIS_UNIFORM_SOURCE 4
 
 // ---- Scene data: every pass that reads the mesh (gbuffer, dprsm, direct, voxelize, ...) ---------------
 #define B_FRAME 0
@@ -105,7 +110,7 @@ const uint CDF_HEADER = 4u;
 #define FACE_RR 0
 #define FACE_UNIFORM 1
 
-// ---- The BVH (crates/graph/src/bvh.rs, shared/bvh.glsl): reference and the exact-visibility variants -----
+// ---- The BVH (crates/scene/src/bvh/, crates/graph/src/gpu_bvh.rs, shared/bvh.glsl): reference and the exact-visibility variants -----
 // Node and triangle buffers, and the traversal's bounds (loop iterations per trace, stack depth).
 #define B_BVH_NODES 26
 #define B_BVH_TRIS 27

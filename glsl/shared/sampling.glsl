@@ -132,45 +132,13 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     return v;
 }
 
-// The shadowed contribution. Visibility: the voxel march (`--visibility voxel`), or with EXACT_VISIBILITY defined (the
-// `*.exact.comp` variants, `--visibility exact`) a shadow ray against the real triangles (BVH) between
-// points lifted off their surfaces (surface_lift in common.glsl): x along its normal, the VPL towards
-// its light. Not the VPL along its normal: a VPL exactly on an edge of a closed box (a light at the
-// box's centre puts texel rays exactly through its edges) lifted along one face's normal stays in the
-// other face's plane, and its shadow rays left the box through that face (a sealed light leaked).
-// Towards the light is always into the free space the light saw it from.
-// contribution_of takes VPL v's data already fetched (ris's shade reads its flux too).
-#if defined(EXACT_VISIBILITY) && defined(END_BALLS_READ)
-// With the end balls read (mis.exact), x's ball for contribution_of's shadow ray: the caller sets it per
-// pixel; 0 (no ball) leaves the VPL's ball alone to shorten the ray.
-vec4 contribution_x_ball = vec4(0.0);
-#endif
-#ifdef EXACT_VISIBILITY
-// The shadow ray's ends: x lifted along its normal, and VPL v lifted towards its light.
-vec3 shadow_origin(vec3 x, vec3 nx) {
-    return x + nx * surface_lift(x, frame.scene_min.w);
-}
-vec3 shadow_end(uint v, Vpl vpl) {
-    vec3 light = lights[v / (lm_faces() * frame.size.w * frame.size.w)].position.xyz;
-    return vpl.position + normalize(light - vpl.position) * surface_lift(vpl.position, frame.scene_min.w);
-}
-#endif
+#include "visibility.glsl"
 
+// The shadowed contribution of VPL v (its data already fetched: ris's shade reads its flux too).
 vec3 contribution_of(vec3 x, vec3 nx, vec3 ax, uint v, Vpl vpl) {
     vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
     if (c == vec3(0.0)) return c;
-#ifdef EXACT_VISIBILITY
-#ifdef END_BALLS_READ
-    // bvh_occluded_lifted's ray, walked only between its ends' balls (the same answer).
-    vec3 o = shadow_origin(x, nx), e = shadow_end(v, vpl);
-    vec2 w = end_ball_window(o, e, x, contribution_x_ball, v, vpl.position);
-    return bvh_any_hit(o, e - o, w.x, w.y) ? vec3(0.0) : c;
-#else
-    return bvh_occluded_lifted(shadow_origin(x, nx), shadow_end(v, vpl)) ? vec3(0.0) : c;
-#endif
-#else
-    return c * voxel_visibility(x, nx, vpl.position, vpl.normal);
-#endif
+    return segment_open(x, nx, v, vpl) ? c : vec3(0.0);
 }
 
 vec3 contribution(vec3 x, vec3 nx, vec3 ax, uint v) {

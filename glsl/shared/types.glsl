@@ -74,7 +74,6 @@ struct RisPush {
     uint neighbors;   // k: neighbours per spatial pass
     float radius;     // spatial radius, pixels
     float history_cap;// the history's confidence is capped at history_cap · M
-    uint history;     // 1: last frame's reservoirs are bound at B_RIS_HISTORY
     uint pool_tiles;  // candidates from a presampled pool of pool_tiles × RIS_POOL_TILE VPLs (0: per pixel)
     float learned;    // δ_L: the target weighs a VPL by max(V̂, δ_L), V̂ learned from earlier frames (0: off)
     uint vis_tile;    // the learned visibility's screen tiles, pixels per side
@@ -83,7 +82,8 @@ struct RisPush {
     uint near_radius; // the near window's half-width, texels (2r + 1 wide)
     uint control;     // 1: the shade adds β (U_g − g(y) W), the unshadowed control variate (no reuse only)
     uint picks;       // K: VPLs each reservoir's candidates keep, independently (layers: R = streams · K)
-    uint pad;
+    uint pad0;
+    uint pad1;
 };
 
 // One reservoir of ris (per pixel and layer). While its candidates stream in (over dispatches) `weight`

@@ -53,8 +53,8 @@ pub fn render_end_balls(r: &Renderer, s: &FrameSettings) -> Result<EndBallMaps> 
     let mut g = Graph::new(&r.gpu);
     let gb = r.passes.gbuffer.add(&mut g, f);
     let v = r.passes.dprsm.add(&mut g, f);
-    let pixels = r.passes.end_balls.add_pixels(&mut g, f, &gb);
-    let vpls = r.passes.end_balls.add_vpls(&mut g, f, &v);
+    let pixels = r.passes.end_balls.add_pixels(&mut g, f, &gb)?;
+    let vpls = r.passes.end_balls.add_vpls(&mut g, f, &v)?;
     for h in [&gb.position, &gb.normal, &pixels, &v.position, &vpls] {
         g.export(h);
     }

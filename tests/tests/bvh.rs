@@ -1,4 +1,4 @@
-//! The GPU BVH (`crates/graph/src/bvh/`, `glsl/shared/bvh.glsl`) against the exact CPU reference
+//! The GPU BVH (`crates/scene/src/bvh/` built, `crates/graph/src/gpu_bvh.rs` uploaded, `glsl/shared/bvh.glsl` walked) against the exact CPU reference
 //! (`bounce_oracles::cpu_ref`: f64 Möller–Trumbore through the same SAH tree), through the test kernel
 //! `glsl/test/bvh_trace.comp` (one invocation per query: a closest-hit ray and an occlusion segment).
 //!

@@ -70,7 +70,7 @@ fn gpu_voxelize(gpu: &Gpu, vox: &Voxelize, scene: &Scene, spec: &VoxelGridSpec, 
     let ub = uniform_buffer(gpu, spec);
     let mut g = Graph::new(gpu);
     let mut h = g.import_buffer(grid);
-    vox.add_scene(&mut g, &gs, &ub, &mut h);
+    vox.add_scene(&mut g, &gs, &ub, &mut h).unwrap();
     g.export(&h);
     let done = g.execute().unwrap();
     assert_eq!(done.ran, ["voxelize_clear", "voxelize"]);

@@ -474,9 +474,23 @@ impl<'a> Graph<'a> {
         key: &impl Hash,
         build: impl FnOnce(&mut Self) -> P,
     ) -> P {
+        match self.try_cached(name, key, |g| Ok::<P, std::convert::Infallible>(build(g))) {
+            Ok(p) => p,
+            Err(never) => match never {},
+        }
+    }
+
+    /// [`Graph::cached`] with a `build` that may fail (a pass whose pipeline is built on first use):
+    /// its error is returned and nothing is kept.
+    pub fn try_cached<P: Products, E>(
+        &mut self,
+        name: &'static str,
+        key: &impl Hash,
+        build: impl FnOnce(&mut Self) -> Result<P, E>,
+    ) -> Result<P, E> {
         let key = fingerprint(key);
         if let Some((_, r)) = self.requests.iter().find(|(n, r)| *n == name && r.key == key) {
-            return P::from_handles(&mut r.handles.iter().copied());
+            return Ok(P::from_handles(&mut r.handles.iter().copied()));
         }
         let kept = self.retained.as_mut().and_then(|st| match st.products.remove(name) {
             Some(p) if p.key == key => Some(p.resources),
@@ -487,12 +501,12 @@ impl<'a> Graph<'a> {
                 let handles: Vec<RawHandle> = resources.into_iter().map(|k| self.lend(name, k)).collect();
                 P::from_handles(&mut handles.iter().copied())
             }
-            None => build(self),
+            None => build(self)?,
         };
         let mut handles = vec![];
         p.handles(&mut handles);
         self.requests.push((name, Request { key, handles }));
-        p
+        Ok(p)
     }
 
     fn lend(&mut self, name: &str, k: Kept) -> RawHandle {

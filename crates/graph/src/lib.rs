@@ -13,6 +13,7 @@ pub mod gpu_bvh;
 pub mod gpu_scene;
 pub mod graph;
 pub mod passes;
+pub mod pipelines;
 pub mod shader_types;
 
 // The scene crate's modules under the names the passes use.

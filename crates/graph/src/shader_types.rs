@@ -83,7 +83,6 @@ pub struct RisPush {
     pub neighbors: u32,
     pub radius: f32,
     pub history_cap: f32,
-    pub history: u32,
     /// Candidates from a presampled pool of `pool_tiles` × `RIS_POOL_TILE` VPLs (0: drawn per pixel).
     pub pool_tiles: u32,
     /// δ_L: the target weighs a VPL by max(V̂, δ_L), V̂ the visibility learned from earlier frames' shadow
@@ -102,7 +101,7 @@ pub struct RisPush {
     /// K: VPLs each reservoir's candidates keep, independently, each traced by its own shadow ray; the
     /// reservoirs (layers) are `reservoirs` / K candidate streams of K picks.
     pub picks: u32,
-    pub pad: u32,
+    pub pad: [u32; 2],
 }
 const _: () = assert!(size_of::<RisPush>() == 64);
 

@@ -24,10 +24,13 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     if a.time_limit.is_some() {
         time_limit_method(a, &mut settings, err)?;
     }
+    let started = Instant::now();
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
-    // Before the renderer builds pipelines and uploads the scene (seconds on a large scene).
+    let device_s = started.elapsed().as_secs_f64();
+    // Before the renderer uploads the scene and builds its BVH (seconds on a large scene).
     settings.validate(&gpu)?;
     let mut renderer = Renderer::new(&gpu, &scene)?;
+    let renderer_s = started.elapsed().as_secs_f64() - device_s;
     if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
         ris_frame_budget(a, &mut renderer, &mut settings, err)?;
         settings.validate(&gpu)?;
@@ -37,16 +40,13 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         animate(a, &mut renderer, &settings, path.as_ref(), frames, err)?;
         return super::check_validation(&gpu, a.frame.validation);
     }
-    if a.time_limit.is_some() && !bounce_graph::frame::progressive::averages(&settings) {
-        writeln!(
-            err,
-            "note: this frame is the same for every seed (`all` or direct light): one frame, whatever the time limit"
-        )?;
-    }
+    note_single_frame(a, &settings, err)?;
     // The frame's GPU time (the EXR's `gpu_ms`, --timings) and --time-limit's budget are then the frames'
     // own work, not the driver's first-use compilation; that compilation is paid here or in the frame.
+    let warm = Instant::now();
     renderer.warm_up(&settings)?;
     renderer.prepare(&settings)?;
+    let startup = Startup { device_s, renderer_s, warm_up_s: warm.elapsed().as_secs_f64() };
     let t0 = Instant::now();
     let (frame, frames) = match a.time_limit {
         None => (renderer.render(&settings)?, None),
@@ -85,6 +85,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     output::write_exr_and_png(&a.out, a.png.as_deref(), &img, &meta)?;
     if a.timings {
         timings(out, &settings, &frame, wall, &gpu.name)?;
+        startup.report(out)?;
     }
     writeln!(
         err,
@@ -224,6 +225,38 @@ fn metadata(
         ("shadow_res", s.shadow_res.to_string()),
         ("non_finite_pixels", non_finite.to_string()),
     ]
+}
+
+/// Under `--time-limit`, says when every frame would be the same (one frame is rendered).
+fn note_single_frame(a: &RenderArgs, settings: &FrameSettings, err: &mut dyn Write) -> Result<()> {
+    if a.time_limit.is_some() && !bounce_graph::frame::progressive::averages(settings) {
+        writeln!(
+            err,
+            "note: this frame is the same for every seed (`all` or direct light): one frame, whatever the time limit"
+        )?;
+    }
+    Ok(())
+}
+
+/// Where the time before the first frame went (`--timings`): the device (instance, device, allocator),
+/// the renderer (scene upload, BVH, pass objects; no pipeline is built there) and the warm-up (the
+/// pipelines the frame needs, built on first use, and an untimed small frame).
+struct Startup {
+    device_s: f64,
+    renderer_s: f64,
+    warm_up_s: f64,
+}
+
+impl Startup {
+    fn report(&self, out: &mut dyn Write) -> Result<()> {
+        let total = self.device_s + self.renderer_s + self.warm_up_s;
+        writeln!(
+            out,
+            "startup {total:.3} s: device {:.3} s, renderer {:.3} s, pipelines and warm-up frame {:.3} s",
+            self.device_s, self.renderer_s, self.warm_up_s
+        )?;
+        Ok(())
+    }
 }
 
 /// The `--timings` table on `out`: each pass's GPU time, the passes a cache skipped, the total, the

@@ -74,8 +74,11 @@ pub fn build_frame<'a>(
 ) -> anyhow::Result<FrameOut> {
     let (f, k) = (i.f, &i.keys);
     // The voxel grid only where something marches it: exact rays need none.
-    let voxels =
-        s.visibility.marches_voxels().then(|| g.cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid)));
+    let voxels = s
+        .visibility
+        .marches_voxels()
+        .then(|| g.try_cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid)))
+        .transpose()?;
     let vpls = g.cached("vpls", &k.vpls, |g| r.dprsm.add(g, f));
     let shadow = g.cached("shadow", &k.shadow, |g| r.dprsm.add_depth(g, f));
     let gbuffer = g.cached("gbuffer", &k.gbuffer, |g| r.gbuffer.add(g, f));
@@ -95,7 +98,7 @@ pub fn build_frame<'a>(
             direct: combined,
         };
         let (push, per_dispatch) = (reference_push(s, chunk), i.reference_per_dispatch);
-        r.reference.add(g, f, io, &mut out, &mut sq, push, per_dispatch);
+        r.reference.add(g, f, io, &mut out, &mut sq, push, per_dispatch)?;
         return Ok(FrameOut { radiance: out, second_moment: Some(sq), cdf: None });
     }
     let p = i.importance;
@@ -103,15 +106,16 @@ pub fn build_frame<'a>(
     // `uniform`'s CDF (the VPLs' validity) depends on the maps alone: it has its own slot, so switching
     // to a method's CDF and back does not redo it.
     let slot = if p.kind == ImportanceKind::Uniform { "validity_cdf" } else { "cdf" };
-    let cdf = g.cached(slot, &k.cdf, |g| {
-        let imp = r.importance.add(g, f, &gbuffer, &vpls, voxels, p);
-        Cdf { importance: imp.importance, cdf: r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections) }
-    });
+    let cdf = g.try_cached(slot, &k.cdf, |g| {
+        let imp = r.importance.add(g, f, &gbuffer, &vpls, voxels, p)?;
+        let cdf = r.cdf_reduce.add(g, &imp.importance, rows, f.dprsm_res, imp.sections);
+        anyhow::Ok(Cdf { importance: imp.importance, cdf })
+    })?;
     let mut inputs = GatherInputs::new(&gbuffer, &vpls, voxels, cdf.importance, cdf.cdf, combined);
     if s.uses_end_balls() {
         inputs.ends = Some(EndBallImages {
-            pixels: g.cached("end_balls.pixels", &k.gbuffer, |g| r.end_balls.add_pixels(g, f, &gbuffer)),
-            vpls: g.cached("end_balls.vpls", &k.vpls, |g| r.end_balls.add_vpls(g, f, &vpls)),
+            pixels: g.try_cached("end_balls.pixels", &k.gbuffer, |g| r.end_balls.add_pixels(g, f, &gbuffer))?,
+            vpls: g.try_cached("end_balls.vpls", &k.vpls, |g| r.end_balls.add_vpls(g, f, &vpls))?,
         });
     }
     let push = gather_push(s, f, p, chunk);
@@ -125,7 +129,7 @@ pub fn build_frame<'a>(
         return Ok(FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) });
     }
     let pass = if s.method == Method::Mis { &r.mis } else { &r.gather };
-    pass.add(g, f, &inputs, &mut out, push);
+    pass.add(g, f, &inputs, &mut out, push)?;
     Ok(FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) })
 }
 

@@ -38,16 +38,17 @@ use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle, PassContext};
 use crate::passes::dprsm::DprsmOut;
 use crate::passes::gbuffer::GBufferOut;
+use crate::pipelines::Lazy;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{vk, Binding, ComputePipeline, DescriptorWrites, Gpu, Image, ImageDesc, Sampler};
+use bounce_device::{vk, Binding, DescriptorWrites, Gpu, Image, ImageDesc, Sampler};
 
 pub const END_BALL_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 pub struct EndBalls {
-    pixels: ComputePipeline,
-    vpls: ComputePipeline,
+    pixels: Lazy<1>,
+    vpls: Lazy<1>,
     sampler: Sampler,
 }
 
@@ -72,12 +73,12 @@ impl EndBalls {
             bindings.extend(GpuBvh::bindings());
             bindings.extend_from_slice(inputs);
             bindings.push(Binding::storage_image(B_END_BALL_OUT));
-            ComputePipeline::new(gpu, name, &crate::spirv(spirv), &bindings, 0, &[])
+            Lazy::new(gpu, name, spirv, &bindings, 0)
         };
         let g = [Binding::sampled_image(B_GATHER_GPOSITION), Binding::sampled_image(B_GATHER_GNORMAL)];
         Ok(EndBalls {
-            pixels: pipeline("end_balls.pixels", shaders::END_BALLS_COMP, &g)?,
-            vpls: pipeline("end_balls.vpls", shaders::END_BALLS_VPLS_COMP, &[Binding::sampled_image(B_VPL_POSITION)])?,
+            pixels: pipeline("end_balls.pixels", shaders::END_BALLS_COMP, &g),
+            vpls: pipeline("end_balls.vpls", shaders::END_BALLS_VPLS_COMP, &[Binding::sampled_image(B_VPL_POSITION)]),
             sampler: Sampler::nearest(gpu)?,
         })
     }
@@ -93,7 +94,8 @@ impl EndBalls {
     }
 
     /// The balls of the G-buffer's points.
-    pub fn add_pixels<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, gb: &GBufferOut) -> Handle<Image> {
+    pub fn add_pixels<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, gb: &GBufferOut) -> Result<Handle<Image>> {
+        let pipeline = self.pixels.pipeline()?;
         let desc = Self::desc("end_balls.pixels", f.width, f.height);
         let mut out = g.create_image(desc);
         let (gb, o) = (*gb, out);
@@ -107,13 +109,14 @@ impl EndBalls {
                     .writes(f, ctx, &o)
                     .sampled_image(B_GATHER_GPOSITION, ctx.image(&gb.position), s)
                     .sampled_image(B_GATHER_GNORMAL, ctx.image(&gb.normal), s);
-                self.pixels.dispatch(ctx.cmd, &w, &[], [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
+                pipeline.dispatch(ctx.cmd, &w, &[], [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
             });
-        out
+        Ok(out)
     }
 
     /// The balls of the VPLs (one per texel of the VPL maps).
-    pub fn add_vpls<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, vpls: &DprsmOut) -> Handle<Image> {
+    pub fn add_vpls<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, vpls: &DprsmOut) -> Result<Handle<Image>> {
+        let pipeline = self.vpls.pipeline()?;
         let layers = f.vpl_faces * f.scene.light_count;
         let desc = Self::desc("end_balls.vpls", f.dprsm_res, f.dprsm_res).layers(layers);
         let mut out = g.create_image(desc);
@@ -124,9 +127,9 @@ impl EndBalls {
             .record(move |ctx| {
                 let w = self.writes(f, ctx, &o).sampled_image(B_VPL_POSITION, ctx.image(&position), self.sampler.raw);
                 let size = [f.dprsm_res, f.dprsm_res, layers];
-                self.vpls.dispatch(ctx.cmd, &w, &[], size, [WG_2D, WG_2D, 1]);
+                pipeline.dispatch(ctx.cmd, &w, &[], size, [WG_2D, WG_2D, 1]);
             });
-        out
+        Ok(out)
     }
 
     /// What both dispatches bind: the scene, the BVH and the output.

@@ -35,6 +35,7 @@ use crate::graph::PassContext;
 use crate::graph::{Graph, Handle};
 use crate::passes::dprsm::DprsmOut;
 use crate::passes::gbuffer::GBufferOut;
+use crate::pipelines::Lazy;
 use crate::shader_types::GatherPush;
 use crate::shaders;
 use anyhow::Result;
@@ -46,16 +47,16 @@ pub struct Gather {
     /// The voxel and exact variants.
     vis: VisibilityVariants,
     /// The `--visibility psm` variant (the frame's shared VPL set and its shadow maps).
-    psm: ComputePipeline,
+    psm: Lazy<1>,
     sampler: Sampler,
 }
 
 /// One shader in its two per-pixel visibility variants (`voxel.glsl`'s march; `EXACT_VISIBILITY`, which
-/// also binds the BVH and the end balls), and the choice between them for a frame: the gather, mis and
+/// also binds the BVH and the end balls), each built when a frame first needs it: the gather, mis and
 /// ris's shade share it.
 pub struct VisibilityVariants {
-    voxel: ComputePipeline,
-    exact: ComputePipeline,
+    voxel: Lazy<1>,
+    exact: Lazy<1>,
 }
 
 impl VisibilityVariants {
@@ -63,23 +64,31 @@ impl VisibilityVariants {
     pub fn new(
         gpu: &Gpu,
         name: &'static str,
-        spirv: [&[u8]; 2],
+        spirv: [&'static [u8]; 2],
         mut bindings: Vec<Binding>,
         push: u32,
-    ) -> Result<Self> {
+    ) -> Self {
         let [voxel, exact] = spirv;
-        let voxel = ComputePipeline::new(gpu, name, &crate::spirv(voxel), &bindings, push, &[])?;
+        let voxel = Lazy::new(gpu, name, voxel, &bindings, push);
         bindings.extend(crate::gpu_bvh::GpuBvh::bindings());
         bindings.extend(crate::passes::end_balls::gather_bindings());
-        let exact = ComputePipeline::new(gpu, name, &crate::spirv(exact), &bindings, push, &[])?;
-        Ok(VisibilityVariants { voxel, exact })
+        let exact = Lazy::new(gpu, name, exact, &bindings, push);
+        VisibilityVariants { voxel, exact }
     }
 
-    /// The frame's variant, with `w` plus what it binds (the BVH).
-    pub fn pick(&self, f: &FrameInputs, w: DescriptorWrites) -> (&ComputePipeline, DescriptorWrites) {
+    /// The variant of the frame's visibility (built on first use).
+    pub fn pipeline(&self, f: &FrameInputs) -> Result<&ComputePipeline> {
         match f.visibility {
-            Visibility::Exact => (&self.exact, f.bvh.writes(w)),
-            Visibility::Voxel | Visibility::Psm => (&self.voxel, w),
+            Visibility::Exact => self.exact.pipeline(),
+            Visibility::Voxel | Visibility::Psm => self.voxel.pipeline(),
+        }
+    }
+
+    /// `w` plus what the frame's variant binds besides the common set (the BVH).
+    pub fn writes(f: &FrameInputs, w: DescriptorWrites) -> DescriptorWrites {
+        match f.visibility {
+            Visibility::Exact => f.bvh.writes(w),
+            Visibility::Voxel | Visibility::Psm => w,
         }
     }
 }
@@ -216,24 +225,32 @@ impl Gather {
     /// A gather-shaped pass (same bindings and push constants) running other shaders: `mis`. The three
     /// SPIR-V variants, one per [`Visibility`]: the voxel march; exact rays (also binds the BVH and the
     /// end balls); `psm` (also binds the shared set and its maps).
-    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&[u8]; 3]) -> Result<Self> {
+    pub fn with_shaders(gpu: &Gpu, name: &'static str, spirv: [&'static [u8]; 3]) -> Result<Self> {
         let [spirv, exact, psm] = spirv;
         let (bindings, push) = Self::bindings();
         let mut b = bindings.clone();
         b.extend(crate::passes::psm::gather_bindings());
-        let psm = ComputePipeline::new(gpu, name, &crate::spirv(psm), &b, push, &[])?;
-        let vis = VisibilityVariants::new(gpu, name, [spirv, exact], bindings, push)?;
+        let psm = Lazy::new(gpu, name, psm, &b, push);
+        let vis = VisibilityVariants::new(gpu, name, [spirv, exact], bindings, push);
         Ok(Gather { name, vis, psm, sampler: Sampler::nearest(gpu)? })
     }
 
-    /// The shader variant of the frame's visibility, with what it binds besides the common set.
-    fn variant(
+    /// The shader variant of the frame's visibility (built on first use).
+    fn pipeline(&self, f: &FrameInputs, i: &GatherInputs) -> Result<&ComputePipeline> {
+        match (f.visibility, &i.psm) {
+            (Visibility::Psm, Some(_)) => self.psm.pipeline(),
+            _ => self.vis.pipeline(f),
+        }
+    }
+
+    /// What the frame's variant binds besides the common set, and the push's `end_balls`.
+    fn variant_writes(
         &self,
         ctx: &PassContext,
         f: FrameInputs,
         i: &GatherInputs,
         writes: DescriptorWrites,
-    ) -> (&ComputePipeline, DescriptorWrites, u32) {
+    ) -> (DescriptorWrites, u32) {
         match (f.visibility, &i.psm) {
             (Visibility::Psm, Some(p)) => {
                 let writes = writes.storage_buffer(B_PSM_VIEWS, ctx.buffer(&p.views)).sampled_image(
@@ -241,18 +258,14 @@ impl Gather {
                     ctx.image(&p.depth),
                     self.sampler.raw,
                 );
-                (&self.psm, writes, 0)
+                (writes, 0)
             }
             (Visibility::Exact, _) => {
                 // The exact layout holds the end balls' bindings.
                 let (writes, on) = end_ball_writes(ctx, i, writes, self.sampler.raw);
-                let (pipeline, writes) = self.vis.pick(&f, writes);
-                (pipeline, writes, on)
+                (VisibilityVariants::writes(&f, writes), on)
             }
-            _ => {
-                let (pipeline, writes) = self.vis.pick(&f, writes);
-                (pipeline, writes, 0)
-            }
+            _ => (VisibilityVariants::writes(&f, writes), 0),
         }
     }
 
@@ -268,8 +281,9 @@ impl Gather {
         i: &GatherInputs,
         out: &mut Handle<Image>,
         push: GatherPush,
-    ) {
+    ) -> Result<()> {
         let (i, o) = (*i, *out);
+        let pipeline = self.pipeline(&f, &i)?;
         let mut b = g.add_pass(self.name);
         for h in i.images() {
             b = b.read(&h, Access::ComputeRead);
@@ -298,7 +312,7 @@ impl Gather {
                 .sampling_writes(&f, ctx, s)
                 .sampled_image(B_GATHER_DIRECT, direct, s)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            let (pipeline, writes, end_balls) = self.variant(ctx, f, &i, writes);
+            let (writes, end_balls) = self.variant_writes(ctx, f, &i, writes);
             for (first, last) in super::dispatch_ranges(push.first, push.last, f.vpls_per_dispatch) {
                 if first != push.first {
                     // The next chunk adds to what the previous one stored.
@@ -308,5 +322,6 @@ impl Gather {
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
             }
         });
+        Ok(())
     }
 }

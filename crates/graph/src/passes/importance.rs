@@ -26,11 +26,12 @@ use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle, PassContext};
 use crate::passes::dprsm::DprsmOut;
 use crate::passes::gbuffer::GBufferOut;
+use crate::pipelines::Lazy;
 use crate::shader_types::ImportancePush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Sampler};
+use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Sampler};
 
 /// Which weights the method sections hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -73,10 +74,10 @@ pub struct ImportanceParams {
 }
 
 pub struct Importance {
-    pipeline: ComputePipeline,
-    gbg: ComputePipeline,
+    pipeline: Lazy<1>,
+    gbg: Lazy<1>,
     /// gbg's scatter with `--visibility exact`: each ray's real first hit (binds the BVH).
-    gbg_exact: ComputePipeline,
+    gbg_exact: Lazy<1>,
     sampler: Sampler,
 }
 
@@ -95,24 +96,15 @@ impl Importance {
         bindings.extend(super::vpl_bindings());
         bindings.push(Binding::storage_buffer(B_IMPORTANCE));
         let push = std::mem::size_of::<ImportancePush>() as u32;
-        let pipeline =
-            ComputePipeline::new(gpu, "importance", &crate::spirv(shaders::IMPORTANCE_COMP), &bindings, push, &[])?;
+        let pipeline = Lazy::new(gpu, "importance", shaders::IMPORTANCE_COMP, &bindings, push);
         bindings.extend([
             Binding::storage_buffer(B_VOXELS),
             Binding::storage_buffer(B_GBG_SUM),
             Binding::storage_buffer(B_GBG_COUNT),
         ]);
-        let gbg = ComputePipeline::new(
-            gpu,
-            "importance_gbg",
-            &crate::spirv(shaders::IMPORTANCE_GBG_COMP),
-            &bindings,
-            push,
-            &[],
-        )?;
+        let gbg = Lazy::new(gpu, "importance_gbg", shaders::IMPORTANCE_GBG_COMP, &bindings, push);
         bindings.extend(crate::gpu_bvh::GpuBvh::bindings());
-        let spirv = crate::spirv(shaders::IMPORTANCE_GBG_EXACT_COMP);
-        let gbg_exact = ComputePipeline::new(gpu, "importance_gbg", &spirv, &bindings, push, &[])?;
+        let gbg_exact = Lazy::new(gpu, "importance_gbg", shaders::IMPORTANCE_GBG_EXACT_COMP, &bindings, push);
         Ok(Importance { pipeline, gbg, gbg_exact, sampler: Sampler::nearest(gpu)? })
     }
 
@@ -129,13 +121,21 @@ impl Importance {
         vpls: &DprsmOut,
         voxels: Option<Handle<Buffer>>,
         p: ImportanceParams,
-    ) -> ImportanceOut {
+    ) -> Result<ImportanceOut> {
+        let pipelines = Pipelines {
+            validity: self.pipeline.pipeline()?,
+            scatter: match (p.kind, f.visibility) {
+                (ImportanceKind::Gbg { .. }, Visibility::Exact) => Some(self.gbg_exact.pipeline()?),
+                (ImportanceKind::Gbg { .. }, Visibility::Voxel | Visibility::Psm) => Some(self.gbg.pipeline()?),
+                _ => None,
+            },
+        };
         let texels = Self::texel_count(&f);
         let sections = 1 + p.kind.method_sections();
         let mut importance = g.create_buffer(BufferDesc::storage("importance", 4 * texels * sections as u64));
         let gbg = matches!(p.kind, ImportanceKind::Gbg { .. });
         let mut scratch = gbg.then(|| Self::add_clear(g, texels));
-        let io = Io { gb: *gb, vpls: *vpls, voxels, out: importance, scratch };
+        let io = Io { gb: *gb, vpls: *vpls, voxels, out: importance, scratch, sampler: self.sampler.raw };
         let mut b = g.add_pass("importance");
         for h in [&gb.position, &gb.normal, &gb.albedo, &vpls.position, &vpls.normal, &vpls.flux] {
             b = b.read(h, Access::ComputeRead);
@@ -146,8 +146,8 @@ impl Importance {
         if let Some((sums, counts)) = &mut scratch {
             b = b.write(sums, Access::ComputeWrite).write(counts, Access::ComputeWrite);
         }
-        b.overwrite(&mut importance, Access::ComputeWrite).record(move |ctx| self.record(ctx, f, p, io));
-        ImportanceOut { importance, sections }
+        b.overwrite(&mut importance, Access::ComputeWrite).record(move |ctx| Self::record(ctx, f, p, io, pipelines));
+        Ok(ImportanceOut { importance, sections })
     }
 
     /// gbg's scratch sums and counts, zeroed by `importance_clear` (the scatter adds into them).
@@ -161,8 +161,8 @@ impl Importance {
     /// The dispatches: validity (section 0), then the method's sections, or gbg's scatter and resolve.
     /// Sections are disjoint ranges of one whole-buffer binding; each dispatch is serialized after the
     /// previous one through the graph (as in `cdf_reduce`).
-    fn record(&self, ctx: &PassContext, f: FrameInputs, p: ImportanceParams, io: Io) {
-        let s = self.sampler.raw;
+    fn record(ctx: &PassContext, f: FrameInputs, p: ImportanceParams, io: Io, pipelines: Pipelines) {
+        let s = io.sampler;
         let (gb, vpls, out) = (io.gb, io.vpls, io.out);
         let writes = super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&gb.position, &gb.normal, &gb.albedo], s);
         let mut writes = super::vpl_writes(writes, ctx, [&vpls.position, &vpls.normal, &vpls.flux], s)
@@ -185,7 +185,7 @@ impl Importance {
         let dispatch = |pipeline: &ComputePipeline, writes: &DescriptorWrites, push: ImportancePush, size| {
             pipeline.dispatch(ctx.cmd, writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
         };
-        dispatch(&self.pipeline, &writes, push(IMP_UNIFORM, 0), [res, res, layers]);
+        dispatch(pipelines.validity, &writes, push(IMP_UNIFORM, 0), [res, res, layers]);
         let method = match p.kind {
             ImportanceKind::Uniform | ImportanceKind::Gbg { .. } => None,
             ImportanceKind::Global => Some((IMP_GLOBAL, 1)),
@@ -194,9 +194,11 @@ impl Importance {
         };
         if let Some((mode, n)) = method {
             ctx.serialize(&out);
-            dispatch(&self.pipeline, &writes, push(mode, 1), [res, res, layers * n]);
+            dispatch(pipelines.validity, &writes, push(mode, 1), [res, res, layers * n]);
         }
-        if let (ImportanceKind::Gbg { rays }, Some((sums, counts))) = (p.kind, &io.scratch) {
+        if let (ImportanceKind::Gbg { rays }, Some((sums, counts)), Some(scatter)) =
+            (p.kind, &io.scratch, pipelines.scatter)
+        {
             if let Some(v) = &io.voxels {
                 writes = writes.storage_buffer(B_VOXELS, ctx.buffer(v));
             }
@@ -204,9 +206,9 @@ impl Importance {
             ctx.serialize(&out);
             // The voxel march's rays all fit one dispatch; traced rays go in shares under the loop limit.
             let chunk = f.traces_per_dispatch.max(1);
-            let (scatter, chunk, writes) = match f.visibility {
-                Visibility::Exact => (&self.gbg_exact, chunk, f.bvh.writes(writes)),
-                Visibility::Voxel | Visibility::Psm => (&self.gbg, rays.max(1), writes),
+            let (chunk, writes) = match f.visibility {
+                Visibility::Exact => (chunk, f.bvh.writes(writes)),
+                Visibility::Voxel | Visibility::Psm => (rays.max(1), writes),
             };
             for first in (0..rays).step_by(chunk as usize) {
                 if first > 0 {
@@ -234,4 +236,13 @@ struct Io {
     voxels: Option<Handle<Buffer>>,
     out: Handle<Buffer>,
     scratch: Option<(Handle<Buffer>, Handle<Buffer>)>,
+    sampler: vk::Sampler,
+}
+
+/// The importance pass's pipelines for a frame: the validity and CDF methods', and gbg's scatter and
+/// resolve for the frame's visibility.
+#[derive(Clone, Copy)]
+struct Pipelines<'a> {
+    validity: &'a ComputePipeline,
+    scatter: Option<&'a ComputePipeline>,
 }

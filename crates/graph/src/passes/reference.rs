@@ -12,14 +12,17 @@ use crate::bindings::*;
 use crate::gpu_bvh::GpuBvh;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
+use crate::pipelines::Lazy;
 use crate::shader_types::GatherPush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{Binding, ComputePipeline, Gpu, Image, Sampler};
+use bounce_device::{Binding, Gpu, Image, Sampler};
 
 pub struct Reference {
-    pipeline: ComputePipeline,
+    pipeline: Lazy<1>,
+    /// `SPEC_TEXTURED`: whether the scene has textures.
+    textured: bool,
     sampler: Sampler,
 }
 
@@ -44,10 +47,9 @@ impl Reference {
         ]);
         bindings.extend(GpuBvh::bindings());
         let push = std::mem::size_of::<GatherPush>() as u32;
-        let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
-        let spirv = crate::spirv(shaders::REFERENCE_COMP);
         Ok(Reference {
-            pipeline: ComputePipeline::new(gpu, "reference", &spirv, &bindings, push, &spec)?,
+            pipeline: Lazy::new(gpu, "reference", shaders::REFERENCE_COMP, &bindings, push),
+            textured,
             sampler: Sampler::nearest(gpu)?,
         })
     }
@@ -78,8 +80,8 @@ impl Reference {
         sq: &mut Handle<Image>,
         push: GatherPush,
         per_dispatch: u32,
-    ) {
-        let pipeline = &self.pipeline;
+    ) -> Result<()> {
+        let pipeline = self.pipeline.get(0, &[(crate::bindings::SPEC_TEXTURED, self.textured as u32)])?;
         let (hs, hq) = (*sum, *sq);
         let mut b = g
             .add_pass("reference")
@@ -115,5 +117,6 @@ impl Reference {
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [f.width, f.height, 1], [WG_2D, WG_2D, 1]);
             }
         });
+        Ok(())
     }
 }

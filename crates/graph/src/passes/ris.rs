@@ -109,59 +109,28 @@ use super::FrameInputs;
 use crate::bindings::*;
 use crate::frame::Visibility;
 use crate::graph::{Graph, Handle, PassBuilder, PassContext};
+use crate::pipelines::Lazy;
 use crate::shader_types::{GatherPush, Reservoir, RisPush, RisPushBlock};
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Buffer, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Image, Sampler};
-use std::sync::OnceLock;
 
-/// One variant of the initial stage, specialised per pick count K (`SPEC_RIS_PICKS`): K = 1 is built
-/// with the renderer, K > 1 when a frame first asks for it (`--picks`), so start-up pays for no pick
-/// count it does not use and a frame runs only its own picks' code.
-struct Picked {
-    spirv: &'static [u8],
-    bindings: Vec<Binding>,
-    by_picks: [OnceLock<ComputePipeline>; RIS_MAX_PICKS as usize],
-}
-
-impl Picked {
-    fn new(gpu: &Gpu, spirv: &'static [u8], bindings: &[Binding]) -> Result<Self> {
-        let me = Picked { spirv, bindings: bindings.to_vec(), by_picks: Default::default() };
-        me.get(gpu, 1)?;
-        Ok(me)
-    }
-
-    /// The pipeline for K picks (1 ..= `RIS_MAX_PICKS`, checked by the settings), built on first use.
-    fn get(&self, gpu: &Gpu, picks: u32) -> Result<&ComputePipeline> {
-        let cell = &self.by_picks[picks as usize - 1];
-        if let Some(p) = cell.get() {
-            return Ok(p);
-        }
-        let push = std::mem::size_of::<RisPushBlock>() as u32;
-        let spec = [(SPEC_RIS_PICKS, picks)];
-        let p = ComputePipeline::new(gpu, "ris_initial", &crate::spirv(self.spirv), &self.bindings, push, &spec)?;
-        Ok(cell.get_or_init(|| p))
-    }
-}
+/// Specialisations of the initial stage: picks K (1 ..= `RIS_MAX_PICKS`) × near window × its windows
+/// (one light's, or every light's) × the uniform source's shortcut ([`Ris::initial_spec`]).
+const INITIAL_SLOTS: usize = RIS_MAX_PICKS as usize * 8;
 
 pub struct Ris {
-    gpu: Gpu,
-    /// The initial stage drawing its own candidates (`--pool-tiles 0`), and the spatial stage.
-    initial: Picked,
-    spatial: ComputePipeline,
-    /// The pool's presampling (any source, and the uniform source with faces by Russian roulette, whose
-    /// mixture is one CDF) and the initial stage that draws from it (`--pool-tiles` > 0).
-    presample: ComputePipeline,
-    presample_uniform: ComputePipeline,
-    initial_pool: Picked,
-    /// The pool's initial stage with the learned visibility in the target (`--learn-visibility`).
-    initial_pool_learned: Picked,
-    /// The near window's variants, `[multi][uniform]`: one light's window, or every light's (scenes with
-    /// more than one light); any source, or the uniform source's shortcut (`RisFrame::uniform_source`).
-    initial_pool_near: [[Picked; 2]; 2],
-    /// The same with the learned visibility.
-    initial_pool_learned_near: [[Picked; 2]; 2],
+    /// The pool's presampling (`--pool-tiles` > 0): any source, or (slot 1) the uniform source with
+    /// faces by Russian roulette, whose mixture is one CDF.
+    presample: Lazy<2>,
+    /// The initial stage: drawing its own candidates (`--pool-tiles 0`), from the pool, and from the pool
+    /// with the learned visibility in the target (`--learn-visibility`); the variants that bind
+    /// something of their own. Each is specialised to the frame's picks, near window and source.
+    initial: [Lazy<INITIAL_SLOTS>; 3],
+    /// Last frame's reservoirs combined in, while they are kept (`--temporal-cap` > 0).
+    temporal: Lazy<1>,
+    spatial: Lazy<1>,
     /// The shade in the gather's per-pixel visibility variants (voxel, exact).
     shade: VisibilityVariants,
     sampler: Sampler,
@@ -313,67 +282,37 @@ impl Ris {
         use shaders::*;
         let base = super::gather::sampling_bindings;
         let push = std::mem::size_of::<RisPushBlock>() as u32;
-        let stage = |name, spirv: &[u8], extra: &[Binding]| {
+        let with = |extra: &[Binding]| {
             let mut b = base();
             b.extend_from_slice(extra);
-            ComputePipeline::new(gpu, name, &crate::spirv(spirv), &b, push, &[])
+            b
         };
-        // The initial stage's variants, each specialised per pick count (Picked).
-        let picked_pair = |spirv: [&'static [u8]; 2], b: &[Binding]| -> Result<[Picked; 2]> {
-            Ok([Picked::new(gpu, spirv[0], b)?, Picked::new(gpu, spirv[1], b)?])
-        };
-        let mut b = base();
-        b.extend([B_RIS_OUT, B_RIS_HISTORY, B_RIS_UNSHADOWED].map(Binding::storage_buffer));
-        let initial = Picked::new(gpu, RIS_INITIAL_COMP, &b)?;
-        let spatial = stage(
-            "ris_spatial",
-            RIS_SPATIAL_COMP,
-            &[Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)],
-        )?;
-        let presample = stage("ris_presample", RIS_PRESAMPLE_COMP, &[Binding::storage_buffer(B_RIS_POOL)])?;
-        let presample_uniform =
-            stage("ris_presample", RIS_PRESAMPLE_UNIFORM_COMP, &[Binding::storage_buffer(B_RIS_POOL)])?;
-        let mut b = base();
-        b.extend([
-            Binding::storage_buffer(B_RIS_OUT),
-            Binding::storage_buffer(B_RIS_HISTORY),
-            Binding::storage_buffer(B_RIS_UNSHADOWED),
-            Binding::uniform_texel_buffer(B_RIS_POOL),
-        ]);
-        let mut bl = b.clone();
-        bl.push(Binding::uniform_texel_buffer(B_RIS_VIS));
-        let initial_pool_learned = Picked::new(gpu, RIS_INITIAL_POOL_LEARNED_COMP, &bl)?;
-        // The near window's pairs (any source, the uniform source's shortcut), one window or every light's.
-        let near = |one: [&'static [u8]; 2], multi: [&'static [u8]; 2], b: &[Binding]| -> Result<[[Picked; 2]; 2]> {
-            Ok([picked_pair(one, b)?, picked_pair(multi, b)?])
-        };
-        let initial_pool_learned_near = near(
-            [RIS_INITIAL_POOL_LEARNED_NEAR_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_UNIFORM_COMP],
-            [RIS_INITIAL_POOL_LEARNED_NEAR_MULTI_COMP, RIS_INITIAL_POOL_LEARNED_NEAR_MULTI_UNIFORM_COMP],
-            &bl,
-        )?;
-        let initial_pool_near = near(
-            [RIS_INITIAL_POOL_NEAR_COMP, RIS_INITIAL_POOL_NEAR_UNIFORM_COMP],
-            [RIS_INITIAL_POOL_NEAR_MULTI_COMP, RIS_INITIAL_POOL_NEAR_MULTI_UNIFORM_COMP],
-            &b,
-        )?;
-        let initial_pool = Picked::new(gpu, RIS_INITIAL_POOL_COMP, &b)?;
-        let mut b = base();
-        b.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV].map(Binding::storage_buffer));
-        b.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
-        let variants = [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP];
-        let shade = VisibilityVariants::new(gpu, "ris_shade", variants, b, push)?;
+        let initial = with(&[Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_UNSHADOWED)]);
+        let temporal = with(&[Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_HISTORY)]);
+        let mut pooled = initial.clone();
+        pooled.push(Binding::uniform_texel_buffer(B_RIS_POOL));
+        let mut learned = pooled.clone();
+        learned.push(Binding::uniform_texel_buffer(B_RIS_VIS));
+        let spatial = with(&[Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)]);
+        let mut shade = base();
+        shade.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV].map(Binding::storage_buffer));
+        shade.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
         Ok(Ris {
-            gpu: gpu.clone(),
-            initial,
-            spatial,
-            presample,
-            presample_uniform,
-            initial_pool,
-            initial_pool_learned,
-            initial_pool_near,
-            initial_pool_learned_near,
-            shade,
+            presample: Lazy::new(
+                gpu,
+                "ris_presample",
+                RIS_PRESAMPLE_COMP,
+                &with(&[Binding::storage_buffer(B_RIS_POOL)]),
+                push,
+            ),
+            initial: [
+                Lazy::new(gpu, "ris_initial", RIS_INITIAL_COMP, &initial, push),
+                Lazy::new(gpu, "ris_initial", RIS_INITIAL_POOL_COMP, &pooled, push),
+                Lazy::new(gpu, "ris_initial", RIS_INITIAL_POOL_LEARNED_COMP, &learned, push),
+            ],
+            temporal: Lazy::new(gpu, "ris_temporal", RIS_TEMPORAL_COMP, &temporal, push),
+            spatial: Lazy::new(gpu, "ris_spatial", RIS_SPATIAL_COMP, &spatial, push),
+            shade: VisibilityVariants::new(gpu, "ris_shade", [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP], shade, push),
             sampler: Sampler::nearest(gpu)?,
         })
     }
@@ -404,7 +343,8 @@ impl Ris {
         let mut current = history.current;
         let mut scratch = (r.spatial_passes > 0).then(|| g.create_buffer(desc("ris.scratch")));
         let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
-        let pool = (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push, r.uniform_source));
+        let pool =
+            (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push, r.uniform_source)).transpose()?;
         // The learned visibility's counts: kept across the frames of one view (the history's key), zeroed
         // when new; a stand-in the shade never writes when off.
         let mut vis = if r.push.learned > 0.0 {
@@ -445,7 +385,10 @@ impl Ris {
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
-            self.add_initial(g, f, i, dst, &mut unshadowed, previous, pool, learned, push, r)?;
+            self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
+            if let Some(previous) = previous {
+                self.add_temporal(g, f, i, previous, dst, push, r.push)?;
+            }
         }
         for pass in 0..r.spatial_passes {
             let s = pass + 1;
@@ -454,9 +397,9 @@ impl Ris {
                 (false, Some(t)) => (current, t),
                 (_, None) => unreachable!("spatial passes have a scratch buffer"),
             };
-            self.add_spatial(g, f, i, src, dst, push, RisPush { pass, ..r.push });
+            self.add_spatial(g, f, i, src, dst, push, RisPush { pass, ..r.push })?;
         }
-        self.add_shade(g, f, i, current, unshadowed, &mut vis, &mut cv, out, push, r.push);
+        self.add_shade(g, f, i, current, unshadowed, &mut vis, &mut cv, out, push, r.push)?;
         Ok(())
     }
 
@@ -465,22 +408,48 @@ impl Ris {
         i.sampling_writes(&f, ctx, self.sampler.raw)
     }
 
-    /// The initial stage's variant for a frame of `push` (`multi`: more than one light).
-    fn initial_variant(&self, push: &RisPush, uniform_source: bool, multi: bool) -> &Picked {
-        let (multi, uniform) = (multi as usize, uniform_source as usize);
-        match (push.pool_tiles > 0, push.learned > 0.0) {
-            (true, true) if push.near_candidates > 0 => &self.initial_pool_learned_near[multi][uniform],
-            (true, true) => &self.initial_pool_learned,
-            (true, false) if push.near_candidates > 0 => &self.initial_pool_near[multi][uniform],
-            (true, false) => &self.initial_pool,
-            (false, _) => &self.initial,
-        }
+    /// The initial stage's pipeline for a frame of `push` (`multi`: more than one light), built on first
+    /// use: the variant by what it binds (its own candidates, the pool, the pool and the learned
+    /// visibility), specialised to the picks and, with the near window, to its windows and the source.
+    fn initial_pipeline(&self, push: &RisPush, uniform_source: bool, multi: bool) -> Result<&ComputePipeline> {
+        let variant = match (push.pool_tiles > 0, push.learned > 0.0) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+        };
+        let (slot, spec) = Self::initial_spec(push, uniform_source, multi);
+        self.initial[variant].get(slot, &spec)
     }
 
-    /// Builds the initial stage's pipeline a frame of `push` will use (its pick count's specialisation),
-    /// so that a timed run does not pay for it in its first frame.
+    /// The initial stage's specialisation slot and constants: K picks, and with the near window (which
+    /// needs the pool) whether it has every light's windows and the uniform source's shortcut (both
+    /// matter only there).
+    fn initial_spec(push: &RisPush, uniform_source: bool, multi: bool) -> (usize, [(u32, u32); 4]) {
+        let near = push.pool_tiles > 0 && push.near_candidates > 0;
+        let (multi, uniform) = (near && multi, near && uniform_source);
+        let slot = (push.picks as usize - 1) * 8 + near as usize * 4 + multi as usize * 2 + uniform as usize;
+        let lights = if multi { RIS_NEAR_LIGHTS } else { 1 };
+        let spec = [
+            (SPEC_RIS_PICKS, push.picks),
+            (SPEC_RIS_NEAR, near as u32),
+            (SPEC_RIS_NEAR_LIGHTS, lights),
+            (SPEC_RIS_UNIFORM_SOURCE, uniform as u32),
+        ];
+        (slot, spec)
+    }
+
+    /// The presampling's pipeline (slot 1: the uniform source's shortcut).
+    fn presample_pipeline(&self, uniform_source: bool) -> Result<&ComputePipeline> {
+        self.presample.get(uniform_source as usize, &[(SPEC_RIS_UNIFORM_SOURCE, uniform_source as u32)])
+    }
+
+    /// Builds the pipelines a frame of `push` will use, so that a timed run does not pay for them in its
+    /// first frame.
     pub fn prepare(&self, push: &RisPush, uniform_source: bool, multi: bool) -> Result<()> {
-        self.initial_variant(push, uniform_source, multi).get(&self.gpu, push.picks)?;
+        self.initial_pipeline(push, uniform_source, multi)?;
+        if push.pool_tiles > 0 {
+            self.presample_pipeline(uniform_source)?;
+        }
         Ok(())
     }
 
@@ -506,8 +475,9 @@ impl Ris {
         push: GatherPush,
         ris: RisPush,
         uniform_source: bool,
-    ) -> Handle<Buffer> {
+    ) -> Result<Handle<Buffer>> {
         let i = *i;
+        let pipeline = self.presample_pipeline(uniform_source)?;
         let mut desc = BufferDesc::storage("ris.pool", 48 * RIS_POOL_TILE as u64 * ris.pool_tiles as u64);
         desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         let mut pool = g.create_buffer(desc);
@@ -516,10 +486,9 @@ impl Ris {
             let writes = self.base_writes(f, ctx, &i).storage_buffer(B_RIS_POOL, ctx.buffer(&o));
             let block = RisPushBlock { gather: push, ris };
             let size = [RIS_POOL_TILE, ris.pool_tiles, 1];
-            let pipeline = if uniform_source { &self.presample_uniform } else { &self.presample };
             pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
         });
-        pool
+        Ok(pool)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -530,7 +499,6 @@ impl Ris {
         i: &GatherInputs,
         dst: &mut Handle<Buffer>,
         unshadowed: &mut Handle<Buffer>,
-        previous: Option<Handle<Buffer>>,
         pool: Option<Handle<Buffer>>,
         learned: Option<Handle<Buffer>>,
         push: GatherPush,
@@ -539,20 +507,16 @@ impl Ris {
         let (i, o, u) = (*i, *dst, *unshadowed);
         // The variant, specialised to the frame's picks (built here on first use, so a failure is an error
         // of this frame, not of the recorded pass).
-        let variant = self.initial_variant(&r.push, r.uniform_source, f.scene.light_count > 1);
-        let pipeline = variant.get(&self.gpu, r.push.picks)?;
+        let pipeline = self.initial_pipeline(&r.push, r.uniform_source, f.scene.light_count > 1)?;
         let mut b = Self::reads(g.add_pass("ris_initial"), &i);
-        for p in previous.iter().chain(pool.iter()).chain(learned.iter()) {
+        for p in pool.iter().chain(learned.iter()) {
             b = b.read(p, Access::ComputeRead);
         }
         b = b.overwrite(unshadowed, Access::ComputeWrite);
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
-            // Without a history the (unread) history binding gets the output buffer.
-            let history = previous.map_or(ctx.buffer(&o), |p| ctx.buffer(&p));
             let writes = self
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
-                .storage_buffer(B_RIS_HISTORY, history)
                 .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u));
             let writes = match (&pool, &learned) {
                 (Some(p), Some(v)) => {
@@ -567,13 +531,38 @@ impl Ris {
                     ctx.serialize(&o);
                     ctx.serialize(&u);
                 }
-                let block = RisPushBlock {
-                    gather: GatherPush { first, last, ..push },
-                    ris: RisPush { history: previous.is_some() as u32, ..r.push },
-                };
+                let block = RisPushBlock { gather: GatherPush { first, last, ..push }, ris: r.push };
                 let size = [f.width, f.height, r.push.reservoirs / r.push.picks];
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
             }
+        });
+        Ok(())
+    }
+
+    /// Last frame's final reservoirs (`previous`) combined into this frame's initial ones (`dst`), layer by
+    /// layer.
+    #[allow(clippy::too_many_arguments)]
+    fn add_temporal<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        i: &GatherInputs,
+        previous: Handle<Buffer>,
+        dst: &mut Handle<Buffer>,
+        push: GatherPush,
+        ris: RisPush,
+    ) -> Result<()> {
+        let (i, o) = (*i, *dst);
+        let pipeline = self.temporal.pipeline()?;
+        let b = Self::reads(g.add_pass("ris_temporal"), &i).read(&previous, Access::ComputeRead);
+        b.write(dst, Access::ComputeWrite).record(move |ctx| {
+            let writes = self
+                .base_writes(f, ctx, &i)
+                .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
+                .storage_buffer(B_RIS_HISTORY, ctx.buffer(&previous));
+            let block = RisPushBlock { gather: push, ris };
+            let size = [f.width, f.height, ris.reservoirs];
+            pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
         });
         Ok(())
     }
@@ -588,8 +577,9 @@ impl Ris {
         dst: &mut Handle<Buffer>,
         push: GatherPush,
         ris: RisPush,
-    ) {
+    ) -> Result<()> {
         let (i, o) = (*i, *dst);
+        let pipeline = self.spatial.pipeline()?;
         let b = Self::reads(g.add_pass("ris_spatial"), &i).read(&src, Access::ComputeRead);
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
             let writes = self
@@ -598,8 +588,9 @@ impl Ris {
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o));
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
-            self.spatial.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
+            pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
         });
+        Ok(())
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -615,8 +606,9 @@ impl Ris {
         out: &mut Handle<Image>,
         push: GatherPush,
         ris: RisPush,
-    ) {
+    ) -> Result<()> {
         let (i, o, hv, hc) = (*i, *out, *vis, *cv);
+        let pipeline = self.shade.pipeline(&f)?;
         let mut b = Self::reads(g.add_pass("ris_shade"), &i)
             .read(&reservoirs, Access::ComputeRead)
             .read(&unshadowed, Access::ComputeRead);
@@ -648,7 +640,7 @@ impl Ris {
                 Visibility::Exact => super::gather::end_ball_writes(ctx, &i, writes, self.sampler.raw),
                 _ => (writes, 0),
             };
-            let (pipeline, writes) = self.shade.pick(&f, writes);
+            let writes = VisibilityVariants::writes(&f, writes);
             // All reservoirs of a pixel, accumulated over dispatches as the gather's samples.
             let whole = GatherPush { first: 0, last: ris.reservoirs, accumulate: 0, end_balls, ..push };
             for (first, last) in super::dispatch_ranges(0, ris.reservoirs, f.vpls_per_dispatch) {
@@ -668,5 +660,6 @@ impl Ris {
                 );
             }
         });
+        Ok(())
     }
 }

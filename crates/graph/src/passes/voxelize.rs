@@ -34,11 +34,12 @@ use super::FrameInputs;
 use crate::bindings::*;
 use crate::gpu_scene::{scene_bindings, GpuScene};
 use crate::graph::{Graph, Handle};
+use crate::pipelines::Lazy;
 use crate::shader_types::VoxelizePush;
 use crate::shaders;
 use anyhow::{bail, Context, Result};
 use bounce_device::sync::Access;
-use bounce_device::{Binding, Buffer, BufferDesc, ComputePipeline, Gpu};
+use bounce_device::{Binding, Buffer, BufferDesc, Gpu};
 
 /// Conservative margin of the voxelization, in cells (2⁻¹³; from `glsl/shared/bindings.glsl`).
 pub use crate::bindings::VOXEL_EPS;
@@ -75,7 +76,7 @@ pub fn create_grid_buffer(gpu: &Gpu, spec: &VoxelGridSpec) -> Result<Buffer> {
 }
 
 pub struct Voxelize {
-    pipeline: ComputePipeline,
+    pipeline: Lazy<1>,
 }
 
 impl Voxelize {
@@ -83,16 +84,14 @@ impl Voxelize {
         let mut bindings = scene_bindings();
         bindings.push(Binding::storage_buffer(B_VOXELS));
         let push = std::mem::size_of::<VoxelizePush>() as u32;
-        let pipeline =
-            ComputePipeline::new(gpu, "voxelize", &crate::spirv(shaders::VOXELIZE_COMP), &bindings, push, &[])?;
-        Ok(Voxelize { pipeline })
+        Ok(Voxelize { pipeline: Lazy::new(gpu, "voxelize", shaders::VOXELIZE_COMP, &bindings, push) })
     }
 
     /// A new grid for `spec`, cleared and voxelized with the grid of `f.uniforms` (see the module doc).
-    pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, spec: &VoxelGridSpec) -> Handle<Buffer> {
+    pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>, spec: &VoxelGridSpec) -> Result<Handle<Buffer>> {
         let mut grid = g.create_buffer(grid_desc(spec));
-        self.add_scene(g, f.scene, f.uniforms, &mut grid);
-        grid
+        self.add_scene(g, f.scene, f.uniforms, &mut grid)?;
+        Ok(grid)
     }
 
     /// [`Voxelize::add`] from what it really reads: the grid depends on the scene and the uniforms' voxel
@@ -103,7 +102,8 @@ impl Voxelize {
         scene: &'a GpuScene,
         uniforms: &'a Buffer,
         grid: &mut Handle<Buffer>,
-    ) {
+    ) -> Result<()> {
+        let pipeline = self.pipeline.pipeline()?;
         g.add_clear("voxelize_clear", &mut [&mut *grid]);
         let h = *grid;
         g.add_pass("voxelize").write(grid, Access::ComputeWrite).record(move |ctx| {
@@ -120,10 +120,11 @@ impl Voxelize {
                 }
                 let n = batch.min(scene.triangle_count - first);
                 let push = VoxelizePush { cells_per_invocation: per_invocation, first_triangle: first };
-                self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [n, shares, 1], [WG_1D, 1, 1]);
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [n, shares, 1], [WG_1D, 1, 1]);
                 first += n;
             }
         });
+        Ok(())
     }
 }
 

@@ -1,0 +1,84 @@
+#version 460
+// ris, spatial stage (dispatch W × H × R): the reservoir combined with k neighbours' of the same layer,
+// generalized balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
+#include "shared/ris.glsl"
+
+layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
+layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
+
+// Whether neighbour q may lend its reservoir to p: both see geometry, their normals within ~25° and their
+// distances from the eye within 10 % (a deterministic function of the two G-buffer texels).
+bool similar(vec4 gp, vec3 np, vec4 gq, vec3 nq) {
+    if (gq.w == 0.0) return false;
+    float dp = distance(gp.xyz, frame.eye.xyz), dq = distance(gq.xyz, frame.eye.xyz);
+    return dot(np, nq) >= 0.9 && abs(dq - dp) <= 0.1 * dp;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    uint layer = gl_GlobalInvocationID.z;
+    if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
+    uint idx = res_index(px, layer);
+    Reservoir canonical = res_in[idx];
+    vec4 gp = texelFetch(g_position, px, 0);
+    if (gp.w == 0.0) {
+        res_out[idx] = canonical;
+        return;
+    }
+    // The inputs: 0 the pixel itself, then the accepted neighbours (at most RIS_MAX_NEIGHBORS).
+    ivec2 q[RIS_MAX_NEIGHBORS + 1];
+    vec3 xs[RIS_MAX_NEIGHBORS + 1], ns[RIS_MAX_NEIGHBORS + 1], albs[RIS_MAX_NEIGHBORS + 1];
+    q[0] = px;
+    xs[0] = gp.xyz;
+    ns[0] = texelFetch(g_normal, px, 0).xyz;
+    albs[0] = texelFetch(g_albedo, px, 0).rgb;
+    uint n = 1u;
+    uint tries = min(ris.neighbors, uint(RIS_MAX_NEIGHBORS));
+    for (uint j = 0u; j < tries; j++) {
+        // A point of the disc of radius `radius` (by the hash of pixel, seed, pass, layer and j).
+        uint stream = 16u + ris.pass * 64u + j;
+        float a = 2.0 * PI * ris_rand(px, stream, 2u * layer), rr = ris.radius * sqrt(ris_rand(px, stream, 2u * layer + 1u));
+        ivec2 c = px + ivec2(round(rr * vec2(cos(a), sin(a))));
+        if (c == px || any(lessThan(c, ivec2(0))) || any(greaterThanEqual(c, ivec2(frame.size.xy)))) continue;
+        vec4 gq = texelFetch(g_position, c, 0);
+        vec3 nq = texelFetch(g_normal, c, 0).xyz;
+        if (!similar(gp, ns[0], gq, nq)) continue;
+        q[n] = c;
+        xs[n] = gq.xyz;
+        ns[n] = nq;
+        albs[n] = texelFetch(g_albedo, c, 0).rgb;
+        n++;
+    }
+    Reservoir inputs[RIS_MAX_NEIGHBORS + 1];
+    inputs[0] = canonical;
+    float confidence = canonical.confidence;
+    for (uint i = 1u; i < n; i++) {
+        inputs[i] = res_in[res_index(q[i], layer)];
+        confidence += inputs[i].confidence;
+    }
+    // Resample: input i's sample y_i weighs m_i(y_i) · p̂_x(y_i) · W_i.
+    Reservoir r = empty_reservoir(confidence);
+    float sum = 0.0;
+    for (uint i = 0u; i < n; i++) {
+        Reservoir in_i = inputs[i];
+        if (in_i.vpl == RIS_NONE || !(in_i.weight > 0.0)) continue;
+        Vpl vpl = vpl_fetch(in_i.vpl);
+        float num = 0.0, den = 0.0, here = 0.0;
+        for (uint j = 0u; j < n; j++) {
+            float t = vpl_unshadowed_luminance(xs[j], ns[j], vpl_luminance_albedo(albs[j]), vpl, pc.clamp_d2);
+            den += inputs[j].confidence * t;
+            if (j == i) num = inputs[j].confidence * t;
+            if (j == 0u) here = t;
+        }
+        float w = den > 0.0 ? num / den * here * in_i.weight : 0.0;
+        if (!(w > 0.0)) continue;
+        sum += w;
+        if (ris_rand(px, 8u + ris.pass, layer * 16u + i) * sum < w) {
+            r.vpl = in_i.vpl;
+            r.target = here;
+        }
+    }
+    r.weight = r.vpl != RIS_NONE ? sum / r.target : 0.0;
+    if (!(r.weight > 0.0)) r = empty_reservoir(confidence);
+    res_out[idx] = r;
+}
