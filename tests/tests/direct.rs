@@ -8,7 +8,7 @@
 //! float rounding (relative 1e-3) and the visibility exactly; the test also bounds how many pixels
 //! the rule excludes, so the rule cannot hide a broken renderer.
 
-use bounce_graph::frame::{Component, FrameSettings, Renderer};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::Scene;
 use bounce_oracles::cpu_ref::{sample_image, Bvh};
 use bounce_tests::TestGpu;
@@ -16,7 +16,14 @@ use bounce_tests::TestGpu;
 fn compare(name: &str, scene: &Scene, w: u32, h: u32, shadow_res: u32, max_excluded: f64) {
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, scene).unwrap();
-    let s = FrameSettings { width: w, height: h, component: Component::Direct, shadow_res, ..FrameSettings::default() };
+    let s = FrameSettings {
+        width: w,
+        height: h,
+        component: Component::Direct,
+        shadow_res,
+        method: Method::Uniform,
+        ..FrameSettings::default()
+    };
     let frame = r.render(&s).unwrap();
     let bvh = Bvh::new(scene);
     let reference = sample_image(scene, &bvh, w, h);

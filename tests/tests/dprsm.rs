@@ -5,7 +5,7 @@
 
 use bounce_graph::bindings::VPL_MIN_COS;
 use bounce_graph::camera::Camera;
-use bounce_graph::frame::{FrameSettings, Renderer};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::{point_light, Scene};
 use bounce_oracles::cpu_ref::{Bvh, Trace};
 use bounce_tests::TestGpu;
@@ -59,7 +59,12 @@ fn near_triangle_edge(bvh: &Bvh, lp: DVec3, (i, j, n, face): (usize, usize, usiz
 fn check_against_ray_cast(scene: &Scene, res: u32) {
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, scene).unwrap();
-    let s = FrameSettings { shadow_res: res, ..FrameSettings::default() };
+    let s = FrameSettings {
+        shadow_res: res,
+        method: Method::Uniform,
+        component: Component::Direct,
+        ..FrameSettings::default()
+    };
     let far = r.uniforms(&s).scene_max[3] as f64;
     let depth = bounce_tests::maps::render_dprsm(&r, &s).unwrap();
     let bvh = Bvh::new(scene);
@@ -130,8 +135,16 @@ fn a_light_sealed_in_a_box_has_every_vpl_on_the_box() {
     for res in [16u32, 64, 256] {
         let gpu = TestGpu::new();
         let r = Renderer::new(&gpu, &scene).unwrap();
-        let [pos, _, _] =
-            bounce_tests::maps::render_vpls(&r, &FrameSettings { dprsm_res: res, ..FrameSettings::default() }).unwrap();
+        let [pos, _, _] = bounce_tests::maps::render_vpls(
+            &r,
+            &FrameSettings {
+                dprsm_res: res,
+                method: Method::Uniform,
+                component: Component::Direct,
+                ..FrameSettings::default()
+            },
+        )
+        .unwrap();
         let outside: Vec<String> = pos
             .iter()
             .enumerate()
@@ -148,7 +161,12 @@ fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
     let scene = scene.clone();
     let gpu = TestGpu::new();
     let r = Renderer::new(&gpu, &scene).unwrap();
-    let s = FrameSettings { dprsm_res: res, ..FrameSettings::default() };
+    let s = FrameSettings {
+        dprsm_res: res,
+        method: Method::Uniform,
+        component: Component::Direct,
+        ..FrameSettings::default()
+    };
     let [pos, nrm, flux] = bounce_tests::maps::render_vpls(&r, &s).unwrap();
     let bvh = Bvh::new(&scene);
     let n = res as usize;

@@ -24,6 +24,7 @@ fn settings(w: u32, dprsm_res: u32) -> FrameSettings {
         component: Component::Indirect,
         dprsm_res,
         visibility: Visibility::Exact,
+        method: Method::Uniform,
         ..FrameSettings::default()
     }
 }

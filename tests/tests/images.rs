@@ -3,7 +3,7 @@
 //! actual, reference and difference images are written to `target/test-output/`.
 
 use bounce::output::{read_exr, RgbImage};
-use bounce_graph::frame::{Component, FrameSettings, Renderer};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::Scene;
 use bounce_tests::{mean, rel_mse, write_evidence, TestGpu};
 
@@ -19,7 +19,9 @@ fn image_test(name: &str, component: Component, w: u32, h: u32, max_rel_mse: f64
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
-    let frame = r.render(&FrameSettings { width: w, height: h, component, ..FrameSettings::default() }).unwrap();
+    let frame = r
+        .render(&FrameSettings { width: w, height: h, component, method: Method::Uniform, ..FrameSettings::default() })
+        .unwrap();
     let actual = RgbImage::from_rgba(w, h, &frame.radiance);
     assert_eq!(actual.non_finite_count(), 0, "non-finite pixels");
     let e = rel_mse(&actual.pixels, &reference.pixels);

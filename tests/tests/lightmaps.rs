@@ -35,7 +35,13 @@ fn texel_solid_angles_cover_each_map() {
         assert!((map.solid_angle() - want).abs() < 1e-9, "{map:?}: solid_angle() {}", map.solid_angle());
         let [pos, _, flux] = bounce_tests::maps::render_vpls(
             &r,
-            &FrameSettings { dprsm_res: res, light_map: map, ..FrameSettings::default() },
+            &FrameSettings {
+                dprsm_res: res,
+                light_map: map,
+                method: Method::Uniform,
+                component: Component::Direct,
+                ..FrameSettings::default()
+            },
         )
         .unwrap();
         let valid = pos.iter().filter(|p| p[3] != 0.0).count();

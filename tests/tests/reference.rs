@@ -17,7 +17,12 @@ use std::f32::consts::PI;
 
 /// The reference's indirect image: `spp` samples, `w` × `h`.
 fn reference(r: &mut Renderer, spp: u32, seed: u64, w: u32, h: u32) -> Vec<[f32; 3]> {
-    reference_with(r, FrameSettings { spp, seed, ..FrameSettings::default() }, w, h)
+    reference_with(
+        r,
+        FrameSettings { spp, seed, method: Method::Uniform, component: Component::Direct, ..FrameSettings::default() },
+        w,
+        h,
+    )
 }
 
 fn reference_with(r: &mut Renderer, base: FrameSettings, w: u32, h: u32) -> Vec<[f32; 3]> {
@@ -122,6 +127,8 @@ fn a_reference_frame_does_not_depend_on_its_chunks() {
                 spp: 13,
                 seed,
                 reference_chunk: chunk.and_then(std::num::NonZeroU32::new),
+                method: Method::Uniform,
+                component: Component::Direct,
                 ..FrameSettings::default()
             };
             reference_with(&mut r, s, 16, 16)
@@ -145,7 +152,13 @@ fn progressive_reference_frames_are_one_sequence() {
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     {
-        let base = FrameSettings { spp: 2, seed: 7, ..FrameSettings::default() };
+        let base = FrameSettings {
+            spp: 2,
+            seed: 7,
+            method: Method::Uniform,
+            component: Component::Direct,
+            ..FrameSettings::default()
+        };
         let mut mean = |base: &FrameSettings| {
             let mut sum = vec![[0.0f64; 3]; 16 * 16];
             for k in 0..4 {

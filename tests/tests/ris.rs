@@ -9,7 +9,9 @@
 //! are several picks from one reservoir's candidates, with and without reuse.
 
 use crate::vpl::{converges_to, indirect_with};
-use bounce_graph::frame::{FrameSettings, Method, Renderer, RisSettings, RisSource, SettingsError, Visibility};
+use bounce_graph::frame::{
+    Component, FrameSettings, Method, Renderer, RisSettings, RisSource, SettingsError, Visibility,
+};
 use bounce_graph::scene::Scene;
 use bounce_tests::TestGpu;
 
@@ -37,6 +39,7 @@ fn ris(visibility: Visibility, seed: u64, reuse: u32, cap: f32) -> FrameSettings
             pool_tiles: 0,
             ..RisSettings::default()
         },
+        component: Component::Direct,
         ..FrameSettings::default()
     }
 }
@@ -59,7 +62,13 @@ fn progressive_mean(r: &mut Renderer, frames: u64, settings: impl Fn(u64) -> Fra
 
 fn all(r: &mut Renderer, visibility: Visibility) -> Vec<[f32; 3]> {
     let (w, h, res, vox) = SIZE;
-    let s = FrameSettings { method: Method::All, clamp: 0.01, visibility, ..FrameSettings::default() };
+    let s = FrameSettings {
+        method: Method::All,
+        clamp: 0.01,
+        visibility,
+        component: Component::Direct,
+        ..FrameSettings::default()
+    };
     indirect_with(r, s, w, h, res, vox)
 }
 
@@ -265,6 +274,7 @@ fn ris_near_window_is_unbiased_with_two_lights_and_every_light_map() {
             clamp: 0.01,
             visibility: Visibility::Exact,
             light_map,
+            component: Component::Direct,
             ..FrameSettings::default()
         };
         let all = indirect_with(&mut r, reference, w, h, res, vox);
@@ -400,7 +410,8 @@ fn ris_with_exact_visibility_agrees_with_the_reference() {
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h) = (24, 24);
-    let reference = FrameSettings { method: Method::Reference, spp: 256, ..FrameSettings::default() };
+    let reference =
+        FrameSettings { method: Method::Reference, spp: 256, component: Component::Direct, ..FrameSettings::default() };
     let reference = indirect_with(&mut r, reference, w, h, 128, 64);
     // 48 frames: with ris's defaults (no reuse) 16 frames left a Monte Carlo error near 1 % on their own.
     let frames = 48;
@@ -412,6 +423,7 @@ fn ris_with_exact_visibility_agrees_with_the_reference() {
             seed: 100 + k,
             cdf_seed: Some(100),
             vpls: 8,
+            component: Component::Direct,
             ..FrameSettings::default()
         };
         mean += bounce_tests::mean(&indirect_with(&mut r, s, w, h, 128, 64)) / frames as f64;
@@ -433,7 +445,13 @@ fn ris_with_one_candidate_is_its_source_method() {
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = SIZE;
     for source in [RisSource::Uniform, RisSource::Gbg, RisSource::Local] {
-        let base = FrameSettings { seed: 3, vpls: 8, ..FrameSettings::default() };
+        let base = FrameSettings {
+            seed: 3,
+            vpls: 8,
+            method: Method::Uniform,
+            component: Component::Direct,
+            ..FrameSettings::default()
+        };
         let ris = RisSettings {
             source,
             candidates: 1,

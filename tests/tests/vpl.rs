@@ -50,7 +50,14 @@ fn indirect(
     dprsm_res: u32,
     voxels: u32,
 ) -> Vec<[f32; 3]> {
-    indirect_with(r, FrameSettings { method, seed, vpls, ..FrameSettings::default() }, w, h, dprsm_res, voxels)
+    indirect_with(
+        r,
+        FrameSettings { method, seed, vpls, component: Component::Direct, ..FrameSettings::default() },
+        w,
+        h,
+        dprsm_res,
+        voxels,
+    )
 }
 
 pub(crate) fn indirect_with(
@@ -121,8 +128,14 @@ fn every_method_converges_to_all_at_the_monte_carlo_rate() {
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (24, 24, 32, 32);
     let clamp = 0.01;
-    let all =
-        indirect_with(&mut r, FrameSettings { method: Method::All, clamp, ..FrameSettings::default() }, w, h, res, vox);
+    let all = indirect_with(
+        &mut r,
+        FrameSettings { method: Method::All, clamp, component: Component::Direct, ..FrameSettings::default() },
+        w,
+        h,
+        res,
+        vox,
+    );
     for (method, face) in [
         (Method::Uniform, FaceMode::RussianRoulette),
         (Method::Global, FaceMode::RussianRoulette),
@@ -140,6 +153,7 @@ fn every_method_converges_to_all_at_the_monte_carlo_rate() {
             cdf_samples: 16,
             clamp,
             defensive: 0.5,
+            component: Component::Direct,
             ..FrameSettings::default()
         };
         let name = format!("{} (face {:?})", method.name(), face);
@@ -250,12 +264,22 @@ fn the_patch_kernel_brings_the_vpl_sum_closer_to_the_exact_one_bounce_image() {
     let (w, h) = (24, 24);
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
-    let reference = FrameSettings { method: Method::Reference, spp: 16384, ..FrameSettings::default() };
+    let reference = FrameSettings {
+        method: Method::Reference,
+        spp: 16384,
+        component: Component::Direct,
+        ..FrameSettings::default()
+    };
     let r_img = indirect_with(&mut r, reference, w, h, 32, 32);
     let mr = bounce_tests::mean(&r_img);
     for res in [32, 64] {
         let sum = |r: &mut Renderer, vpl_kernel| {
-            let s = FrameSettings { method: Method::All, vpl_kernel, ..FrameSettings::default() };
+            let s = FrameSettings {
+                method: Method::All,
+                vpl_kernel,
+                component: Component::Direct,
+                ..FrameSettings::default()
+            };
             indirect_with(r, s, w, h, res, 32)
         };
         let (point, patch) = (sum(&mut r, VplKernel::Point), sum(&mut r, VplKernel::Patch));
@@ -283,7 +307,13 @@ fn mis_is_unbiased_with_either_visibility_and_the_thesis_weights_are_not() {
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (24, 24, 32, 32);
     for visibility in [Visibility::Voxel, Visibility::Exact] {
-        let base = FrameSettings { clamp: 0.01, visibility, ..FrameSettings::default() };
+        let base = FrameSettings {
+            clamp: 0.01,
+            visibility,
+            method: Method::Uniform,
+            component: Component::Direct,
+            ..FrameSettings::default()
+        };
         let all = indirect_with(&mut r, FrameSettings { method: Method::All, ..base.clone() }, w, h, res, vox);
         let target = bounce_tests::mean(&all);
         for weights in [MisWeights::Consistent, MisWeights::Thesis] {
@@ -342,7 +372,13 @@ fn mis_is_unbiased_where_patches_reach_behind_a_junction() {
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = (24, 24, 8, 32);
-    let base = FrameSettings { clamp: 0.01, visibility: Visibility::Exact, ..FrameSettings::default() };
+    let base = FrameSettings {
+        clamp: 0.01,
+        visibility: Visibility::Exact,
+        method: Method::Uniform,
+        component: Component::Direct,
+        ..FrameSettings::default()
+    };
     let all = indirect_with(&mut r, FrameSettings { method: Method::All, ..base.clone() }, w, h, res, vox);
     let target = bounce_tests::mean(&all);
     let (m, se) = mis_seed_mean(&mut r, &base, 7000..7064, (w, h, res, vox));
@@ -499,7 +535,13 @@ fn around_a_corner_gbg_and_mis_beat_uniform_and_global() {
     for method in [Method::Uniform, Method::Global, Method::Gbg, Method::Mis] {
         let e = (0..3)
             .map(|k| {
-                let s = FrameSettings { method, seed: 40 + k, vpls: 32, ..FrameSettings::default() };
+                let s = FrameSettings {
+                    method,
+                    seed: 40 + k,
+                    vpls: 32,
+                    component: Component::Direct,
+                    ..FrameSettings::default()
+                };
                 bounce_tests::rel_mse(&indirect_with(&mut r, s, w, h, res, vox), &all)
             })
             .sum::<f64>()
@@ -525,7 +567,14 @@ fn local_has_no_seam_at_region_borders() {
     let all = indirect(&mut r, Method::All, 0, 1, w, h, res, vox);
     let mut diffs = vec![];
     for k in 0..12 {
-        let s = FrameSettings { method: Method::Local, regions: 4, seed: 70 + k, vpls: 8, ..FrameSettings::default() };
+        let s = FrameSettings {
+            method: Method::Local,
+            regions: 4,
+            seed: 70 + k,
+            vpls: 8,
+            component: Component::Direct,
+            ..FrameSettings::default()
+        };
         let img = indirect_with(&mut r, s, w, h, res, vox);
         for y in 0..h as usize {
             let (l, rr) = (y * w as usize + w as usize / 2 - 1, y * w as usize + w as usize / 2);
@@ -547,7 +596,14 @@ fn a_seed_gives_one_image() {
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     for method in [Method::Uniform, Method::Gbg, Method::Mis] {
         let mut run = |seed| {
-            indirect_with(&mut r, FrameSettings { method, seed, vpls: 4, ..FrameSettings::default() }, 16, 16, 32, 32)
+            indirect_with(
+                &mut r,
+                FrameSettings { method, seed, vpls: 4, component: Component::Direct, ..FrameSettings::default() },
+                16,
+                16,
+                32,
+                32,
+            )
         };
         let (a, b, c) = (run(9), run(9), run(10));
         assert_eq!(a, b, "{}: the same seed gave two images", method.name());
@@ -567,7 +623,12 @@ fn all_with_exact_visibility_agrees_with_the_reference() {
     let (w, h) = (24, 24);
     let exact = indirect_with(
         &mut r,
-        FrameSettings { method: Method::All, visibility: Visibility::Exact, ..FrameSettings::default() },
+        FrameSettings {
+            method: Method::All,
+            visibility: Visibility::Exact,
+            component: Component::Direct,
+            ..FrameSettings::default()
+        },
         w,
         h,
         64,
@@ -575,7 +636,7 @@ fn all_with_exact_visibility_agrees_with_the_reference() {
     );
     let reference = indirect_with(
         &mut r,
-        FrameSettings { method: Method::Reference, spp: 256, ..FrameSettings::default() },
+        FrameSettings { method: Method::Reference, spp: 256, component: Component::Direct, ..FrameSettings::default() },
         w,
         h,
         64,

@@ -48,6 +48,14 @@ pub enum Command {
 #[derive(Clone, Copy)]
 pub struct Choices<T: 'static>(&'static [(&'static str, T, &'static str)]);
 
+impl<T: PartialEq> Choices<T> {
+    /// The command-line name of `value` (the defaults' flags show it); a value the table lacks is a bug
+    /// that `frame_flag_defaults_are_the_graph_defaults` catches.
+    pub fn name_of(&self, value: &T) -> &'static str {
+        self.0.iter().find(|(_, v, _)| v == value).map_or("?", |(name, ..)| *name)
+    }
+}
+
 impl<T: Clone + Send + Sync + 'static> TypedValueParser for Choices<T> {
     type Value = T;
 
@@ -146,10 +154,13 @@ pub const FACES: Choices<FaceMode> = Choices(&[
     ("uniform", FaceMode::Uniform, "Every face with importance equally likely (thesis alg. 4)"),
 ]);
 
-/// `--vpls` when not given.
-pub const DEFAULT_VPLS: u32 = 64;
-/// `--spp` when not given (one frame of the reference).
-pub const DEFAULT_SPP: u32 = 256;
+/// The one table of defaults: `FrameSettings::default()`, what a frame is when nothing says otherwise.
+/// Every flag of a frame setting takes its default from it (clap evaluates these at parse time), so the
+/// library, the command line and the tests share one renderer. A command with other defaults (`view`,
+/// `bench`) says so with `mut_arg` beside its arguments.
+fn d() -> FrameSettings {
+    FrameSettings::default()
+}
 /// `render --time-limit`'s method when neither --method nor --vpls is given: the path tracer. Its progressive frames
 /// continue one stratified sample sequence per pixel, and at equal time it had the lowest error of every
 /// method on every scene of the suite, below ris and below the Mitsuba MIS tracer of
@@ -192,7 +203,7 @@ pub struct PictureArgs {
     #[arg(long)]
     pub height: Option<u32>,
     /// Which radiance to render.
-    #[arg(long, value_parser = COMPONENTS, default_value = "combined")]
+    #[arg(long, value_parser = COMPONENTS, default_value = COMPONENTS.name_of(&d().component))]
     pub component: Component,
     /// How the gather picks VPLs. Default ris: the lowest error at equal time of the VPL methods on every
     /// scene measured (BENCHMARKS.md); `render --time-limit` without it renders `reference`, the lowest
@@ -205,7 +216,7 @@ pub struct PictureArgs {
     #[arg(long)]
     pub vpls: Option<u32>,
     /// Random seed (same seed, same image).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = d().seed)]
     pub seed: u64,
 }
 
@@ -217,8 +228,8 @@ impl PictureArgs {
         let height = self.height.or(scene.render_height).unwrap_or(fallback_size);
         FrameSettings {
             component: self.component,
-            method: self.method.unwrap_or(Method::Ris),
-            vpls: self.vpls.unwrap_or(DEFAULT_VPLS),
+            method: self.method.unwrap_or(d().method),
+            vpls: self.vpls.unwrap_or(d().vpls),
             seed: self.seed,
             ..frame.settings(width, height)
         }
@@ -229,48 +240,48 @@ impl PictureArgs {
 #[derive(Args, Debug)]
 pub struct FrameArgs {
     /// Reflective DPRSM resolution per face (VPLs: 2 × lights × res²).
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = d().dprsm_res)]
     pub dprsm_res: u32,
     /// Resolution per face of the paraboloid depth map used for direct-light shadows.
-    #[arg(long, default_value_t = 2048)]
+    #[arg(long, default_value_t = d().shadow_res)]
     pub shadow_res: u32,
     /// Voxels along the longest side of the scene (cubic cells).
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = d().voxels)]
     pub voxels: u32,
     /// A VPL's falloff with distance.
-    #[arg(long, value_parser = VPL_KERNELS, default_value = "patch")]
+    #[arg(long, value_parser = VPL_KERNELS, default_value = VPL_KERNELS.name_of(&d().vpl_kernel))]
     pub vpl_kernel: VplKernel,
     /// Gather points per CDF (global, stratified, local).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = d().cdf_samples)]
     pub cdf_samples: u32,
     /// Screen regions of `local` (a perfect square).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = d().regions)]
     pub regions: u32,
     /// Cosine rays per gather point (gbg).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = d().gather_rays)]
     pub gather_rays: u32,
     /// Share of samples drawn uniformly among all VPLs by the CDF methods (keeps every VPL's pdf > 0;
     /// default 0.1, or 0.5 where `render --time-limit` picks ris's gathered source for the view).
     #[arg(long)]
     pub defensive: Option<f32>,
     /// How CDF methods choose the paraboloid face.
-    #[arg(long, value_parser = FACES, default_value = "rr")]
+    #[arg(long, value_parser = FACES, default_value = FACES.name_of(&d().face))]
     pub face: FaceMode,
     /// MIS weights (--method mis).
-    #[arg(long, value_parser = MIS_WEIGHTS, default_value = "consistent")]
+    #[arg(long, value_parser = MIS_WEIGHTS, default_value = MIS_WEIGHTS.name_of(&d().mis_weights))]
     pub mis_weights: MisWeights,
     /// Samples per pixel of --method reference (default 256: its own noise is ≈ relMSE 1e-4 on the
     /// default scene at 128²); under `render --time-limit`, per frame (default 8).
     #[arg(long)]
     pub spp: Option<u32>,
     /// Visibility of the VPL gather.
-    #[arg(long, value_parser = VISIBILITIES, default_value = "exact")]
+    #[arg(long, value_parser = VISIBILITIES, default_value = VISIBILITIES.name_of(&d().visibility))]
     pub visibility: Visibility,
     /// Resolution of each per-VPL paraboloid shadow map (--visibility psm).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = d().psm_res)]
     pub psm_res: u32,
     /// The VPL map at each light (its faces are --dprsm-res² each).
-    #[arg(long, value_parser = LIGHT_MAPS, default_value = "dprsm")]
+    #[arg(long, value_parser = LIGHT_MAPS, default_value = LIGHT_MAPS.name_of(&d().light_map))]
     pub light_map: LightMap,
     /// Field of view of --light-map rsm, degrees.
     #[arg(long, default_value_t = 90.0)]
@@ -309,7 +320,7 @@ pub struct FrameArgs {
 #[derive(Args, Debug)]
 pub struct LabArgs {
     /// Clamp 1/d² below this distance, as a fraction of the scene diagonal (0: off, unbiased).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = d().clamp)]
     pub clamp: f32,
     /// Spatial reuse passes of --method ris (0: none).
     #[arg(long, default_value_t = RisSettings::default().spatial_passes)]
@@ -376,7 +387,7 @@ impl FrameArgs {
         let mut s = FrameSettings {
             width,
             height,
-            spp: self.spp.unwrap_or(DEFAULT_SPP),
+            spp: self.spp.unwrap_or(d().spp),
             visibility: self.visibility,
             psm_res: self.psm_res,
             light_map: match self.light_map {

@@ -80,7 +80,7 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
             output::check_destination(&p).map_err(bad)?;
         }
     }
-    let vpls = a.picture.vpls.unwrap_or(crate::cli::DEFAULT_VPLS);
+    let vpls = a.picture.vpls.unwrap_or(bounce_graph::frame::FrameSettings::default().vpls);
     if !(1..=4096).contains(&vpls) {
         return Err(bad(anyhow::anyhow!("--vpls must be between 1 and 4096 (got {vpls})")));
     }
