@@ -111,9 +111,8 @@ pub struct Shared {
     /// The subgroup operations compute shaders may use (empty where compute shaders have none).
     pub compute_subgroup_ops: vk::SubgroupFeatureFlags,
     /// Loop iterations one shader invocation may run before the driver cuts its loops short, where the
-    /// driver has such a limit: llvmpipe (lavapipe) stops every loop of an invocation after 65535
-    /// iterations *in total*, silently (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`). Passes whose invocations
-    /// loop long split their work so that each dispatch stays under it.
+    /// driver has such a limit ([`crate::workarounds`]). Passes whose invocations loop long split their
+    /// work so that each dispatch stays under it.
     pub loop_iteration_limit: Option<u32>,
     pub push_descriptor: khr::push_descriptor::Device,
     pub debug_utils: Option<ext::debug_utils::Device>,
@@ -355,7 +354,7 @@ fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
         queue_family,
         timestamp_valid_bits: qfs[queue_family as usize].timestamp_valid_bits,
         compute_subgroup_ops: compute_subgroup_ops(instance, physical),
-        loop_iteration_limit: (driver.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(65535),
+        loop_iteration_limit: crate::workarounds::loop_iteration_limit(driver.driver_id),
     })
 }
 

@@ -32,6 +32,7 @@ mod pipeline;
 mod swapchain;
 pub mod sync;
 mod timestamps;
+pub mod workarounds;
 
 pub use ash::vk;
 pub use command::DescriptorWrites;

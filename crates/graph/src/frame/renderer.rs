@@ -137,7 +137,8 @@ impl Renderer {
     /// first frame against 0.2–28 ms after it); drivers that compile at pipeline creation pay nothing
     /// here. The next frame's image does not change: it records every pass as a first frame does.
     pub fn warm_up(&mut self, s: &FrameSettings) -> Result<()> {
-        // llvmpipe keys a shader's compiled variant on whether each image's sides are powers of two, so
+        // llvmpipe keys a shader's compiled variant on whether each image's sides are powers of two
+        // (bounce_device::workarounds), so
         // a smaller stand-in keeps that: a power of two becomes `cap`, any other size 1.5 · cap.
         let small = |n: u32, cap: u32| match n {
             n if n <= cap => n,

@@ -12,7 +12,7 @@
 //! (Here each end is lifted along its face normal, the renderer lifts x along its shading normal.)
 //! Figures: BENCHMARKS.md, "Exact shadow rays that skip their ends' empty balls" and "An optimized BVH".
 //!
-//!     cargo run --release -p bounce-tests --bin end-balls -- scene.toml
+//!     cargo run --release -p bounce-lab --bin end-balls -- scene.toml
 
 use bounce_graph::bvh::query::BvhView;
 use bounce_graph::bvh::{Bvh, FlatBvh};
@@ -37,11 +37,11 @@ fn main() -> anyhow::Result<()> {
     let view = BvhView { nodes: &flat.nodes, tris: &flat.tris };
     let diag = (scene.bounds_max - scene.bounds_min).length();
     let lift = |x: Vec3| (1e-5 * diag).max(x.abs().max_element() / 262144.0);
-    let (pixels, vpls, mut rng) = bounce_tests::gather_ends(&scene, &flat);
+    let (pixels, vpls, mut rng) = bounce_lab::gather_ends(&scene, &flat);
     let light = Vec3::from_slice(&scene.lights[0].position[..3]);
     let t0 = std::time::Instant::now();
     let rx: Vec<f64> =
-        pixels.iter().map(|&(x, n)| bounce_tests::windows::ball_radius(&view, x, n, lift(x) / 16.0)).collect();
+        pixels.iter().map(|&(x, n)| bounce_lab::windows::ball_radius(&view, x, n, lift(x) / 16.0)).collect();
     let cap: f64 = std::env::var("CAP")
         .ok()
         .and_then(|c| c.parse().ok())
@@ -49,7 +49,7 @@ fn main() -> anyhow::Result<()> {
         * diag as f64;
     let rx: Vec<f64> = rx.iter().map(|r| r.min(cap)).collect();
     let ry: Vec<f64> =
-        vpls.iter().map(|&(y, n)| bounce_tests::windows::ball_radius(&view, y, n, lift(y) / 16.0).min(cap)).collect();
+        vpls.iter().map(|&(y, n)| bounce_lab::windows::ball_radius(&view, y, n, lift(y) / 16.0).min(cap)).collect();
     println!("radii in {:.1} s", t0.elapsed().as_secs_f64());
     let med = |v: &[f64]| {
         let mut s = v.to_vec();
@@ -81,7 +81,7 @@ fn main() -> anyhow::Result<()> {
     let mut per_pixel = vec![0u64; pixels.len()];
     let (mut rays, mut full, mut clipped, mut none_needed, mut vis, mut vis_full, mut vis_clip) =
         (0u64, 0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
-    for (pi, vi) in bounce_tests::gather_pairs(&pixels, &vpls, &mut rng) {
+    for (pi, vi) in bounce_lab::gather_pairs(&pixels, &vpls, &mut rng) {
         let ((x, nx), (y, ny)) = (pixels[pi], vpls[vi]);
         rays += 1;
         let o = (x + nx * lift(x)).as_dvec3();
@@ -89,7 +89,7 @@ fn main() -> anyhow::Result<()> {
         let (lo, hi) = (1e-6, 1.0 - 1e-6);
         let w = cpu_threaded::walk(&threaded, o, e, lo, hi);
         full += w.records as u64;
-        let t1 = bounce_tests::windows::ball_exit(
+        let t1 = bounce_lab::windows::ball_exit(
             o,
             e,
             x.as_dvec3(),
@@ -98,7 +98,7 @@ fn main() -> anyhow::Result<()> {
             lift(x) as f64 / 8.0,
         );
         let t2 = 1.0
-            - bounce_tests::windows::ball_exit(
+            - bounce_lab::windows::ball_exit(
                 e,
                 o,
                 y.as_dvec3(),

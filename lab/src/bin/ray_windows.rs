@@ -15,14 +15,14 @@
 //! shortened by a cone must give the whole segment's answer. Figures: BENCHMARKS.md, "Skipping more of
 //! the exact rays' empty space".
 //!
-//!     cargo run --release -p bounce-tests --bin ray-windows -- scene.toml [G,G,…] [m,m,…]
+//!     cargo run --release -p bounce-lab --bin ray-windows -- scene.toml [G,G,…] [m,m,…]
 
 use bounce_graph::bvh::query::BvhView;
 use bounce_graph::bvh::{Bvh, FlatBvh};
 use bounce_graph::passes::voxelize::{self, VoxelGridSpec};
 use bounce_graph::scene::Scene;
+use bounce_lab::windows::{ball_exit, ball_radius, nearest_above};
 use bounce_oracles::{cpu_threaded, cpu_voxel};
-use bounce_tests::windows::{ball_exit, ball_radius, nearest_above};
 use glam::{DVec3, Vec3};
 use std::path::Path;
 
@@ -49,7 +49,7 @@ fn main() -> anyhow::Result<()> {
     let diag = (scene.bounds_max - scene.bounds_min).length();
     let lift = |x: Vec3| (1e-5 * diag).max(x.abs().max_element() / 262144.0);
     let cap = bounce_graph::bindings::END_BALL_MAX_RADIUS as f64 * diag as f64;
-    let (pixels, vpls, mut rng) = bounce_tests::gather_ends(&scene, &flat);
+    let (pixels, vpls, mut rng) = bounce_lab::gather_ends(&scene, &flat);
     let light = Vec3::from_slice(&scene.lights[0].position[..3]);
     let rx: Vec<f64> = pixels.iter().map(|&(x, n)| ball_radius(&view, x, n, lift(x) / 16.0).min(cap)).collect();
     let ry: Vec<f64> = vpls.iter().map(|&(y, n)| ball_radius(&view, y, n, lift(y) / 16.0).min(cap)).collect();
@@ -66,7 +66,7 @@ fn main() -> anyhow::Result<()> {
     let (mut free, mut free_vis, mut cells) =
         (vec![0u64; grids.len()], vec![0u64; grids.len()], vec![0u64; grids.len()]);
     let (mut coned, mut coned_vis) = (vec![0u64; bins.len()], vec![0u64; bins.len()]);
-    for (pi, vi) in bounce_tests::gather_pairs(&pixels, &vpls, &mut rng) {
+    for (pi, vi) in bounce_lab::gather_pairs(&pixels, &vpls, &mut rng) {
         let ((x, nx), (y, ny)) = (pixels[pi], vpls[vi]);
         let (o, e) = ((x + nx * lift(x)).as_dvec3(), ends[vi]);
         let whole = cpu_threaded::walk(&threaded, o, e, 1e-6, 1.0 - 1e-6);
@@ -128,7 +128,7 @@ fn main() -> anyhow::Result<()> {
 /// Whether the segment o → e between parameters a and b crosses no occupied cell of `grid`, and the
 /// cells visited until the first occupied one (or the window's end).
 fn march(spec: &VoxelGridSpec, grid: &cpu_voxel::CpuGrid, o: DVec3, e: DVec3, a: f64, b: f64) -> (bool, u32) {
-    let cells = bounce_tests::grid_cells_along(spec, o + (e - o) * a, o + (e - o) * b);
+    let cells = bounce_lab::grid_cells_along(spec, o + (e - o) * a, o + (e - o) * b);
     match cells.iter().position(|&(c, _, _)| grid.occupied(c)) {
         Some(k) => (false, k as u32 + 1),
         None => (true, cells.len() as u32),
@@ -176,7 +176,7 @@ fn bin_of(d: DVec3, m: usize) -> usize {
 /// plus the sphere's own angular radius).
 fn cone_distances(
     view: &BvhView,
-    vpls: &[bounce_tests::SurfacePoint],
+    vpls: &[bounce_lab::SurfacePoint],
     ends: &[DVec3],
     m: usize,
     lift: &dyn Fn(Vec3) -> f32,

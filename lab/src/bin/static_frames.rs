@@ -3,7 +3,7 @@
 //! on the default scene. The figures of BENCHMARKS.md, "Skipping what a
 //! frame does not need".
 //!
-//!     cargo run -p bounce-tests --bin static-frames [width] [vpls]
+//!     cargo run -p bounce-lab --bin static-frames [width] [vpls]
 
 use bounce_device::{Gpu, GpuOptions};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
