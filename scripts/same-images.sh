@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Shows that this checkout renders exactly what commit BASE rendered: every method, component, light
-# map and visibility mode on the default scene and the two-rooms scene, compared pixel for pixel (f32
-# bits). Builds BASE in a temporary git worktree with its own target directory (seeded from this one,
+# map and visibility mode, and ris's features, on the suite's scenes (SCENES, default: all seven),
+# compared pixel for pixel (f32 bits). Builds BASE in a temporary git worktree with its own target directory (seeded from this one,
 # so shaderc is not compiled twice), renders the same matrix with both binaries at 24², and exits 1
 # if any image differs.
 #
@@ -26,9 +26,13 @@ CARGO_TARGET_DIR="$base_target" cargo build -q --manifest-path "$work/base/Cargo
   CARGO_TARGET_DIR="$base_target" cargo build -q --manifest-path "$work/base/Cargo.toml" -p bounce
 cargo build -q -p bounce-tests --bin same-pixels
 cargo build -q -p bounce --features lab
-new_bin="$target/debug/bounce"
-old_bin="$base_target/debug/bounce"
-same="$target/debug/same-pixels"
+# Copies, so that a build during the renders changes neither side.
+cp "$target/debug/bounce" "$work/new-bounce"
+cp "$base_target/debug/bounce" "$work/old-bounce"
+cp "$target/debug/same-pixels" "$work/same-pixels"
+new_bin="$work/new-bounce"
+old_bin="$work/old-bounce"
+same="$work/same-pixels"
 
 common=(--width 24 --height 24 --dprsm-res 16 --voxels 32 --vpls 8 --seed 3 --shadow-res 256 --psm-res 32)
 cases=(
@@ -66,7 +70,7 @@ for m in uniform gbg; do cases+=("cube-$m|--component indirect --method $m --lig
 mkdir -p "$out"
 fail=0
 n=0
-for scene in cornell-box two-rooms; do
+for scene in ${SCENES:-cornell-box two-rooms box-on-floor doorway clutter sibenik conference}; do
   for c in "${cases[@]}"; do
     name="${c%%|*}"
     read -r -a flags <<<"${c#*|}"

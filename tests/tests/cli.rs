@@ -803,3 +803,99 @@ fn cli_reference_matches_the_help() {
     flags.dedup();
     assert!(flags.len() <= 35, "render has {} flags: {flags:?}", flags.len());
 }
+
+/// The generated suite (`scripts/make-scenes.py --suite`): at least forty scenes in nine families, every
+/// one loading under the scene contract, from millimetre to kilometre scales and far from the origin,
+/// each with its lights inside its bounds; the same seed writes the same files.
+#[test]
+fn the_generated_suite_has_forty_loadable_scenes_of_every_scale() {
+    let d = scratch("suite-scenes");
+    let script = bounce_tests::workspace().join("scripts/make-scenes.py");
+    let make = |dir: &Path| {
+        let s = std::process::Command::new("python3").arg(&script).arg("--suite").arg(dir).output().unwrap();
+        assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    };
+    make(&d.join("a"));
+    make(&d.join("b"));
+    let mut names: Vec<String> = std::fs::read_dir(d.join("a"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert!(names.len() >= 40, "{} scenes", names.len());
+    let families: std::collections::BTreeSet<&str> = names.iter().map(|n| n.rsplit_once('-').unwrap().0).collect();
+    assert_eq!(families.len(), 9, "{families:?}");
+    let (mut smallest, mut largest, mut farthest) = (f64::MAX, 0.0f64, 0.0f64);
+    for n in &names {
+        let path = d.join("a").join(n).join("scene.toml");
+        let scene = bounce_graph::scene::Scene::load(&path).unwrap_or_else(|e| panic!("{n}: {e}"));
+        let size = (scene.bounds_max - scene.bounds_min).length() as f64;
+        smallest = smallest.min(size);
+        largest = largest.max(size);
+        farthest = farthest.max(scene.origin.length() / size);
+        for l in &scene.lights {
+            let p = glam::Vec3::from_slice(&l.position[..3]);
+            assert!(p.cmpge(scene.bounds_min).all() && p.cmple(scene.bounds_max).all(), "{n}: a light outside");
+        }
+        let again = std::fs::read(d.join("b").join(n).join(format!("{n}.obj"))).unwrap();
+        assert!(again == std::fs::read(d.join("a").join(n).join(format!("{n}.obj"))).unwrap(), "{n} differs");
+    }
+    assert!(smallest < 0.1 && largest > 1000.0, "scales {smallest} .. {largest}");
+    assert!(farthest > 100.0, "no scene far from the origin ({farthest} of its size)");
+}
+
+/// `bounce suite`, tiny: two scenes, two methods, two seeds at equal time. One row per scene, method and
+/// seed; `uniform`'s ratios are 1; gbg's geometric mean in suite.md is the geometric mean over scenes of
+/// the median over seeds of its relMSE over `uniform`'s, recomputed here from suite.csv.
+#[test]
+fn suite_runs_every_method_on_every_scene_and_aggregates() {
+    let d = scratch("suite");
+    let ws = bounce_tests::workspace();
+    let (cornell, doorway) = (ws.join("assets/cornell-box/scene.toml"), ws.join("assets/doorway/scene.toml"));
+    let out = d.join("out");
+    let r = bounce(&[
+        "suite",
+        cornell.to_str().unwrap(),
+        doorway.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--methods",
+        "uniform,gbg",
+        "--seeds",
+        "2",
+        "--time-limit",
+        "0.05",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--reference-spp",
+        "16",
+        "--dprsm-res",
+        "16",
+        "--shadow-res",
+        "64",
+        "--validation",
+    ]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let csv = std::fs::read_to_string(out.join("suite.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2 * 2 * 2, "{csv}");
+    let median2 = |scene: &str, method: &str| -> f64 {
+        let v: Vec<f64> =
+            rows.iter().filter(|r| r[0] == scene && r[2] == method).map(|r| r[6].parse().unwrap()).collect();
+        assert_eq!(v.len(), 2);
+        0.5 * (v[0] + v[1])
+    };
+    let ratio = |scene| median2(scene, "gbg") / median2(scene, "uniform");
+    let geomean = (ratio("cornell-box") * ratio("doorway")).sqrt();
+    let md = std::fs::read_to_string(out.join("suite.md")).unwrap();
+    let line = md.lines().find(|l| l.starts_with("| gbg |")).expect("gbg's aggregate row");
+    let shown: f64 = line.split('|').nth(2).unwrap().trim().parse().unwrap();
+    assert!((shown - geomean).abs() <= 5e-4 * geomean.max(1.0), "{shown} vs {geomean}\n{md}");
+    assert!(md.lines().any(|l| l.starts_with("| uniform | 1.000 |")), "{md}");
+    assert_eq!(&std::fs::read(out.join("suite.png")).unwrap()[1..4], b"PNG");
+    // A suite without the baseline is one error line.
+    let r = bounce(&["suite", cornell.to_str().unwrap(), "--out", out.to_str().unwrap(), "--methods", "gbg"]);
+    assert_eq!((r.code, error_lines(&r).len()), (2, 1), "{}", r.stderr);
+}

@@ -42,6 +42,9 @@ pub enum Command {
     Bench(BenchArgs),
     /// Interactive viewer: fly camera, progressive accumulation, screenshots (needs a display).
     View(ViewArgs),
+    /// Every method at equal time on every scene of a suite against each scene's ground truth:
+    /// suite.csv, suite.md, suite.png (`scripts/make-scenes.py --suite DIR` writes a suite).
+    Suite(SuiteArgs),
 }
 
 /// A choice flag's values: (name on the command line, the graph's value, its `--help` line).
@@ -594,6 +597,41 @@ pub struct BenchArgs {
     /// The seed schedules --animate compares, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "fresh,coherent")]
     pub temporal: Vec<Temporal>,
+}
+
+/// `suite` renders many frames on many scenes, so its maps default to a smaller resolution than `render`'s.
+#[derive(Args, Debug)]
+#[command(mut_arg("dprsm_res", |a| a.default_value("128")))]
+pub struct SuiteArgs {
+    /// Scene files, or folders whose `*/scene.toml` are the suite.
+    #[arg(required = true)]
+    pub scenes: Vec<PathBuf>,
+    /// Output folder (suite.csv, suite.md, suite.png, and each scene's cached ground truth).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Methods to compare (must include uniform, the baseline).
+    #[arg(long, value_parser = METHODS, value_delimiter = ',', default_value = "uniform,global,stratified,local,gbg,mis,ris")]
+    pub methods: Vec<Method>,
+    /// Seeds per method and scene (1..=N).
+    #[arg(long, default_value_t = 4)]
+    pub seeds: u32,
+    /// Wall-time budget of progressive frames per method, seed and scene (equal time).
+    #[arg(long, value_name = "SECONDS", default_value_t = 1.0)]
+    pub time_limit: f64,
+    /// VPLs per pixel per frame (ris: reservoirs).
+    #[arg(long, default_value_t = 16)]
+    pub vpls: u32,
+    /// Image width.
+    #[arg(long, default_value_t = 128)]
+    pub width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 128)]
+    pub height: u32,
+    /// Samples per pixel of each scene's path-traced ground truth.
+    #[arg(long, default_value_t = 1024)]
+    pub reference_spp: u32,
+    #[command(flatten)]
+    pub frame: FrameArgs,
 }
 
 /// What `bench` measures errors against (`commands::bench::Reference` adds the sample count).

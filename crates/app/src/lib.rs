@@ -1,4 +1,4 @@
-//! bounce, the application: the `bounce` command line (`render`, `info`, `compare`, `bench`, `view`)
+//! bounce, the application: the `bounce` command line (`render`, `info`, `compare`, `bench`, `view`, `suite`)
 //! and the image files, metrics and plot behind it.
 //!
 //! [`run`] is the whole command line, so the tests drive it in-process. `cli` is the clap schema,
@@ -53,6 +53,7 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
         Command::Compare(a) => commands::compare::run(&a, out),
         Command::Bench(a) => commands::bench::run(&a, out, err),
         Command::View(a) => commands::view::run(&a, out, err),
+        Command::Suite(a) => commands::bench::suite::run(&a, out, err),
     };
     match result {
         Ok(()) => error::SUCCESS,

@@ -10,6 +10,8 @@ pub struct Metrics {
     /// mean(test) / mean(reference).
     pub mean_ratio: f64,
     pub p99_abs: f64,
+    /// The tail: the 99.9th percentile of the per-pixel, per-channel |error| (fireflies show here first).
+    pub p999_abs: f64,
     pub non_finite: usize,
     /// Mean FLIP of the tone-mapped pair, when computed (`with_flip`).
     pub flip: Option<f64>,
@@ -37,8 +39,10 @@ impl Metrics {
         }
         let n = abs.len().max(1) as f64;
         abs.sort_by(|a, b| a.total_cmp(b));
-        let p99 =
-            abs.get(((abs.len() as f64 * 0.99) as usize).min(abs.len().saturating_sub(1))).copied().unwrap_or(0.0);
+        let quantile = |q: f64| {
+            abs.get(((abs.len() as f64 * q) as usize).min(abs.len().saturating_sub(1))).copied().unwrap_or(0.0)
+        };
+        let (p99, p999) = (quantile(0.99), quantile(0.999));
         Metrics {
             rmse: (se / n).sqrt(),
             rel_mse: rel / n,
@@ -50,6 +54,7 @@ impl Metrics {
                 f64::INFINITY
             },
             p99_abs: p99,
+            p999_abs: p999,
             non_finite,
             flip: None,
         }
@@ -64,11 +69,12 @@ impl Metrics {
 
     pub fn table(&self) -> String {
         format!(
-            "RMSE        {:.6e}\nrelMSE      {:.6e}\nmean ratio  {:.6}\np99 |err|   {:.6e}\nmean FLIP   {}\nnon-finite  {}",
+            "RMSE        {:.6e}\nrelMSE      {:.6e}\nmean ratio  {:.6}\np99 |err|   {:.6e}\np99.9 |err| {:.6e}\nmean FLIP   {}\nnon-finite  {}",
             self.rmse,
             self.rel_mse,
             self.mean_ratio,
             self.p99_abs,
+            self.p999_abs,
             self.flip.map(|f| format!("{f:.6}")).unwrap_or_else(|| "n/a".into()),
             self.non_finite
         )
@@ -76,11 +82,12 @@ impl Metrics {
 
     pub fn json(&self) -> String {
         format!(
-            "{{\"rmse\": {}, \"rel_mse\": {}, \"mean_ratio\": {}, \"p99_abs\": {}, \"flip\": {}, \"non_finite\": {}}}",
+            "{{\"rmse\": {}, \"rel_mse\": {}, \"mean_ratio\": {}, \"p99_abs\": {}, \"p999_abs\": {}, \"flip\": {}, \"non_finite\": {}}}",
             self.rmse,
             self.rel_mse,
             self.mean_ratio,
             self.p99_abs,
+            self.p999_abs,
             self.flip.map(|f| f.to_string()).unwrap_or_else(|| "null".into()),
             self.non_finite
         )

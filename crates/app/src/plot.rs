@@ -1,6 +1,6 @@
 //! The time-versus-error plot of `bounce bench`: log–log, one line per method, labelled axes with units
-//! and a legend; and for `bench --animate`, panels of per-frame figures (relMSE, flicker) over the
-//! frames. Text uses the embedded DejaVu Sans (assets/fonts), so no system font is needed.
+//! and a legend; for `bench --animate`, panels of per-frame figures (relMSE, flicker) over the
+//! frames; for `suite`, each method's sorted ratios over `uniform` across the scenes. Text uses the embedded DejaVu Sans (assets/fonts), so no system font is needed.
 
 use anyhow::{anyhow, Result};
 use plotters::coord::combinators::BindKeyPoints;
@@ -109,6 +109,67 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
             chart
                 .draw_series(line.iter().map(|p| Circle::new(*p, 4, color.filled())))
+                .map_err(|e| anyhow!("plot: {e}"))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+}
+
+/// The suite's plot (`bounce suite`): for each method its per-scene relMSE over `uniform`'s, sorted,
+/// against the share of scenes (x from 0 to 1, y log), with the line y = 1 where a method ties `uniform`.
+pub fn sorted_ratios(path: &Path, series: &[(String, Vec<f64>)], subtitle: &str) -> Result<()> {
+    register_font();
+    let all: Vec<f64> =
+        series.iter().flat_map(|(_, v)| v.iter().copied()).filter(|v| v.is_finite() && *v > 0.0).collect();
+    if all.is_empty() {
+        return Err(anyhow!("no finite positive ratio to plot"));
+    }
+    let lo = all.iter().copied().fold(1.0f64, f64::min) / 1.5;
+    let hi = all.iter().copied().fold(1.0f64, f64::max) * 1.5;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    {
+        let root = BitMapBackend::new(&tmp, (900, 640)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("relMSE over uniform's, per scene, sorted ({subtitle})"), ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(96)
+            .build_cartesian_2d(0.0..1.0f64, (lo..hi).log_scale().with_key_points(key_points(lo, hi)))
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("share of scenes")
+            .y_desc("relMSE / uniform's (below 1: better than uniform)")
+            .y_label_formatter(&|v| tick(*v))
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        chart
+            .draw_series(LineSeries::new(vec![(0.0, 1.0), (1.0, 1.0)], BLACK.mix(0.5).stroke_width(1)))
+            .map_err(|e| anyhow!("plot: {e}"))?;
+        for (k, (name, v)) in series.iter().enumerate() {
+            let color = Palette99::pick(k).to_rgba();
+            let mut v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite() && *x > 0.0).collect();
+            v.sort_by(|a, b| a.total_cmp(b));
+            let n = v.len().max(1) as f64;
+            let line: Vec<(f64, f64)> = v.iter().enumerate().map(|(i, y)| ((i as f64 + 0.5) / n, *y)).collect();
+            chart
+                .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
+                .map_err(|e| anyhow!("plot: {e}"))?
+                .label(name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
+            chart
+                .draw_series(line.iter().map(|p| Circle::new(*p, 3, color.filled())))
                 .map_err(|e| anyhow!("plot: {e}"))?;
         }
         chart

@@ -9,7 +9,7 @@
 //! exhaustive VPL sum (`--method all`) on the same VPL set, rendered once and cached in the output
 //! folder under a name keyed by the scene and the settings that change it. It writes:
 //! - `bench.csv`: one row per frame (method, VPLs, seed, GPU ms, wall ms, RMSE, relMSE, mean ratio,
-//!   p99 |error|, FLIP, then one column per pass);
+//!   p99 and p99.9 |error|, FLIP, then one column per pass);
 //! - `bench.md`: the medians over repeats, shaped like the thesis's Tables 7.1 and 7.2 (methods in rows,
 //!   VPL counts in columns, time and error per cell) and a per-pass time table (Fig. 7.19's breakdown);
 //! - `time_vs_error.png`: median relMSE against median GPU time, log–log, one line per method (points at
@@ -19,6 +19,7 @@
 //! flicker of a moving light's animation): see [`animation`].
 
 mod animation;
+pub mod suite;
 
 use crate::cli::{BenchArgs, ReferenceArg};
 use crate::error::{self, bad};
@@ -341,15 +342,16 @@ fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &str,
 /// One row per frame (per budget with `--time-limits`: `time_limit_s` and the `frames` averaged), one
 /// column per pass.
 fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
-    let mut csv =
-        String::from("method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs,flip,time_limit_s,frames");
+    let mut csv = String::from(
+        "method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs,p999_abs,flip,time_limit_s,frames",
+    );
     for p in pass_names {
         csv.push_str(&format!(",pass_{p}_ms"));
     }
     csv.push('\n');
     for s in samples {
         csv.push_str(&format!(
-            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e},{:.6},{},{}",
+            "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e},{:.6e},{:.6},{},{}",
             s.method.name(),
             s.column.vpls,
             s.seed,
@@ -359,6 +361,7 @@ fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
             s.metrics.rel_mse,
             s.metrics.mean_ratio,
             s.metrics.p99_abs,
+            s.metrics.p999_abs,
             s.metrics.flip.unwrap_or(f64::NAN),
             s.column.seconds.map(|t| t.to_string()).unwrap_or_default(),
             s.frames,

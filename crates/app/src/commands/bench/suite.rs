@@ -1,0 +1,296 @@
+//! `bounce suite`: every method at equal time on every scene of a suite, against each scene's ground
+//! truth, per scene and in aggregate.
+//!
+//! The suite is a folder of scene folders (`scripts/make-scenes.py --suite DIR` writes one, a family's
+//! scenes named `<family>-<k>`) or scene files. For each scene it runs `bench`'s equal-time sweep (one
+//! budget, `--time-limit` seconds of progressive frames per method and seed, every method paying for its
+//! whole frames) against the path-traced ground truth, cached in `OUT/<scene>/`. It writes:
+//! - `suite.csv`: one row per scene, method and seed (frames, wall ms, relMSE, mean ratio, p99.9 |error|);
+//! - `suite.md`: per method over the scenes, the geometric mean and the worst case of its relMSE over
+//!   `uniform`'s (each the median over seeds), how many scenes it loses to `uniform`, the largest bias of
+//!   its image mean (the mean over seeds of mean/truth − 1) and spread (its standard deviation over
+//!   seeds), and its tail (p99.9 |error|) over `uniform`'s; then the same geometric mean per family, and
+//!   every scene's ratios;
+//! - `suite.png`: each method's ratios over `uniform`, sorted, against the share of scenes.
+
+use super::{median, sweep, BenchPlan, Column, Reference, Sample};
+use crate::cli::SuiteArgs;
+use crate::error::{self, bad};
+use anyhow::{Context, Result};
+use bounce_device::Gpu;
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// One measured budget: a scene, a method, a seed.
+struct Row {
+    scene: String,
+    family: String,
+    sample: Sample,
+}
+
+pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
+    crate::output::check_folder(&a.out).map_err(bad)?;
+    let scenes = scene_files(&a.scenes).map_err(bad)?;
+    if !a.methods.contains(&Method::Uniform) {
+        return Err(bad(anyhow::anyhow!("--methods must include uniform: every method is measured against it")));
+    }
+    if a.methods.contains(&Method::All) {
+        return Err(bad(anyhow::anyhow!("`all` is not a method to sweep (the ground truth is path traced)")));
+    }
+    if a.seeds == 0 || !(a.time_limit.is_finite() && a.time_limit > 0.0) {
+        return Err(bad(anyhow::anyhow!("--seeds must be at least 1 and --time-limit a positive number of seconds")));
+    }
+    let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
+    let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
+    for &method in &a.methods {
+        FrameSettings { method, vpls: a.vpls, ..base.clone() }.validate(&gpu)?;
+    }
+    let mut rows = vec![];
+    for (k, path) in scenes.iter().enumerate() {
+        let name = scene_name(path);
+        writeln!(err, "scene {}/{}: {name}", k + 1, scenes.len())?;
+        let scene = super::super::load_scene(path, err)?;
+        let mut renderer = Renderer::new(&gpu, &scene)?;
+        let plan = BenchPlan {
+            methods: a.methods.clone(),
+            columns: vec![Column { vpls: a.vpls, seconds: Some(a.time_limit) }],
+            repeats: a.seeds,
+            base: base.clone(),
+            reference: Reference::Path { spp: a.reference_spp },
+        };
+        for &method in &plan.methods {
+            renderer.check(&FrameSettings { method, vpls: a.vpls, ..base.clone() })?;
+        }
+        for sample in sweep(&mut renderer, &plan, path, &a.out.join(&name), err)? {
+            rows.push(Row { scene: name.clone(), family: family(&name), sample });
+        }
+    }
+    super::super::check_validation(&gpu, a.frame.validation)?;
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let md = markdown(a, &rows, &gpu.name, &command);
+    crate::output::write_text(&a.out.join("suite.csv"), &csv(&rows))?;
+    crate::output::write_text(&a.out.join("suite.md"), &md)?;
+    let curves: Vec<(String, Vec<f64>)> = a
+        .methods
+        .iter()
+        .filter(|m| **m != Method::Uniform)
+        .map(|m| (m.name().to_string(), ratios(&rows, *m).into_values().collect()))
+        .collect();
+    crate::plot::sorted_ratios(&a.out.join("suite.png"), &curves, &format!("{} scenes", scenes.len()))?;
+    writeln!(out, "{md}")?;
+    writeln!(err, "wrote {}/suite.csv, suite.md, suite.png", a.out.display())?;
+    Ok(())
+}
+
+/// The scene files: each argument that is a file, and every `*/scene.toml` of each folder (sorted).
+fn scene_files(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut files = vec![];
+    for a in args {
+        if a.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(a)
+                .with_context(|| format!("reading {}", a.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path().join("scene.toml")))
+                .filter(|p| p.is_file())
+                .collect();
+            found.sort();
+            anyhow::ensure!(!found.is_empty(), "{} holds no */scene.toml", a.display());
+            files.extend(found);
+        } else {
+            anyhow::ensure!(a.is_file(), "{}: no such scene file or folder", a.display());
+            files.push(a.clone());
+        }
+    }
+    anyhow::ensure!(!files.is_empty(), "no scene given");
+    Ok(files)
+}
+
+/// A scene's name: its folder's, or the file's stem when the file is not a folder's `scene.toml`.
+fn scene_name(path: &Path) -> String {
+    let named = |p: Option<&std::ffi::OsStr>| p.map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    match path.file_name().and_then(|n| n.to_str()) {
+        Some("scene.toml") => named(path.parent().and_then(|p| p.file_name())),
+        _ => named(path.file_stem()),
+    }
+}
+
+/// The family of a generated scene, `<family>-<k>`: the name without its number (else the name).
+fn family(name: &str) -> String {
+    match name.rsplit_once('-') {
+        Some((f, k)) if k.parse::<u32>().is_ok() => f.to_string(),
+        _ => name.to_string(),
+    }
+}
+
+/// The median over seeds of `f` for each scene (in scene order) and `method`.
+fn per_scene(rows: &[Row], method: Method, f: impl Fn(&Sample) -> f64) -> BTreeMap<String, f64> {
+    let mut by: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for r in rows.iter().filter(|r| r.sample.method == method) {
+        by.entry(r.scene.clone()).or_default().push(f(&r.sample));
+    }
+    by.into_iter().map(|(k, v)| (k, median(v))).collect()
+}
+
+/// Each scene's median relMSE of `method` over `uniform`'s.
+fn ratios(rows: &[Row], method: Method) -> BTreeMap<String, f64> {
+    let uniform = per_scene(rows, Method::Uniform, |s| s.metrics.rel_mse);
+    per_scene(rows, method, |s| s.metrics.rel_mse)
+        .into_iter()
+        .filter_map(|(k, v)| uniform.get(&k).map(|u| (k, v / u)))
+        .collect()
+}
+
+/// (mean, standard deviation) over seeds of the image mean over the truth's, for each scene.
+fn means(rows: &[Row], method: Method) -> BTreeMap<String, (f64, f64)> {
+    let mut by: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for r in rows.iter().filter(|r| r.sample.method == method) {
+        by.entry(r.scene.clone()).or_default().push(r.sample.metrics.mean_ratio);
+    }
+    by.into_iter()
+        .map(|(k, v)| {
+            let n = v.len() as f64;
+            let m = v.iter().sum::<f64>() / n;
+            let var = if v.len() > 1 { v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0) } else { 0.0 };
+            (k, (m, var.sqrt()))
+        })
+        .collect()
+}
+
+fn geomean(v: impl IntoIterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in v.into_iter().filter(|x| x.is_finite() && *x > 0.0) {
+        s += x.ln();
+        n += 1;
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        (s / n as f64).exp()
+    }
+}
+
+/// The (scene, value) with the largest value.
+fn worst(m: &BTreeMap<String, f64>) -> (String, f64) {
+    // A NaN (a scene whose ratio is undefined) counts as the worst.
+    let key = |v: f64| if v.is_nan() { f64::INFINITY } else { v };
+    m.iter()
+        .max_by(|a, b| key(*a.1).total_cmp(&key(*b.1)))
+        .map_or((String::from("–"), f64::NAN), |(s, v)| (s.clone(), *v))
+}
+
+fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String {
+    let scenes: Vec<String> = {
+        let mut s: Vec<String> = rows.iter().map(|r| r.scene.clone()).collect();
+        s.dedup();
+        s
+    };
+    let mut md = format!(
+        "# Suite: {} scenes, {} seeds, {} s per method and seed, {}×{}, {} VPLs a frame\n\n`{command}` on {device}; \
+         relMSE against each scene's path-traced ground truth ({} spp), the median over seeds; ratios are \
+         over `uniform`'s on the same scene.\n\n",
+        scenes.len(),
+        a.seeds,
+        a.time_limit,
+        a.width,
+        a.height,
+        a.vpls,
+        a.reference_spp
+    );
+    md += "| method | geomean relMSE / uniform | worst (scene) | scenes above uniform | largest |mean − truth| over seeds (scene) | largest spread of the mean over seeds | median p99.9 |error| / uniform |\n";
+    md += "|---|---:|---|---:|---|---:|---:|\n";
+    let uniform_tail = per_scene(rows, Method::Uniform, |s| s.metrics.p999_abs);
+    for &m in &a.methods {
+        let r = ratios(rows, m);
+        let (ws, wv) = worst(&r);
+        let above = r.values().filter(|v| **v > 1.0).count();
+        let mm = means(rows, m);
+        let bias: BTreeMap<String, f64> = mm.iter().map(|(k, (m, _))| (k.clone(), (m - 1.0).abs())).collect();
+        let (bs, bv) = worst(&bias);
+        let spread = mm.values().map(|(_, s)| *s).fold(0.0, f64::max);
+        let tail = per_scene(rows, m, |s| s.metrics.p999_abs);
+        let tail_ratio = median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).map(|u| v / u)).collect());
+        md += &format!(
+            "| {} | {:.3} | {:.3} ({ws}) | {above} of {} | {:.2} % ({bs}) | {:.2} % | {:.3} |\n",
+            m.name(),
+            geomean(r.values().copied()),
+            wv,
+            r.len(),
+            100.0 * bv,
+            100.0 * spread,
+            tail_ratio
+        );
+    }
+    let families: Vec<String> = {
+        let mut f: Vec<String> = rows.iter().map(|r| r.family.clone()).collect();
+        f.sort();
+        f.dedup();
+        f
+    };
+    md += "\n## Per family: geomean relMSE / uniform\n\n| family | ";
+    md += &a.methods.iter().map(|m| m.name()).collect::<Vec<_>>().join(" | ");
+    md += " |\n|---|";
+    md += &"---:|".repeat(a.methods.len());
+    md += "\n";
+    for f in &families {
+        md += &format!("| {f} |");
+        for &m in &a.methods {
+            let r = ratios(rows, m);
+            let g = geomean(r.iter().filter(|(k, _)| family(k) == *f).map(|(_, v)| *v));
+            md += &format!(" {g:.3} |");
+        }
+        md += "\n";
+    }
+    md += "\n## Per scene: relMSE / uniform (uniform's own relMSE in its column)\n\n| scene | ";
+    md += &a.methods.iter().map(|m| m.name()).collect::<Vec<_>>().join(" | ");
+    md += " |\n|---|";
+    md += &"---:|".repeat(a.methods.len());
+    md += "\n";
+    let uniform = per_scene(rows, Method::Uniform, |s| s.metrics.rel_mse);
+    for s in &scenes {
+        md += &format!("| {s} |");
+        for &m in &a.methods {
+            let v = if m == Method::Uniform { uniform.get(s).copied() } else { ratios(rows, m).get(s).copied() };
+            md += &format!(" {} |", v.map_or("–".into(), |v| format!("{v:.3}")));
+        }
+        md += "\n";
+    }
+    md
+}
+
+fn csv(rows: &[Row]) -> String {
+    let mut csv = String::from("scene,family,method,seed,frames,wall_ms,rel_mse,mean_ratio,p999_abs\n");
+    for r in rows {
+        let s = &r.sample;
+        csv += &format!(
+            "{},{},{},{},{},{:.3},{:.6e},{:.6},{:.6e}\n",
+            r.scene,
+            r.family,
+            s.method.name(),
+            s.seed,
+            s.frames,
+            s.wall_ms,
+            s.metrics.rel_mse,
+            s.metrics.mean_ratio,
+            s.metrics.p999_abs
+        );
+    }
+    csv
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn families_and_means() {
+        assert_eq!(family("light-corner-3"), "light-corner");
+        assert_eq!(family("cornell-box"), "cornell-box");
+        assert!((geomean([2.0, 8.0]) - 4.0).abs() < 1e-12);
+        assert!(geomean([]).is_nan());
+        let m: BTreeMap<String, f64> = [("a".to_string(), 1.0), ("b".to_string(), 3.0)].into();
+        assert_eq!(worst(&m), ("b".to_string(), 3.0));
+        assert_eq!(scene_name(Path::new("x/boxes-1/scene.toml")), "boxes-1");
+        assert_eq!(scene_name(Path::new("x/room.toml")), "room");
+    }
+}
