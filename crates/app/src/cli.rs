@@ -263,8 +263,9 @@ pub struct FrameArgs {
     /// Cosine rays per gather point (gbg).
     #[arg(long, default_value_t = d().gather_rays)]
     pub gather_rays: u32,
-    /// Share of samples drawn uniformly among all VPLs by the CDF methods (keeps every VPL's pdf > 0;
-    /// default 0.1, or 0.5 where `render --time-limit` picks ris's gathered source for the view).
+    /// Share of samples drawn uniformly among all VPLs by the CDF methods (bounds every VPL's weight;
+    /// default 0.75, chosen over the generated suite, or 0.5 where `render --time-limit` picks ris's
+    /// gathered source for the view).
     #[arg(long)]
     pub defensive: Option<f32>,
     /// How CDF methods choose the paraboloid face.
@@ -530,16 +531,37 @@ impl Temporal {
     }
 }
 
-/// The scripted light motion and how its frames draw their random numbers (`render`, `view`).
+/// The scripted light and camera motion and how its frames draw their random numbers (`render`, `view`).
 #[derive(Args, Debug)]
 pub struct AnimationArgs {
     /// Move the lights: `orbit[:PERIOD]` (each light circles its start, PERIOD frames per turn, default
     /// 60) or a TOML file of keyframes (see README). Needs --frames.
     #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
     pub light_path: Option<String>,
-    /// The seeds of consecutive frames.
+    /// Move the camera: `orbit[:PERIOD]` (the eye circles its start looking at the scene's target) or a
+    /// TOML file of keyframes (`frame`, `eye`, `target`, optional `fov_y`). Needs --frames.
+    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
+    pub camera_path: Option<String>,
+    /// The seeds of consecutive frames (an A/B switch of the `lab` feature; default coherent).
+    #[cfg(feature = "lab")]
     #[arg(long, value_enum, default_value = "coherent")]
     pub temporal: Temporal,
+}
+
+impl AnimationArgs {
+    /// The seed schedule of consecutive frames: `coherent`, measured to flicker least (BENCHMARKS.md),
+    /// unless the `lab` feature's `--temporal` says otherwise.
+    pub fn temporal(&self) -> Temporal {
+        #[cfg(feature = "lab")]
+        return self.temporal;
+        #[cfg(not(feature = "lab"))]
+        Temporal::Coherent
+    }
+
+    /// Whether anything moves by script.
+    pub fn moves(&self) -> bool {
+        self.light_path.is_some() || self.camera_path.is_some()
+    }
 }
 
 /// The window size of `view` when neither the flags nor the scene give one.
@@ -587,10 +609,13 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 1024)]
     pub reference_spp: u32,
     /// Measure temporal stability instead: move the lights along this path (`orbit[:PERIOD]` or a
-    /// keyframe TOML, as --light-path) and report per method the mean per-frame relMSE and flicker
-    /// against a per-frame ground truth, at --vpls's first value per frame.
-    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
+    /// keyframe TOML, as --light-path; `none`: they stay put) and report per method the mean per-frame
+    /// relMSE and flicker against a per-frame ground truth, at --vpls's first value per frame.
+    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml|none")]
     pub animate: Option<String>,
+    /// With --animate, move the camera too (`orbit[:PERIOD]` or a keyframe TOML, as --camera-path).
+    #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
+    pub camera_path: Option<String>,
     /// Frames of the --animate animation.
     #[arg(long, default_value_t = 16)]
     pub frames: u32,

@@ -7,6 +7,7 @@
 //! stderr. `output`, `metrics` and `plot` are libraries the tests and tools use too; `light_path` is
 //! the scripted light motion of `--light-path` and `--animate`.
 
+pub mod camera_path;
 mod cli;
 mod commands;
 mod error;

@@ -53,7 +53,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         }
     }
     let mut renderer = Renderer::new(&gpu, &scene)?;
-    if a.animate.is_some() {
+    if a.animate.is_some() || a.camera_path.is_some() {
         animation::run(a, &scene, &mut renderer, &base, out, err)?;
         return super::check_validation(&gpu, a.frame.validation);
     }

@@ -3,6 +3,7 @@
 //! optional tone-mapped PNG, and with `--timings` the per-pass GPU time table on stdout. Warnings and
 //! the `wrote …` line go to stderr.
 
+use crate::camera_path::CameraPath;
 use crate::cli::{RenderArgs, RENDER_FALLBACK_SIZE};
 use crate::error::{self, bad};
 use crate::light_path::LightPath;
@@ -20,6 +21,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     check_destinations(a)?;
     let scene = super::load_scene(&a.scene, err)?;
     let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
+    let camera = a.animation.camera_path.as_deref().map(|p| CameraPath::parse(p, &scene)).transpose()?;
     let mut settings = a.picture.settings(&a.frame, &scene, RENDER_FALLBACK_SIZE);
     if a.time_limit.is_some() {
         time_limit_method(a, &mut settings, err)?;
@@ -37,7 +39,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     }
     renderer.check(&settings)?;
     if let Some(frames) = a.frames {
-        animate(a, &mut renderer, &settings, path.as_ref(), frames, err)?;
+        animate(a, &mut renderer, &settings, path.as_ref(), camera.as_ref(), frames, err)?;
         return super::check_validation(&gpu, a.frame.validation);
     }
     note_single_frame(a, &settings, err)?;
@@ -122,18 +124,21 @@ fn check_animation_flags(a: &RenderArgs) -> Result<()> {
     match (a.frames, &a.out_dir) {
         (Some(0), _) => fail("--frames must be at least 1"),
         (Some(_), None) | (None, Some(_)) => fail("--frames and --out-dir go together"),
-        (None, None) if a.animation.light_path.is_some() => fail("--light-path needs --frames and --out-dir"),
+        (None, None) if a.animation.moves() => fail("--light-path and --camera-path need --frames and --out-dir"),
         (Some(_), Some(_)) if a.time_limit.is_some() => fail("--time-limit and --frames do not go together"),
         _ => Ok(()),
     }
 }
 
-/// Frame k of the animation: the lights at `path`'s frame k, the `--temporal` seed; an EXR and a PNG each.
+/// Frame k of the animation: the lights at `path`'s frame k, the camera at `camera`'s, the seed of the
+/// seed schedule; an EXR and a PNG each.
+#[allow(clippy::too_many_arguments)]
 fn animate(
     a: &RenderArgs,
     r: &mut Renderer,
     s: &FrameSettings,
     path: Option<&LightPath>,
+    camera: Option<&CameraPath>,
     frames: u32,
     err: &mut dyn Write,
 ) -> Result<()> {
@@ -146,15 +151,19 @@ fn animate(
         if let Some(p) = path {
             p.apply(r, k);
         }
-        // Every frame of a moving light is a change; a static one accumulates nothing here either.
-        let since_change = if path.is_some() { 0 } else { k };
-        let fs = FrameSettings { seed: a.animation.temporal.seed(s.seed, k, since_change), ..s.clone() };
+        if let Some(c) = camera {
+            c.apply(r, k);
+        }
+        // Every frame of a moving light or camera is a change; a static one accumulates nothing here either.
+        let since_change = if a.animation.moves() { 0 } else { k };
+        let fs = FrameSettings { seed: a.animation.temporal().seed(s.seed, k, since_change), ..s.clone() };
         let f = r.render(&fs)?;
         let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
         let mut meta = metadata(a, &fs, &gpu_name, &f, img.non_finite_count());
         meta.push(("frame", k.to_string()));
-        meta.push(("temporal", a.animation.temporal.name().to_string()));
+        meta.push(("temporal", a.animation.temporal().name().to_string()));
         meta.push(("light_path", a.animation.light_path.clone().unwrap_or_else(|| "none".into())));
+        meta.push(("camera_path", a.animation.camera_path.clone().unwrap_or_else(|| "none".into())));
         let stem = dir.join(format!("frame_{k:04}"));
         output::write_exr(&stem.with_extension("exr"), &img, &meta)?;
         output::write_png(&stem.with_extension("png"), &img)?;

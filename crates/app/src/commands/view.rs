@@ -33,6 +33,7 @@
 //! `render` makes, bit for bit) and writes it as EXR and, tone-mapped on the host, as PNG; the log line
 //! says how many copies to host memory the whole run made.
 
+use crate::camera_path::CameraPath;
 use crate::cli::{ViewArgs, VIEW_FALLBACK_SIZE};
 use crate::error::{self, bad};
 use crate::light_path::LightPath;
@@ -99,11 +100,12 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
     if matches!(settings.method, Method::All) {
         return Err(bad(anyhow::anyhow!("`all` is not progressive; view a sampled method or use `bounce render`")));
     }
-    if a.animation.light_path.is_some() && a.frames.is_none() {
-        return Err(bad(anyhow::anyhow!("--light-path needs --frames (and --screenshot)")));
+    if a.animation.moves() && a.frames.is_none() {
+        return Err(bad(anyhow::anyhow!("--light-path and --camera-path need --frames (and --screenshot)")));
     }
     let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
-    let mut app = Viewer { args: a, scene: &scene, settings, path, state: None, error: None, log: vec![] };
+    let camera = a.animation.camera_path.as_deref().map(|p| CameraPath::parse(p, &scene)).transpose()?;
+    let mut app = Viewer { args: a, scene: &scene, settings, path, camera, state: None, error: None, log: vec![] };
     event_loop.run_app(&mut app).context("running the window's event loop")?;
     for line in &app.log {
         writeln!(out, "{line}")?;
@@ -120,6 +122,9 @@ struct Viewer<'a> {
     settings: FrameSettings,
     /// `--light-path`: where the lights are at each frame of the run.
     path: Option<LightPath>,
+    /// `--camera-path`: where the camera is at each frame of the run (the fly camera's keys then do
+    /// nothing).
+    camera: Option<CameraPath>,
     state: Option<State>,
     error: Option<anyhow::Error>,
     /// Lines for stdout after the window closes (screenshots written).
@@ -338,9 +343,16 @@ impl Viewer<'_> {
         let now = Instant::now();
         let dt = (now - st.last).as_secs_f32();
         st.last = now;
-        if st.fly.step(dt) {
-            st.renderer.set_camera(st.fly.camera());
-            st.frames = 0;
+        match &self.camera {
+            Some(c) => {
+                c.apply(&mut st.renderer, st.total);
+                st.frames = 0;
+            }
+            None if st.fly.step(dt) => {
+                st.renderer.set_camera(st.fly.camera());
+                st.frames = 0;
+            }
+            None => {}
         }
         let before = st.renderer.lights().to_vec();
         match &self.path {
@@ -357,7 +369,7 @@ impl Viewer<'_> {
         let shot = last || std::mem::take(&mut st.shot_requested);
         // The run's seed where this accumulation began, then its frame st.frames as `render --time-limit`
         // takes it (seed + k; the reference: the next samples of one sequence).
-        let seed = self.args.animation.temporal.seed(self.settings.seed, st.total.saturating_sub(st.frames), 0);
+        let seed = self.args.animation.temporal().seed(self.settings.seed, st.total.saturating_sub(st.frames), 0);
         let s = frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames);
         let params = PresentParams {
             frames: st.frames + 1,
@@ -429,7 +441,7 @@ impl Viewer<'_> {
             ("method", self.settings.method.name().to_string()),
             ("vpls", self.settings.vpls.to_string()),
             ("frames", st.frames.to_string()),
-            ("seed", format!("{} ({})", self.settings.seed, self.args.animation.temporal.name())),
+            ("seed", format!("{} ({})", self.settings.seed, self.args.animation.temporal().name())),
             ("light_path", self.args.animation.light_path.clone().unwrap_or_else(|| "none".into())),
             ("device", st.gpu.name.clone()),
             ("non_finite_pixels", img.non_finite_count().to_string()),

@@ -1,5 +1,6 @@
-//! `bounce bench SCENE --animate PATH --frames N`: temporal stability. The lights move along `PATH`
-//! (`crate::light_path`: `orbit[:PERIOD]` or a keyframe file); each method renders the N frames at a
+//! `bounce bench SCENE --animate PATH [--camera-path CAMERA] --frames N`: temporal stability. The lights
+//! move along `PATH` (`crate::light_path`: `orbit[:PERIOD]` or a keyframe file; `none`: they stay put)
+//! and the camera along `CAMERA` (`crate::camera_path`), either or both; each method renders the N frames at a
 //! fixed budget per frame (`--vpls`'s first value), once per `--temporal` mode (`fresh`: frame k takes
 //! seed 1 + k, its CDF too; `coherent`: every frame seed 1, so each pixel's stratified points and the
 //! importance's gather points stay put while the light moves). Every frame is compared with its own
@@ -15,6 +16,7 @@
 //! interactive session would; the GPU time is the mean over those frames.
 
 use super::{BenchArgs, Reference};
+use crate::camera_path::CameraPath;
 use crate::cli::Temporal;
 use crate::error::bad;
 use crate::light_path::LightPath;
@@ -25,6 +27,48 @@ use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::Scene;
 use std::io::Write;
 use std::path::Path;
+
+/// The scripted motion of an animated sweep: the lights' path (`--animate`; `none`: they stay put) and
+/// the camera's (`--camera-path`), with what names them in the table and keys the ground truth's cache.
+struct Motion {
+    lights: Option<LightPath>,
+    camera: Option<CameraPath>,
+    label: String,
+    /// The paths' own texts (a file's contents) key the cache, so an edited keyframe file renders anew.
+    key: u64,
+}
+
+impl Motion {
+    fn parse(a: &BenchArgs, scene: &Scene) -> Result<Motion> {
+        let lights_arg = a.animate.as_deref().filter(|p| *p != "none");
+        let lights = lights_arg.map(|p| LightPath::parse(p, scene)).transpose()?;
+        let camera = a.camera_path.as_deref().map(|p| CameraPath::parse(p, scene)).transpose()?;
+        let text = |p: Option<&str>| p.map(|p| std::fs::read_to_string(p).unwrap_or_default()).unwrap_or_default();
+        let light_key = (a.animate.as_deref().unwrap_or("none"), text(lights_arg));
+        // Without a camera path the key is the lights' alone, as caches made before camera paths were.
+        let key = match a.camera_path.as_deref() {
+            None => bounce_graph::graph::fingerprint(&light_key),
+            Some(c) => bounce_graph::graph::fingerprint(&(light_key, c, text(Some(c)))),
+        };
+        let label = match (lights_arg, a.camera_path.as_deref()) {
+            (Some(l), None) => l.to_string(),
+            (None, Some(c)) => format!("camera {c}"),
+            (Some(l), Some(c)) => format!("{l}, camera {c}"),
+            (None, None) => "no motion".to_string(),
+        };
+        Ok(Motion { lights, camera, label, key })
+    }
+
+    /// Lights and camera where they are at frame `k`.
+    fn apply(&self, r: &mut Renderer, k: u32) {
+        if let Some(l) = &self.lights {
+            l.apply(r, k);
+        }
+        if let Some(c) = &self.camera {
+            c.apply(r, k);
+        }
+    }
+}
 
 /// One rendered frame of one method and mode.
 struct FrameSample {
@@ -46,8 +90,7 @@ pub(super) fn run(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<()> {
-    let arg = a.animate.as_deref().expect("called with --animate");
-    let path = LightPath::parse(arg, scene)?;
+    let motion = Motion::parse(a, scene)?;
     if a.frames < 2 || a.temporal.is_empty() || !a.time_limits.is_empty() {
         return Err(bad(anyhow::anyhow!(
             "--animate needs --frames ≥ 2 and at least one --temporal mode, and no --time-limits"
@@ -63,7 +106,7 @@ pub(super) fn run(
     let reference = Reference::Path { spp: a.reference_spp };
     r.check(&reference.settings(base))?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let truth = references(r, &path, arg, reference, base, &a.scene, &a.out, a.frames, err)?;
+    let truth = references(r, &motion, reference, base, &a.scene, &a.out, a.frames, err)?;
     let mut samples = vec![];
     let bar = indicatif::ProgressBar::new((a.methods.len() * a.temporal.len()) as u64 * a.frames as u64);
     for &method in &a.methods {
@@ -73,7 +116,7 @@ pub(super) fn run(
             r.clear_frame_cache();
             let mut previous: Option<RgbImage> = None;
             for k in 0..a.frames {
-                path.apply(r, k);
+                motion.apply(r, k);
                 let seed = temporal.seed(1, k, 0);
                 let s = FrameSettings { method, vpls, seed, cdf_seed: Some(seed), ..base.clone() };
                 let f = r.render(&s)?;
@@ -91,7 +134,7 @@ pub(super) fn run(
     }
     bar.finish_and_clear();
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let md = table(a, base, &samples, &r.gpu.name, &command, arg);
+    let md = table(a, base, &samples, &r.gpu.name, &command, &motion.label);
     output::write_text(&a.out.join("bench.csv"), &csv(&samples))?;
     output::write_text(&a.out.join("bench.md"), &md)?;
     plot(&a.out.join("flicker.png"), a, &samples, base, &r.gpu.name)?;
@@ -104,8 +147,7 @@ pub(super) fn run(
 #[allow(clippy::too_many_arguments)]
 fn references(
     r: &mut Renderer,
-    path: &LightPath,
-    arg: &str,
+    motion: &Motion,
     reference: Reference,
     base: &FrameSettings,
     scene: &Path,
@@ -113,9 +155,7 @@ fn references(
     frames: u32,
     err: &mut dyn Write,
 ) -> Result<Vec<RgbImage>> {
-    // The path's own text (a file's contents) keys the cache, so an edited keyframe file renders anew.
-    let contents = std::fs::read_to_string(arg).unwrap_or_default();
-    let key = bounce_graph::graph::fingerprint(&(arg, contents));
+    let key = motion.key;
     let stem = reference.file_name(base, scene);
     let stem = stem.trim_end_matches(".exr");
     let s = reference.settings(base);
@@ -129,7 +169,7 @@ fn references(
             }
         }
         writeln!(err, "reference: frame {k} into {}", file.display())?;
-        path.apply(r, k);
+        motion.apply(r, k);
         let f = r.render(&s)?;
         let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
         let meta = [("component", "indirect".into()), ("method", "reference".into()), ("frame", k.to_string())];
