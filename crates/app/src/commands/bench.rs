@@ -379,6 +379,8 @@ struct Cell {
     /// GPU ms per frame, or wall seconds for a time budget (the plot's x).
     time: f64,
     rel_mse: f64,
+    /// The tail: p99.9 |error| (a firefly shows here before it moves the relMSE).
+    tail: f64,
     flip: f64,
     frames: f64,
 }
@@ -389,6 +391,7 @@ fn cell(samples: &[Sample], m: Method, c: Column) -> Cell {
     Cell {
         time: median(sel.iter().map(|s| time(s)).collect()),
         rel_mse: median(sel.iter().map(|s| s.metrics.rel_mse).collect()),
+        tail: median(sel.iter().map(|s| s.metrics.p999_abs).collect()),
         flip: median(sel.iter().map(|s| s.metrics.flip.unwrap_or(f64::NAN)).collect()),
         frames: median(sel.iter().map(|s| s.frames as f64).collect()),
     }
@@ -400,7 +403,7 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
     let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
     let mut md = format!(
         "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {:?} VPLs, {} repeat(s) \
-         (seeds 1..={}); medians over repeats. Reference: {}. {}\n\n## {} and mean FLIP against the reference\n\n| method |",
+         (seeds 1..={}); medians over repeats. Reference: {}. {}\n\n## {}, p99.9 |error| and mean FLIP against the reference\n\n| method |",
         b.width,
         b.height,
         b.dprsm_res,
@@ -422,11 +425,11 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
     );
     for c in &plan.columns {
         let first = if equal_time { "frames" } else { "ms" };
-        md.push_str(&format!(" {}: {first} | relMSE | FLIP |", c.label()));
+        md.push_str(&format!(" {}: {first} | relMSE | p99.9 | FLIP |", c.label()));
     }
     md.push_str("\n|---|");
     for _ in &plan.columns {
-        md.push_str("---:|---:|---:|");
+        md.push_str("---:|---:|---:|---:|");
     }
     md.push('\n');
     for &m in &plan.methods {
@@ -434,7 +437,7 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
         for &c in &plan.columns {
             let x = cell(samples, m, c);
             let first = if equal_time { x.frames } else { x.time };
-            md.push_str(&format!(" {first:.1} | {:.4} | {:.4} |", x.rel_mse, x.flip));
+            md.push_str(&format!(" {first:.1} | {:.4} | {:.4} | {:.4} |", x.rel_mse, x.tail, x.flip));
         }
         md.push('\n');
     }
