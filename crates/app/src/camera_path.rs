@@ -3,7 +3,7 @@
 //!
 //! - `orbit[:PERIOD]`: the eye circles its start in the horizontal plane while it keeps looking at the
 //!   scene's target, e_k = e_0 + r · (cos θ_k − 1, 0, sin θ_k), θ_k = 2πk / PERIOD (default
-//!   [`ORBIT_PERIOD`] frames), r = [`ORBIT_RADIUS`] × the scene diagonal: frame 0 is the scene's own
+//!   `light_path::ORBIT_PERIOD` frames), r = [`ORBIT_RADIUS`] × the scene diagonal: frame 0 is the scene's own
 //!   view, and every frame both turns and moves the camera (what reprojection must follow).
 //! - `FILE.toml`: keyframes, `[[key]]` tables of `frame`, `eye` and `target` (world coordinates, as in
 //!   the scene file) and an optional `fov_y` (degrees; a key without one keeps the previous key's, the
@@ -15,8 +15,8 @@
 //! line, exit 2.
 
 use crate::error::bad;
-use crate::light_path::{ORBIT_PERIOD, ORBIT_RADIUS};
-use anyhow::{Context, Result};
+use crate::light_path::{orbit_period, read_toml, ORBIT_RADIUS};
+use anyhow::Result;
 use bounce_graph::camera::Camera;
 use bounce_graph::frame::Renderer;
 use bounce_graph::scene::Scene;
@@ -60,23 +60,9 @@ impl CameraPath {
     /// `orbit`, `orbit:PERIOD` or a keyframe file, for `scene`'s camera. Bad input is a [`bad`] error.
     pub fn parse(arg: &str, scene: &Scene) -> Result<CameraPath> {
         let start = scene.camera;
-        let motion = if let Some(rest) = arg.strip_prefix("orbit") {
-            let period = match rest.strip_prefix(':') {
-                None if rest.is_empty() => ORBIT_PERIOD,
-                Some(p) => p.parse::<u32>().ok().filter(|p| *p > 0).ok_or_else(|| {
-                    bad(anyhow::anyhow!(
-                        "--camera-path orbit:PERIOD needs a positive whole number of frames (got `{p}`)"
-                    ))
-                })?,
-                None => {
-                    return Err(bad(anyhow::anyhow!(
-                        "--camera-path: `{arg}` is neither `orbit[:PERIOD]` nor a .toml file"
-                    )))
-                }
-            };
-            Motion::Orbit { period, radius: ORBIT_RADIUS * scene.diagonal() }
-        } else {
-            Motion::Keys(read_keys(Path::new(arg), scene)?)
+        let motion = match orbit_period(arg, "--camera-path")? {
+            Some(period) => Motion::Orbit { period, radius: ORBIT_RADIUS * scene.diagonal() },
+            None => Motion::Keys(read_keys(Path::new(arg), scene)?),
         };
         Ok(CameraPath { start, motion })
     }
@@ -117,14 +103,7 @@ impl CameraPath {
 
 /// The keyframe file's keys, checked.
 fn read_keys(path: &Path, scene: &Scene) -> Result<Vec<(u32, Camera)>> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| bad(anyhow::anyhow!("--camera-path {}: {e}", path.display())))
-        .context("reading the camera path")?;
-    let file: KeyFile = toml::from_str(&text).map_err(|e| {
-        let msg = e.message().to_string();
-        let line = e.span().map(|s| 1 + text[..s.start].matches('\n').count());
-        bad(anyhow::anyhow!("{}:{}: {msg}", path.display(), line.map_or(String::new(), |l| l.to_string())))
-    })?;
+    let file: KeyFile = read_toml(path, "--camera-path")?;
     let mut entries = file.key;
     entries.sort_by_key(|e| e.frame);
     let mut keys: Vec<(u32, Camera)> = vec![];

@@ -83,23 +83,9 @@ impl LightPath {
                 intensity: Vec3::from_slice(&l.intensity[..3]),
             })
             .collect();
-        let motion = if let Some(rest) = arg.strip_prefix("orbit") {
-            let period = match rest.strip_prefix(':') {
-                None if rest.is_empty() => ORBIT_PERIOD,
-                Some(p) => p.parse::<u32>().ok().filter(|p| *p > 0).ok_or_else(|| {
-                    bad(anyhow::anyhow!(
-                        "--light-path orbit:PERIOD needs a positive whole number of frames (got `{p}`)"
-                    ))
-                })?,
-                None => {
-                    return Err(bad(anyhow::anyhow!(
-                        "--light-path: `{arg}` is neither `orbit[:PERIOD]` nor a .toml file"
-                    )))
-                }
-            };
-            Motion::Orbit { period, radius: ORBIT_RADIUS * scene.diagonal() }
-        } else {
-            Motion::Keys(read_keys(Path::new(arg), scene, &start)?)
+        let motion = match orbit_period(arg, "--light-path")? {
+            Some(period) => Motion::Orbit { period, radius: ORBIT_RADIUS * scene.diagonal() },
+            None => Motion::Keys(read_keys(Path::new(arg), scene, &start)?),
         };
         Ok(LightPath { start, motion })
     }
@@ -141,16 +127,35 @@ impl Track {
     }
 }
 
-/// The keyframe file's tracks, checked against the scene.
-fn read_keys(path: &Path, scene: &Scene, start: &[LightState]) -> Result<Vec<Track>> {
+/// `Some(PERIOD)` for `orbit` (PERIOD [`ORBIT_PERIOD`]) or `orbit:PERIOD`, `None` for anything else (a
+/// keyframe file); a malformed orbit is a [`bad`] error naming `flag`. Shared with `crate::camera_path`.
+pub(crate) fn orbit_period(arg: &str, flag: &str) -> Result<Option<u32>> {
+    let Some(rest) = arg.strip_prefix("orbit") else { return Ok(None) };
+    match rest.strip_prefix(':') {
+        None if rest.is_empty() => Ok(Some(ORBIT_PERIOD)),
+        Some(p) => p.parse::<u32>().ok().filter(|p| *p > 0).map(Some).ok_or_else(|| {
+            bad(anyhow::anyhow!("{flag} orbit:PERIOD needs a positive whole number of frames (got `{p}`)"))
+        }),
+        None => Err(bad(anyhow::anyhow!("{flag}: `{arg}` is neither `orbit[:PERIOD]` nor a .toml file"))),
+    }
+}
+
+/// A keyframe file read as `T`: a missing file or a TOML error is a [`bad`] error naming the file (and the
+/// line). Shared with `crate::camera_path`.
+pub(crate) fn read_toml<T: serde::de::DeserializeOwned>(path: &Path, flag: &str) -> Result<T> {
     let text = std::fs::read_to_string(path)
-        .map_err(|e| bad(anyhow::anyhow!("--light-path {}: {e}", path.display())))
-        .context("reading the light path")?;
-    let file: KeyFile = toml::from_str(&text).map_err(|e| {
+        .map_err(|e| bad(anyhow::anyhow!("{flag} {}: {e}", path.display())))
+        .context("reading a keyframe file")?;
+    toml::from_str(&text).map_err(|e| {
         let msg = e.message().to_string();
         let line = e.span().map(|s| 1 + text[..s.start].matches('\n').count());
         bad(anyhow::anyhow!("{}:{}: {msg}", path.display(), line.map_or(String::new(), |l| l.to_string())))
-    })?;
+    })
+}
+
+/// The keyframe file's tracks, checked against the scene.
+fn read_keys(path: &Path, scene: &Scene, start: &[LightState]) -> Result<Vec<Track>> {
+    let file: KeyFile = read_toml(path, "--light-path")?;
     let (mut lo, mut hi) = (scene.bounds_min, scene.bounds_max);
     for l in start {
         lo = lo.min(l.position);

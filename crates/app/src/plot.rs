@@ -17,6 +17,26 @@ fn register_font() {
     });
 }
 
+/// Runs `draw` on a white bitmap of `size` pixels written to a temporary PNG beside `path`, then renames it
+/// into place, so a failed plot leaves no half-written file (the encoder picks the format from the
+/// extension, so the temporary name ends in .png too).
+fn png(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<()>,
+) -> Result<()> {
+    register_font();
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+        draw(&root)?;
+        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+}
+
 /// What the two axes show (the error axis names what the error is measured against).
 pub struct Axes<'a> {
     pub time: &'a str,
@@ -60,7 +80,6 @@ pub fn key_points(lo: f64, hi: f64) -> Vec<f64> {
 /// `series`: (method, [(time, relMSE)]) in column order. Points with a non-positive or non-finite value
 /// cannot go on log axes and are left out.
 pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle: &str, axes: &Axes) -> Result<()> {
-    register_font();
     let pts: Vec<(f64, f64)> = series
         .iter()
         .flat_map(|(_, v)| v.iter().copied())
@@ -71,13 +90,8 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
     }
     let (tmin, tmax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (t, _)| (a.min(*t), b.max(*t)));
     let (emin, emax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (_, e)| (a.min(*e), b.max(*e)));
-    // The encoder picks the format from the extension, so the temporary file ends in .png too.
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
-    {
-        let root = BitMapBackend::new(&tmp, (900, 640)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
-        let mut chart = ChartBuilder::on(&root)
+    png(path, (900, 640), |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(format!("Run time against error ({subtitle})"), ("sans-serif", 22))
             .margin(16)
             .x_label_area_size(48)
@@ -118,15 +132,13 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
             .label_font(("sans-serif", 16))
             .draw()
             .map_err(|e| anyhow!("plot: {e}"))?;
-        root.present().map_err(|e| anyhow!("plot: {e}"))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+        Ok(())
+    })
 }
 
 /// The suite's plot (`bounce suite`): for each method its per-scene relMSE over `uniform`'s, sorted,
 /// against the share of scenes (x from 0 to 1, y log), with the line y = 1 where a method ties `uniform`.
 pub fn sorted_ratios(path: &Path, series: &[(String, Vec<f64>)], subtitle: &str) -> Result<()> {
-    register_font();
     let all: Vec<f64> =
         series.iter().flat_map(|(_, v)| v.iter().copied()).filter(|v| v.is_finite() && *v > 0.0).collect();
     if all.is_empty() {
@@ -134,12 +146,8 @@ pub fn sorted_ratios(path: &Path, series: &[(String, Vec<f64>)], subtitle: &str)
     }
     let lo = all.iter().copied().fold(1.0f64, f64::min) / 1.5;
     let hi = all.iter().copied().fold(1.0f64, f64::max) * 1.5;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
-    {
-        let root = BitMapBackend::new(&tmp, (900, 640)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
-        let mut chart = ChartBuilder::on(&root)
+    png(path, (900, 640), |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(format!("relMSE over uniform's, per scene, sorted ({subtitle})"), ("sans-serif", 22))
             .margin(16)
             .x_label_area_size(48)
@@ -179,9 +187,8 @@ pub fn sorted_ratios(path: &Path, series: &[(String, Vec<f64>)], subtitle: &str)
             .label_font(("sans-serif", 16))
             .draw()
             .map_err(|e| anyhow!("plot: {e}"))?;
-        root.present().map_err(|e| anyhow!("plot: {e}"))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+        Ok(())
+    })
 }
 
 /// One panel of [`over_frames`]: its y-axis label and its series, (name, [(frame, value)]).
@@ -193,19 +200,13 @@ pub struct Panel<'a> {
 /// Panels stacked vertically, frame number on a linear x axis, the values on log y axes, one line per
 /// series (the same colour in every panel).
 pub fn over_frames(path: &Path, panels: &[Panel], title: &str) -> Result<()> {
-    register_font();
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
-    {
-        let root = BitMapBackend::new(&tmp, (900, 420 * panels.len().max(1) as u32)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
+    png(path, (900, 420 * panels.len().max(1) as u32), |root| {
         let root = root.titled(title, ("sans-serif", 22)).map_err(|e| anyhow!("plot: {e}"))?;
         for (area, panel) in root.split_evenly((panels.len().max(1), 1)).iter().zip(panels) {
             frame_panel(area, panel)?;
         }
-        root.present().map_err(|e| anyhow!("plot: {e}"))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+        Ok(())
+    })
 }
 
 fn frame_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel: &Panel) -> Result<()> {
