@@ -12,9 +12,9 @@
 //! A segment whose two ends lie more than 2τ above the plane meets no triangle inside that ball (its
 //! height is linear along it, and the triangles there lie at or below τ), so the walk may start where
 //! the segment leaves the ball: the same answer, fewer records. `glsl/shared/end_balls.glsl` states the
-//! rule, its margins against rounding, and the exit parameter; the exact shadow rays of the gather (its
-//! queue and its pool), mis and ris's shade apply it at both ends (`--end-balls`, on by default; not the
-//! reference's, which have no VPL end). The ray's own ends are lifted off their surfaces along the shading
+//! rule, its margins against rounding, and the exit parameter; the exact shadow rays of the gather's
+//! queue, mis and ris's shade apply it at both ends (always, with exact visibility; not the reference's,
+//! which have no VPL end). The ray's own ends are lifted off their surfaces along the shading
 //! normal (x) and toward the light (a VPL), so the condition fails, and the ball is not used, only for
 //! rays that leave at a grazing angle.
 //!
