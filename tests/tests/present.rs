@@ -93,7 +93,10 @@ fn the_gpu_tone_map_equals_the_png_writers_within_one_step() {
             };
         });
         let mut out = g.import_image(&ldr);
-        r.passes.present.add(&mut g, &radiance, &mut out, w, h, PresentParams { swap_rb: swap, ..params(1, true) });
+        r.passes
+            .present
+            .add(&mut g, &radiance, &mut out, w, h, PresentParams { swap_rb: swap, ..params(1, true) })
+            .unwrap();
         g.export(&out);
         drop(g.execute().unwrap());
         let mut got = ldr.res.read_back(ldr.last_access()).unwrap();

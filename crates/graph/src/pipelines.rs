@@ -1,6 +1,7 @@
 //! Pipelines built when a frame first needs them. A pass holds its shaders as [`Lazy`] sets: the SPIR-V,
 //! the layout's bindings and push-constant size, and one slot per combination of specialisation
-//! constants it may ask for. Creating the renderer builds no pipeline, so start-up pays only for what
+//! constants it may ask for. Creating the renderer builds none of these (only the few pipelines every
+//! frame runs: the G-buffer, the light maps, direct light, the CDF scan), so start-up pays only for what
 //! the first frame runs (on lavapipe a pipeline costs its LLVM compilation: the 51 variants built up
 //! front took most of a small render's 2 s), and a timed run builds its pipelines in its untimed first
 //! frame (`Renderer::prepare`, `Renderer::warm_up`).

@@ -248,7 +248,7 @@ fn note_single_frame(a: &RenderArgs, settings: &FrameSettings, err: &mut dyn Wri
 }
 
 /// Where the time before the first frame went (`--timings`): the device (instance, device, allocator),
-/// the renderer (scene upload, BVH, pass objects; no pipeline is built there) and the warm-up (the
+/// the renderer (scene upload, BVH, the pipelines every frame runs) and the warm-up (the
 /// pipelines the frame needs, built on first use, and an untimed small frame).
 struct Startup {
     device_s: f64,

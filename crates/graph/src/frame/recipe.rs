@@ -122,7 +122,7 @@ pub fn build_frame<'a>(
     if s.visibility.shared_set() {
         // One shared VPL set (and its shadow maps) for every pixel: passes/psm.rs. Under `mis` it is the
         // CDF strategy's samples; the gathering rays stay per pixel.
-        inputs.psm = Some(r.psm.add(g, f, &vpls, cdf.importance, cdf.cdf, s.psm_res, push));
+        inputs.psm = Some(r.psm.add(g, f, &vpls, cdf.importance, cdf.cdf, s.psm_res, push)?);
     }
     if s.method == Method::Ris {
         r.ris.add(g, f, &inputs, &mut out, push, ris_frame(s, i, push))?;

@@ -279,7 +279,7 @@ impl Renderer {
             let presented = match &present {
                 Some(p) if last => {
                     let mut ldr = g.import_image(p.ldr);
-                    let sum = ctx.passes.present.add(&mut g, &out.radiance, &mut ldr, s.width, s.height, p.params);
+                    let sum = ctx.passes.present.add(&mut g, &out.radiance, &mut ldr, s.width, s.height, p.params)?;
                     g.export(&ldr);
                     Some(sum)
                 }

@@ -18,11 +18,12 @@
 
 use crate::bindings::*;
 use crate::graph::{Graph, Handle, Persistent};
+use crate::pipelines::Lazy;
 use crate::shader_types::PresentPush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{vk, Binding, BufferDesc, ComputePipeline, DescriptorWrites, Gpu, Image, ImageDesc, Sampler};
+use bounce_device::{vk, Binding, BufferDesc, DescriptorWrites, Gpu, Image, ImageDesc, Sampler};
 
 /// The 8-bit output's format: the same 32-bit size as the swapchain's UNORM formats, so a plain image
 /// copy moves it.
@@ -42,7 +43,8 @@ pub struct PresentParams {
 }
 
 pub struct Present {
-    pipeline: ComputePipeline,
+    /// Built when the viewer first presents (`render` never does).
+    pipeline: Lazy<1>,
     sampler: Sampler,
 }
 
@@ -54,14 +56,8 @@ impl Present {
             Binding::storage_image(B_PRESENT_OUT),
             Binding::storage_buffer(B_PRESENT_STATS),
         ];
-        let pipeline = ComputePipeline::new(
-            gpu,
-            "present",
-            &crate::spirv(shaders::PRESENT_COMP),
-            &bindings,
-            std::mem::size_of::<PresentPush>() as u32,
-            &[],
-        )?;
+        let push = std::mem::size_of::<PresentPush>() as u32;
+        let pipeline = Lazy::new(gpu, "present", shaders::PRESENT_COMP, &bindings, push);
         Ok(Present { pipeline, sampler: Sampler::nearest(gpu)? })
     }
 
@@ -82,7 +78,8 @@ impl Present {
         width: u32,
         height: u32,
         p: PresentParams,
-    ) -> Handle<Image> {
+    ) -> Result<Handle<Image>> {
+        let pipeline = self.pipeline.pipeline()?;
         let desc = crate::frame::recipe::radiance_desc("present.sum", width, height);
         let kept = g.temporal_image("present.sum", desc, &());
         let mut sum = kept.handle;
@@ -112,15 +109,15 @@ impl Present {
                 let grid = [width, height, 1];
                 let wg = [WG_2D, WG_2D, 1];
                 let accumulate = PresentPush { stage: PRESENT_ACCUMULATE, ..push };
-                self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&accumulate), grid, wg);
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&accumulate), grid, wg);
                 ctx.serialize(&st);
                 let total = PresentPush { stage: PRESENT_TOTAL, ..push };
-                self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&total), wg, wg);
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&total), wg, wg);
                 ctx.serialize(&st);
                 ctx.serialize(&s);
                 let map = PresentPush { stage: PRESENT_MAP, ..push };
-                self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&map), grid, wg);
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&map), grid, wg);
             });
-        sum
+        Ok(sum)
     }
 }

@@ -25,20 +25,22 @@ use crate::bindings::*;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
 use crate::passes::dprsm::DprsmOut;
+use crate::pipelines::Lazy;
 use crate::shader_types::{GatherPush, ParaboloidPush, PsmView};
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{
-    vk, Binding, Buffer, BufferDesc, ComputePipeline, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Image, Sampler,
-};
+use bounce_device::{vk, Binding, Buffer, BufferDesc, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Image, Sampler};
+use std::sync::OnceLock;
 
 /// The most memory the shadow maps of one frame may take.
 pub const MAX_PSM_BYTES: u64 = 1 << 30;
 
+/// Built when a frame first needs it (`--visibility psm`).
 pub struct Psm {
-    select: ComputePipeline,
-    maps: GraphicsPipeline,
+    gpu: Gpu,
+    select: Lazy<1>,
+    maps: OnceLock<GraphicsPipeline>,
     sampler: Sampler,
 }
 
@@ -61,11 +63,20 @@ impl Psm {
             Binding::storage_buffer(B_PSM_VIEWS),
         ]);
         let push = std::mem::size_of::<GatherPush>() as u32;
-        let select = ComputePipeline::new(gpu, "psm_select", &crate::spirv(shaders::PSM_COMP), &bindings, push, &[])?;
+        let select = Lazy::new(gpu, "psm_select", shaders::PSM_COMP, &bindings, push);
+        Ok(Psm { gpu: gpu.clone(), select, maps: OnceLock::new(), sampler: Sampler::nearest(gpu)? })
+    }
+
+    /// The maps' graphics pipeline (the light maps' geometry shader with the VPL as viewpoint), built on
+    /// first use.
+    fn maps(&self) -> Result<&GraphicsPipeline> {
+        if let Some(p) = self.maps.get() {
+            return Ok(p);
+        }
         let mut map_bindings = scene_bindings();
         map_bindings.push(Binding::storage_buffer(B_PSM_VIEWS));
-        let maps = GraphicsPipeline::new(
-            gpu,
+        let p = GraphicsPipeline::new(
+            &self.gpu,
             &GraphicsPipelineDesc {
                 name: "psm",
                 vertex: &crate::spirv(shaders::DPRSM_VERT),
@@ -79,7 +90,7 @@ impl Psm {
                 spec: &[],
             },
         )?;
-        Ok(Psm { select, maps, sampler: Sampler::nearest(gpu)? })
+        Ok(self.maps.get_or_init(|| p))
     }
 
     /// Bytes of `n` maps of `res`².
@@ -99,7 +110,8 @@ impl Psm {
         cdf: Handle<Buffer>,
         res: u32,
         push: GatherPush,
-    ) -> PsmOut {
+    ) -> Result<PsmOut> {
+        let (select, maps) = (self.select.pipeline()?, self.maps()?);
         let n = push.samples.max(1);
         let mut views =
             g.create_buffer(BufferDesc::storage("psm.views", n as u64 * std::mem::size_of::<PsmView>() as u64));
@@ -117,17 +129,17 @@ impl Psm {
                     .storage_buffer(B_IMPORTANCE, ctx.buffer(&importance))
                     .texel_view(B_CDF, ctx.buffer(&cdf))
                     .storage_buffer(B_PSM_VIEWS, ctx.buffer(&view_h));
-                self.select.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [n, 1, 1], [WG_1D, 1, 1]);
+                select.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [n, 1, 1], [WG_1D, 1, 1]);
             });
         let mut depth = Dprsm::depth_image(g, "psm.depth", res, n);
         let (vh, dh) = (views, depth);
         g.add_pass("psm").read(&views, Access::ShaderRead).overwrite(&mut depth, Access::DepthAttachment).record(
             move |ctx| {
                 let writes = f.scene.writes(f.uniforms).storage_buffer(B_PSM_VIEWS, ctx.buffer(&vh));
-                record_paraboloid(ctx, &self.maps, f, writes, res, n, false, &[], &dh);
+                record_paraboloid(ctx, maps, f, writes, res, n, false, &[], &dh);
             },
         );
-        PsmOut { views, depth }
+        Ok(PsmOut { views, depth })
     }
 }
 
