@@ -185,8 +185,7 @@ class SuiteMesh(Mesh):
     def quad(self, a, b, c, d):
         for p in (a, b, c, d):
             self.lines.append("v " + " ".join(f"{x:.9g}" for x in self.place(p)))
-        # UVs from the quad's own extent, one checker period a unit (room units, before scaling).
-        ext = [max(abs(b[k] - a[k]), abs(c[k] - b[k]), abs(d[k] - a[k])) for k in range(3)]
+        # UVs from the quad's own side lengths: one checker period a unit (room units, before scaling).
         du = max(1e-6, ((b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2) ** 0.5)
         dv = max(1e-6, ((d[0] - a[0]) ** 2 + (d[1] - a[1]) ** 2 + (d[2] - a[2]) ** 2) ** 0.5)
         for uv in ((0, 0), (du, 0), (du, dv), (0, dv)):
@@ -194,7 +193,6 @@ class SuiteMesh(Mesh):
         n = self.nv
         self.lines.append(f"f {n + 1}/{n + 1} {n + 2}/{n + 2} {n + 3}/{n + 3} {n + 4}/{n + 4}")
         self.nv += 4
-        del ext
 
 
 def png_checker(path, a, b, n=8, cell=4):
@@ -254,14 +252,22 @@ def random_boxes(rng, m, lo, hi, count, keep_out, mats=("red", "green", "blue", 
     return placed
 
 
+def wall_with_door(m, z, door, w, h, mat):
+    """A zero-thickness wall across the room at z (x in [0, w], y in [0, h]) with a 0.9 × 2.0 doorway at x = door."""
+    m.use(mat)
+    for (x0, y0), (x1, y1) in (((0, 0), (door, h)), ((door + 0.9, 0), (w, h)), ((door, 2.0), (door + 0.9, h))):
+        if x1 > x0 + 1e-3 and y1 > y0 + 1e-3:
+            m.quad((x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z))
+
+
 def table(m, x, z, w, d, h, mat="wood", leg=0.05):
     m.box((x, h - 0.05, z), (x + w, h, z + d), mat)
     for lx, lz in ((x, z), (x + w - leg, z), (x, z + d - leg), (x + w - leg, z + d - leg)):
         m.box((lx, 0, lz), (lx + leg, h - 0.05, lz + leg), mat)
 
 
-def suite_scene(rng, family, k, scale, offset):
-    """(mesh, camera, lights, title) of one suite scene in room units (the mesh places it)."""
+def suite_scene(rng, family, scale, offset):
+    """(mesh, camera, lights) of one suite scene in room units (the mesh places it)."""
     m = SuiteMesh(scale, offset)
     W, H, D = rng.uniform(3, 8), rng.uniform(2.4, 4), rng.uniform(3, 8)
     lo, hi = (0.0, 0.0, 0.0), (W, H, D)
@@ -272,7 +278,6 @@ def suite_scene(rng, family, k, scale, offset):
     power = rng.uniform(4, 10)
     lights = [(light, (power, power, power))]
     walls = ("floor", "wall", "wall")
-    title = family
     if family == "boxes":
         room_walls(m, lo, hi, *walls)
         random_boxes(rng, m, lo, hi, rng.randint(2, 10), [eye, light, target])
@@ -295,13 +300,7 @@ def suite_scene(rng, family, k, scale, offset):
     elif family == "thin-walls":
         room_walls(m, lo, hi, *walls)
         for i in range(rng.randint(1, 2)):
-            z = D * (0.45 + 0.25 * i)
-            door = rng.uniform(0.1, 0.7) * W
-            m.use("red")
-            for a, b in (((0, 0), (door, H)), ((door + 0.9, 0), (W, H)), ((door, 2.0), (door + 0.9, H))):
-                (x0, y0), (x1, y1) = a, b
-                if x1 > x0 + 1e-3 and y1 > y0 + 1e-3:
-                    m.quad((x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z))
+            wall_with_door(m, D * (0.45 + 0.25 * i), rng.uniform(0.1, 0.7) * W, W, H, "red")
         lights = [((rng.uniform(0.2, 0.8) * W, H * 0.8, rng.uniform(0.1, 0.95) * D), (power, power, power))]
     elif family == "light-wall":
         room_walls(m, lo, hi, *walls)
@@ -341,11 +340,7 @@ def suite_scene(rng, family, k, scale, offset):
         D2 = rng.uniform(3, 6)
         room_walls(m, lo, (W, H, D + D2), *walls)
         door = rng.uniform(0.1, 0.7) * W
-        m.use("wall")
-        for a, b in (((0, 0), (door, H)), ((door + 0.9, 0), (W, H)), ((door, 2.0), (door + 0.9, H))):
-            (x0, y0), (x1, y1) = a, b
-            if x1 > x0 + 1e-3 and y1 > y0 + 1e-3:
-                m.quad((x0, y0, D), (x1, y0, D), (x1, y1, D), (x0, y1, D))
+        wall_with_door(m, D, door, W, H, "wall")
         p = (rng.uniform(0.2, 0.8) * W, H * rng.uniform(0.5, 0.85), D + rng.uniform(0.3, 0.8) * D2)
         lights = [(p, (power, power, power))]
         target = (door + 0.45, 1.0, D)
@@ -363,7 +358,7 @@ def suite_scene(rng, family, k, scale, offset):
         random_boxes(rng, m, lo, hi, rng.randint(2, 6), [eye, light, target])
     else:
         raise ValueError(family)
-    return m, (eye, target, fov), lights, title
+    return m, (eye, target, fov), lights
 
 
 def write_suite_scene(d, name, m, camera, lights, scale, size, textured):
@@ -402,7 +397,7 @@ def suite(root, per_family, seed, size):
             scale = SCALES[(n + k) % len(SCALES)]
             far = n % 2 == 1
             offset = tuple(rng.uniform(2e3, 2e4) * scale * rng.choice((-1, 1)) for _ in range(3)) if far else (0.0, 0.0, 0.0)
-            m, camera, lights, _ = suite_scene(rng, family, k, scale, offset)
+            m, camera, lights = suite_scene(rng, family, scale, offset)
             name = f"{family}-{k}"
             write_suite_scene(os.path.join(root, name), name, m, camera, lights, scale, size, family == "textured")
             n += 1

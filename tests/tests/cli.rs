@@ -654,14 +654,10 @@ fn camera_paths_move_the_camera_frame_by_frame() {
     c.extend(common);
     c.extend(size);
     assert_eq!(bounce(&c).code, 0);
-    assert!(read_exr(&held.join("frame_0000.exr")).unwrap().0.pixels == still, "the first key's view");
-    // Frame 1, between two keys of the same view, sees it too; it reuses the products frame 0 kept,
-    // which rounds the last bits of a few pixels otherwise (measured: relMSE 3e-13), and a moved
-    // camera changes them by whole percents (the orbit above).
-    let second = read_exr(&held.join("frame_0001.exr")).unwrap().0.pixels;
-    let rel = bounce::metrics::Metrics::of(&second, &still).rel_mse;
-    assert!(rel < 1e-9, "frame 1 left the keys' view: relMSE {rel}");
-    assert!(bounce::metrics::Metrics::of(&frame(1), &still).rel_mse > 1e-4, "the orbit barely moved");
+    for k in 0..2 {
+        let held_k = read_exr(&held.join(format!("frame_{k:04}.exr"))).unwrap().0.pixels;
+        assert!(held_k == still, "frame {k} left the keys' view (an interpolation that moves a held point)");
+    }
     // bench: the camera alone, then camera and lights.
     for lights in ["none", "orbit:8"] {
         let out = d.join(format!("bench-{lights}").replace(':', "-"));

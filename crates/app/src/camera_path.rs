@@ -15,7 +15,7 @@
 //! line, exit 2.
 
 use crate::error::bad;
-use crate::light_path::{orbit_period, read_toml, ORBIT_RADIUS};
+use crate::light_path::{lerp, orbit_period, read_toml, ORBIT_RADIUS};
 use anyhow::Result;
 use bounce_graph::camera::Camera;
 use bounce_graph::frame::Renderer;
@@ -84,8 +84,8 @@ impl CameraPath {
                         let (f0, a) = keys[after - 1];
                         let t = (k - f0) as f32 / (f1 - f0) as f32;
                         Camera {
-                            eye: a.eye.lerp(b.eye, t),
-                            target: a.target.lerp(b.target, t),
+                            eye: lerp(a.eye, b.eye, t),
+                            target: lerp(a.target, b.target, t),
                             fov_y_deg: a.fov_y_deg + (b.fov_y_deg - a.fov_y_deg) * t,
                             ..a
                         }

@@ -121,10 +121,17 @@ impl Track {
             (_, Some(&(f1, b))) => {
                 let (f0, a) = self.keys[after - 1];
                 let t = (k - f0) as f32 / (f1 - f0) as f32;
-                LightState { position: a.position.lerp(b.position, t), intensity: a.intensity.lerp(b.intensity, t) }
+                LightState { position: lerp(a.position, b.position, t), intensity: lerp(a.intensity, b.intensity, t) }
             }
         }
     }
+}
+
+/// a + (b − a) t between two keys: exactly a where both hold the same value (glam's `lerp`,
+/// a (1 − t) + b t, moves it by an ulp, and a camera an ulp away renders another image). Shared with
+/// `crate::camera_path`.
+pub(crate) fn lerp(a: Vec3, b: Vec3, t: f32) -> Vec3 {
+    a + (b - a) * t
 }
 
 /// `Some(PERIOD)` for `orbit` (PERIOD [`ORBIT_PERIOD`]) or `orbit:PERIOD`, `None` for anything else (a
@@ -210,8 +217,12 @@ mod tests {
         assert_eq!(t.at(15).position, Vec3::splat(2.0));
         assert_eq!(t.at(15).intensity, Vec3::splat(4.0));
         assert_eq!(t.at(20).position, Vec3::splat(3.0));
-        assert_eq!(t.at(27).position, Vec3::splat(3.0 * 0.3));
+        // 3 + (0 − 3) · 0.7 in f32: 0.9 to within its rounding.
+        assert!((t.at(27).position - Vec3::splat(0.9)).abs().max_element() < 2e-7);
         assert_eq!(t.at(99).position, Vec3::splat(0.0));
+        // Two keys of one value hold it exactly between them (a light or camera that stays put).
+        let held = track(&[(0, 0.3), (10, 0.3)]);
+        assert!((1..10).all(|k| held.at(k).position == Vec3::splat(0.3)));
     }
 
     #[test]

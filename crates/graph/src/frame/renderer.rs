@@ -169,11 +169,6 @@ impl Renderer {
         self.ctx.uniform_buffer(s, &self.state.camera)
     }
 
-    /// The BVH of the scene.
-    pub fn bvh(&self) -> &GpuBvh {
-        &self.ctx.bvh
-    }
-
     /// Build, execute and read back one frame.
     pub fn render(&mut self, s: &FrameSettings) -> Result<FrameOutput> {
         self.render_with_progress(s, &mut |_, _| {})

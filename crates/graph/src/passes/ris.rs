@@ -270,7 +270,7 @@ pub fn vis_bytes(width: u32, height: u32, tile: u32, res: u32, faces: u32) -> u6
 /// Candidates per initial dispatch under a loop iteration `limit`: per candidate `draw_vpl`'s loops (two
 /// binary searches, ≤ 32 each, the sections 3 · `sections`, the faces
 /// 2 · `faces` · (`sections` + 1)), or none for a candidate from the pool (`pool`), and 64 for the rest;
-/// 128 kept for the history's combination and the code outside.
+/// 128 kept for the code outside the loop.
 pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, pool: bool) -> u32 {
     let Some(limit) = limit else { return u32::MAX };
     let draw = if pool { 0 } else { 2 * 32 + 3 * (sections + 1) + 2 * faces * (sections + 2) };

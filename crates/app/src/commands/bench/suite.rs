@@ -200,9 +200,11 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
     md += "| method | geomean relMSE / uniform | worst (scene) | scenes above uniform | largest |mean − truth| over seeds (scene) | largest spread of the mean over seeds | median p99.9 |error| / uniform |\n";
     md += "|---|---:|---|---:|---|---:|---:|\n";
     let uniform_tail = per_scene(rows, Method::Uniform, |s| s.metrics.p999_abs);
+    // Each method's per-scene ratios, computed once for the three tables.
+    let all: BTreeMap<&str, BTreeMap<String, f64>> = a.methods.iter().map(|m| (m.name(), ratios(rows, *m))).collect();
     for &m in &a.methods {
-        let r = ratios(rows, m);
-        let (ws, wv) = worst(&r);
+        let r = &all[m.name()];
+        let (ws, wv) = worst(r);
         let above = r.values().filter(|v| **v > 1.0).count();
         let mm = means(rows, m);
         let bias: BTreeMap<String, f64> = mm.iter().map(|(k, (m, _))| (k.clone(), (m - 1.0).abs())).collect();
@@ -235,7 +237,7 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
     for f in &families {
         md += &format!("| {f} |");
         for &m in &a.methods {
-            let r = ratios(rows, m);
+            let r = &all[m.name()];
             let g = geomean(r.iter().filter(|(k, _)| family(k) == *f).map(|(_, v)| *v));
             md += &format!(" {g:.3} |");
         }
@@ -250,7 +252,7 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
     for s in &scenes {
         md += &format!("| {s} |");
         for &m in &a.methods {
-            let v = if m == Method::Uniform { uniform.get(s).copied() } else { ratios(rows, m).get(s).copied() };
+            let v = if m == Method::Uniform { uniform.get(s).copied() } else { all[m.name()].get(s).copied() };
             md += &format!(" {} |", v.map_or("–".into(), |v| format!("{v:.3}")));
         }
         md += "\n";
