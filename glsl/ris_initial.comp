@@ -142,7 +142,7 @@ void main() {
     if (gp.w == 0.0) {
         for (uint j = 0u; j < RIS_PICKS; j++) {
             res_out[res_index(px, layer + j)] = empty_reservoir(0.0);
-            if (ris.control != 0u) unshadowed[res_index(px, layer + j)] = vec4(0.0);
+            if (ris.control == RIS_CONTROL_CANDIDATES) unshadowed[res_index(px, layer + j)] = vec4(0.0);
         }
         return;
     }
@@ -152,7 +152,7 @@ void main() {
     // The control variate's sums, carried between dispatches only when the shade uses them.
     // (A stand-in of one vec4 is bound when it is off.)
     vec4 u = vec4(0.0);
-    if (pc.first != 0u && ris.control != 0u) u = unshadowed[idx];
+    if (pc.first != 0u && ris.control == RIS_CONTROL_CANDIDATES) u = unshadowed[idx];
     // The other picks' choices, carried in their own layers between dispatches.
     Picks pk = Picks(uvec4(RIS_NONE), vec4(0.0), vec4(0.0));
     if (pc.first != 0u) {
@@ -160,7 +160,7 @@ void main() {
             Reservoir q = res_out[res_index(px, layer + j)];
             pk.vpl[j] = q.vpl;
             pk.target[j] = q.target;
-            if (ris.control != 0u) pk.ratio[j] = unshadowed[res_index(px, layer + j)].w;
+            if (ris.control == RIS_CONTROL_CANDIDATES) pk.ratio[j] = unshadowed[res_index(px, layer + j)].w;
         }
     }
     if (cdf_total_at(0u) > 0.0) {
@@ -228,10 +228,10 @@ void main() {
     }
     if (pc.last < ris.candidates) {
         res_out[idx] = r;
-        if (ris.control != 0u) unshadowed[idx] = u;
+        if (ris.control == RIS_CONTROL_CANDIDATES) unshadowed[idx] = u;
         for (uint j = 1u; j < RIS_PICKS; j++) {
             res_out[res_index(px, layer + j)] = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
-            if (ris.control != 0u) unshadowed[res_index(px, layer + j)] = vec4(0.0, 0.0, 0.0, pk.ratio[j]);
+            if (ris.control == RIS_CONTROL_CANDIDATES) unshadowed[res_index(px, layer + j)] = vec4(0.0, 0.0, 0.0, pk.ratio[j]);
         }
         return;
     }
@@ -239,10 +239,10 @@ void main() {
     vec3 ug = ax * u.xyz / float(ris.candidates);
     for (uint j = 1u; j < RIS_PICKS; j++) {
         uint idx_j = res_index(px, layer + j);
-        if (ris.control != 0u) unshadowed[idx_j] = vec4(ug, pk.ratio[j]);
+        if (ris.control == RIS_CONTROL_CANDIDATES) unshadowed[idx_j] = vec4(ug, pk.ratio[j]);
         Reservoir q = Reservoir(pk.vpl[j], r.weight, 0.0, pk.target[j]);
         res_out[idx_j] = finish(q);
     }
-    if (ris.control != 0u) unshadowed[idx] = vec4(ug, u.w);
+    if (ris.control == RIS_CONTROL_CANDIDATES) unshadowed[idx] = vec4(ug, u.w);
     res_out[idx] = finish(r);
 }

@@ -10,6 +10,8 @@ layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir re
 layout(std430, set = 0, binding = B_RIS_VIS) buffer RisVis { uint vis_counts[]; };
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) readonly buffer RisUnshadowed { vec4 unshadowed[]; };
 layout(std430, set = 0, binding = B_RIS_CV) buffer RisCv { uvec4 cv_counts[]; };
+// The frame's shadow rays (visibility tests), counted: `bounce bench` reports them per pixel.
+layout(std430, set = 0, binding = B_RIS_RAYS) buffer RisRays { uint rays_traced; };
 #ifdef EXACT_VISIBILITY
 // The shade's shadow rays from a queue (shared/shadow_queue.glsl): a block's rays are queued first, traced,
 // and then the block's reservoirs are shaded in order with their answers.
@@ -54,6 +56,7 @@ void main() {
                 }
             }
             uint visible = shadow_queue_trace(o, n), ray = 0u;
+            if (n > 0u) atomicAdd(rays_traced, n);
 #else
         {
             uint base = pc.first, top = pc.last;
@@ -74,7 +77,12 @@ void main() {
                 vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
                 if (c != vec3(0.0) && (visible & (1u << ray++)) == 0u) c = vec3(0.0);
 #else
-                vec3 c = contribution_of(x, nx, ax, r.vpl, vpl);
+                // contribution_of, with its visibility test counted.
+                vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
+                if (c != vec3(0.0)) {
+                    atomicAdd(rays_traced, 1u);
+                    if (!segment_open(x, nx, r.vpl, vpl)) c = vec3(0.0);
+                }
 #endif
                 sum += c * r.weight;
                 if (ris.control != 0u) {

@@ -1,10 +1,14 @@
 #version 460
 // ris, spatial stage (dispatch W × H × R): the reservoir combined with k neighbours' of the same layer,
-// generalized balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y).
+// generalized balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y). With ris.control ==
+// RIS_CONTROL_REUSE (the last pass) it also writes the control variate's U_g = Σ_i m_i(y_i) f_x(y_i) W_i,
+// the mean of f_x(y) W over this resampling's choice given its inputs (passes/ris.rs).
 #include "shared/ris.glsl"
 
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
+// (A stand-in of one vec4 is bound when the pass writes no U_g.)
+layout(std430, set = 0, binding = B_RIS_UNSHADOWED) writeonly buffer RisUnshadowed { vec4 unshadowed[]; };
 
 // Whether neighbour q may lend its reservoir to p: both see geometry, their normals within ~25° and their
 // distances from the eye within 10 % (a deterministic function of the two G-buffer texels).
@@ -23,6 +27,7 @@ void main() {
     vec4 gp = texelFetch(g_position, px, 0);
     if (gp.w == 0.0) {
         res_out[idx] = canonical;
+        if (ris.control == RIS_CONTROL_REUSE) unshadowed[idx] = vec4(0.0);
         return;
     }
     // The inputs: 0 the pixel itself, then the accepted neighbours (at most RIS_MAX_NEIGHBORS).
@@ -59,6 +64,7 @@ void main() {
     // Resample: input i's sample y_i weighs m_i(y_i) · p̂_x(y_i) · W_i.
     Reservoir r = empty_reservoir(confidence);
     float sum = 0.0;
+    vec3 ug = vec3(0.0);
     for (uint i = 0u; i < n; i++) {
         Reservoir in_i = inputs[i];
         if (in_i.vpl == RIS_NONE || !(in_i.weight > 0.0)) continue;
@@ -73,6 +79,8 @@ void main() {
         float w = den > 0.0 ? num / den * here * in_i.weight : 0.0;
         if (!(w > 0.0)) continue;
         sum += w;
+        // m_i f_x(y_i) W_i = w_i f_x(y_i) / p̂_x(y_i), p̂_x = luminance(f_x).
+        if (ris.control == RIS_CONTROL_REUSE) ug += w / here * vpl_unshadowed(xs[0], ns[0], albs[0], vpl, pc.clamp_d2);
         if (ris_rand(px, 8u + ris.pass, layer * 16u + i) * sum < w) {
             r.vpl = in_i.vpl;
             r.target = here;
@@ -81,4 +89,6 @@ void main() {
     r.weight = r.vpl != RIS_NONE ? sum / r.target : 0.0;
     if (!(r.weight > 0.0)) r = empty_reservoir(confidence);
     res_out[idx] = r;
+    // w: the kept VPL's ratio s / (p̂ / luminance(f)) as the initial stage's, 1 for this target.
+    if (ris.control == RIS_CONTROL_REUSE) unshadowed[idx] = vec4(r.vpl != RIS_NONE ? ug : vec3(0.0), 1.0);
 }

@@ -1,13 +1,18 @@
 #version 460
-// ris, temporal stage (dispatch W × H × R, only while last frame's reservoirs are kept: --temporal-cap > 0
-// and the view unchanged): each finished reservoir of the initial stage combined with last frame's final
-// reservoir at the same pixel and layer. The same G-buffer gives the same target, so the generalized
-// balance weights reduce to the confidences, m_i = c_i / (c_0 + c_1), the history's capped at
-// --temporal-cap times M.
+// ris, temporal stage (dispatch W × H × R, while last frame's reservoirs and surface are kept): each
+// finished reservoir of the initial stage combined with last frame's final reservoir at the pixel's
+// previous pixel q (passes/reproject.rs; none where the surface was disoccluded). Generalized balance
+// weights m_i(y) = c_i p̂_i(y) / (c_0 p̂_0(y) + c_1 p̂_1(y)), p̂_0 this pixel's target and p̂_1 the target
+// at last frame's surface at q (its point, normal and albedo, with this frame's VPLs), the history's
+// confidence capped at --temporal-cap times M. With the view unchanged q is the pixel itself and p̂_1 =
+// p̂_0 (up to the albedo's unorm8), so the weights are the confidences'.
 #include "shared/ris.glsl"
 
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Reservoir res_history[]; };
+layout(set = 0, binding = B_MOTION) uniform sampler2D motion;
+layout(set = 0, binding = B_PREV_POSITION) uniform sampler2D prev_position;
+layout(set = 0, binding = B_PREV_SURFACE) uniform usampler2D prev_surface;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -15,23 +20,31 @@ void main() {
     if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
     vec4 gp = texelFetch(g_position, px, 0);
     if (gp.w == 0.0) return; // the initial stage left an empty reservoir, with no history to combine
+    vec4 mv = texelFetch(motion, px, 0);
+    if (mv.z == 0.0) return; // disoccluded: the reservoir stays this frame's own
+    ivec2 q = ivec2(mv.xy);
     vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
+    uvec4 su = texelFetch(prev_surface, q, 0);
+    vec3 xq = texelFetch(prev_position, q, 0).xyz, nq = uintBitsToFloat(su.xyz), aq = unpackUnorm4x8(su.w).rgb;
     uint idx = res_index(px, layer);
     Reservoir r = res_out[idx];
     float m = float(ris.candidates);
-    Reservoir h = res_history[idx];
+    Reservoir h = res_history[res_index(q, layer)];
     float ch = min(h.confidence, ris.history_cap * m);
-    float th = h.vpl != RIS_NONE && h.weight > 0.0 ? target_at(x, nx, ax, h.vpl) : 0.0;
-    float total = m + ch;
-    float w0 = m / total * r.target * r.weight;
-    float w1 = ch / total * th * h.weight;
+    bool has0 = r.vpl != RIS_NONE && r.weight > 0.0, has1 = h.vpl != RIS_NONE && h.weight > 0.0;
+    // Each sample's target here and at q: (p̂_0, p̂_1).
+    vec2 t0 = has0 ? vec2(r.target, target_at(xq, nq, aq, r.vpl)) : vec2(0.0);
+    vec2 t1 = has1 ? vec2(target_at(x, nx, ax, h.vpl), target_at(xq, nq, aq, h.vpl)) : vec2(0.0);
+    float d0 = m * t0.x + ch * t0.y, d1 = m * t1.x + ch * t1.y;
+    float w0 = d0 > 0.0 ? m * t0.x / d0 * t0.x * r.weight : 0.0;
+    float w1 = d1 > 0.0 ? ch * t1.y / d1 * t1.x * h.weight : 0.0;
     float sum = w0 + w1;
     if (w1 > 0.0 && ris_rand(px, 2u, layer) * sum < w1) {
         r.vpl = h.vpl;
-        r.target = th;
+        r.target = t1.x;
     }
     r.weight = r.target > 0.0 && sum > 0.0 ? sum / r.target : 0.0;
-    r.confidence = total;
+    r.confidence = m + ch;
     if (!(r.weight > 0.0)) r = empty_reservoir(r.confidence);
     res_out[idx] = r;
 }

@@ -77,6 +77,10 @@ const SHADERS: &[Shader] = &[
     file("ris_spatial.comp"),
     file("ris_shade.comp"),
     variant("ris_shade.exact.comp", "ris_shade.comp", &["EXACT_VISIBILITY"]),
+    file("reproject.comp"),
+    file("denoise_temporal.comp"),
+    file("denoise_variance.comp"),
+    file("denoise_atrous.comp"),
     // The reference: two-strategy MIS (cosine at x, light side at y).
     file("reference.comp"),
     // The viewer's presentation: running mean, Reinhard, sRGB8.

@@ -159,6 +159,11 @@ const float END_BALL_MAX_RADIUS = 0.03;
 // the control's coefficient β, and the same counts of the candidate set in progress, not yet in β.
 #define B_RIS_UNSHADOWED 34
 #define B_RIS_CV 35
+// RisPush.control: off; U_g over the reservoir's own candidates (the initial stage; no reuse); U_g over
+// the last reuse stage's inputs (the last spatial pass: the generalized RIS form, passes/ris.rs).
+#define RIS_CONTROL_OFF 0
+#define RIS_CONTROL_CANDIDATES 1
+#define RIS_CONTROL_REUSE 2
 // Reservoir.vpl of an empty reservoir.
 #define RIS_NONE 0xFFFFFFFFu
 // ris's presampled candidate pool (--pool-tiles): written by ris.presample, read by ris.initial_pool as a
@@ -175,6 +180,34 @@ const float END_BALL_MAX_RADIUS = 0.03;
 // Most picks per reservoir's candidates (ris.picks; the initial stage keeps them in the components of a
 // vec4, pick 0 in the reservoir itself).
 #define RIS_MAX_PICKS 4
+// The shade's shadow-ray counter: one uint, the rays the frame traced (added to by each subgroup).
+#define B_RIS_RAYS 57
+
+// ---- reproject (passes/reproject.rs): motion from the G-buffer, and the surface kept for the next frame --
+// Written: each pixel's previous pixel (B_MOTION: xy, z = 1 where last frame saw the same surface there)
+// and this frame's surface (B_SURFACE_POSITION_OUT: xyz, hit; B_SURFACE_OUT: the normal's float bits and
+// the albedo as unorm8). Read by ris's temporal stage and the denoiser: B_MOTION and last frame's surface
+// at B_PREV_POSITION and B_PREV_SURFACE.
+#define B_MOTION 52
+#define B_PREV_POSITION 53
+#define B_PREV_SURFACE 54
+#define B_SURFACE_POSITION_OUT 55
+#define B_SURFACE_OUT 56
+
+// ---- denoise (passes/denoise.rs): temporal accumulation, variance, à-trous (SVGF) ------------------------
+// Each stage reads B_DENOISE_IN (temporal: the raw estimate, the direct light at B_GATHER_DIRECT, last
+// frame's accumulation at B_DENOISE_PREV_*; variance: the accumulated illumination, its moments at
+// B_DENOISE_MOMENTS; à-trous: the last stage's output) and writes B_DENOISE_OUT (temporal: the
+// accumulation at B_DENOISE_COLOR_OUT and B_DENOISE_MOMENTS_OUT).
+#define B_DENOISE_IN 58
+#define B_DENOISE_PREV_COLOR 59
+#define B_DENOISE_PREV_MOMENTS 60
+#define B_DENOISE_COLOR_OUT 61
+#define B_DENOISE_MOMENTS_OUT 62
+#define B_DENOISE_MOMENTS 63
+#define B_DENOISE_OUT 64
+// À-trous iterations (tap spacings 1, 2, 4, 8, 16: SVGF's five).
+#define DENOISE_ITERATIONS 5
 
 // ---- present: the viewer's running mean, tone mapping and sRGB encoding (passes/present.rs) -------------
 #define B_PRESENT_RADIANCE 40

@@ -43,6 +43,8 @@ struct FrameUniforms {
                              // y faces per light, z tan(fov/2) of a perspective face (float bits), w unused
     vec4 vpl;                // x: the weight s of a VPL's patch area in its kernel 1/√(d⁴ + (s·A_v)²)
                              // (shared/vpl.glsl; 0: point VPLs, 1/d²), yzw unused
+    mat4 prev_view_proj;     // last frame's view_proj (this frame's on a first frame): reprojection
+    vec4 camera;             // x: 2 tan(fov_y / 2) / height, a pixel's angle (radians, small-angle); yzw unused
 };
 
 // gather push constants.
@@ -147,6 +149,26 @@ struct PresentPush {
     uint groups;      // workgroups of the per-pixel stages (the stats buffer's partials)
     uint pad0;
     uint pad1;
+};
+
+// reproject push constants.
+struct ReprojectPush {
+    uint history;     // 1: last frame's surface is kept (B_PREV_*); 0: a first frame, nothing reprojects
+    float plane;      // disocclusion: the most a point may lie off last frame's surface, in pixel footprints
+    float normal;     // disocclusion: the least cosine between this frame's and last frame's normals
+    uint pad0;
+};
+
+// denoise push constants.
+struct DenoisePush {
+    uint history;     // temporal: 1 when last frame's accumulation is kept (B_DENOISE_PREV_*)
+    uint step;        // à-trous: the kernel's tap spacing, pixels (1, 2, 4, ...)
+    uint last;        // à-trous: 1 in the last iteration (remodulate, add the direct light)
+    uint add_direct;  // 1: the raw estimate holds the direct light (subtracted, filtered apart, added back)
+    float alpha;      // the temporal blend's least weight of the new frame (illumination and moments)
+    float sigma_l;    // edge stop: luminance, in standard deviations
+    float sigma_n;    // edge stop: the normals' cosine exponent
+    float sigma_z;    // edge stop: distance off the pixel's plane, in pixel footprints per pixel of offset
 };
 
 #endif

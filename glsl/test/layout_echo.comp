@@ -20,6 +20,8 @@ layout(std430, set = 0, binding = 0) readonly buffer In {
     VoxelizePush vp;
     ParaboloidPush pp;
     PresentPush pr;
+    ReprojectPush rp;
+    DenoisePush dp;
 };
 layout(std430, set = 0, binding = 1) writeonly buffer Out { uint words[]; };
 
@@ -45,6 +47,8 @@ void main() {
     put4u(f.voxel_dims);
     put4u(f.light_map);
     put4(f.vpl);
+    for (int c = 0; c < 4; c++) put4(f.prev_view_proj[c]);
+    put4(f.camera);
     put4u(uvec4(gp.mode, gp.samples, gp.seed, gp.first));
     put4u(uvec4(gp.last, gp.accumulate, gp.add_direct, floatBitsToUint(gp.clamp_d2)));
     put4u(uvec4(gp.sections, floatBitsToUint(gp.defensive), gp.face_mode, gp.cdf_len));
@@ -57,4 +61,7 @@ void main() {
     put4u(uvec4(vp.cells_per_invocation, vp.first_triangle, pp.map_res, pp.light_map));
     put4u(uvec4(pr.stage, pr.frames, pr.reset, pr.swap_rb));
     put4u(uvec4(floatBitsToUint(pr.exposure), pr.groups, pr.pad0, pr.pad1));
+    put4u(uvec4(rp.history, floatBitsToUint(rp.plane), floatBitsToUint(rp.normal), rp.pad0));
+    put4u(uvec4(dp.history, dp.step, dp.last, dp.add_direct));
+    put4(vec4(dp.alpha, dp.sigma_l, dp.sigma_n, dp.sigma_z));
 }

@@ -231,7 +231,7 @@ fn bench_animate_writes_relmse_and_flicker_per_frame() {
                 .collect()
         };
         let mean_row = rows.iter().find(|r| r[1] == mode && r[2] == "mean").expect("a mean row per mode");
-        for (col, from) in [(4, 0), (5, 1)] {
+        for (col, from) in [(5, 0), (6, 1)] {
             let v = of(col, from);
             let want = v.iter().sum::<f64>() / v.len() as f64;
             let got: f64 = mean_row[col].parse().unwrap();
@@ -262,11 +262,11 @@ fn bench_animate_writes_relmse_and_flicker_per_frame() {
         (0..3).map(|k| read_exr(&frames.join(format!("frame_{k:04}.exr"))).unwrap().0.pixels).collect();
     for k in 0..3usize {
         let row = rows.iter().find(|r| r[1] == "coherent" && r[2] == k.to_string()).unwrap();
-        let rel: f64 = row[4].parse().unwrap();
+        let rel: f64 = row[5].parse().unwrap();
         let want = bounce::metrics::Metrics::of(&rendered[k], &truth[k]).rel_mse;
         assert!((rel - want).abs() <= 1e-5 * want, "frame {k}: relMSE {rel} vs {want}");
         if k > 0 {
-            let f: f64 = row[5].parse().unwrap();
+            let f: f64 = row[6].parse().unwrap();
             let want = bounce::metrics::flicker(&rendered[k], &rendered[k - 1], &truth[k], &truth[k - 1]);
             assert!((f - want).abs() <= 1e-5 * want, "frame {k}: flicker {f} vs {want}");
         } else {
@@ -523,7 +523,7 @@ fn view_30_frames_under_xvfb_shows_the_scene() {
     let o = view(&args, true);
     assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(stdout.contains("30 frames in the mean, 30 in all; 1 copy to host memory"), "{stdout}");
+    assert!(stdout.contains("30 frames in the mean, 30 in all, 0 real-time; 1 copy to host memory"), "{stdout}");
     let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
     let all_exr = d.join("all.exr");
     let mut a = vec!["render", scene.to_str().unwrap(), "--out", all_exr.to_str().unwrap()];
@@ -537,6 +537,32 @@ fn view_30_frames_under_xvfb_shows_the_scene() {
     eprintln!("view, 30 frames: mean {mv:.4} vs all {ma:.4} ({:+.2}%)", 100.0 * (mv - ma) / ma);
     assert!(((mv - ma) / ma).abs() < 0.05, "{mv} vs {ma}");
     assert!(std::fs::metadata(&shot).unwrap().len() > 100, "no PNG screenshot");
+}
+
+/// Without --method the viewer renders `realtime` frames (denoised, shown alone) while the camera moves
+/// and accumulates ris while nothing does: along a camera orbit every frame after the first (the scene's
+/// own view) is real-time; a still view accumulates all of its frames.
+#[test]
+fn view_is_real_time_while_the_camera_moves() {
+    let d = scratch("view-realtime");
+    let scene = bounce_tests::default_scene();
+    let shot = d.join("s.png");
+    let small = ["--width", "32", "--height", "32", "--dprsm-res", "32", "--shadow-res", "128", "--vpls", "2"];
+    for (path, want) in [
+        (Some("orbit:8"), "1 frame in the mean, 4 in all, 3 real-time"),
+        (None, "4 frames in the mean, 4 in all, 0 real-time"),
+    ] {
+        let mut args = vec![scene.to_str().unwrap(), "--frames", "4", "--screenshot", shot.to_str().unwrap()];
+        args.extend(small);
+        args.push("--validation");
+        if let Some(p) = path {
+            args.extend(["--camera-path", p]);
+        }
+        let o = view(&args, true);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(stdout.contains(want), "{path:?}: {stdout}");
+    }
 }
 
 /// The bar for a moving light: `view --light-path orbit --frames 30` under Xvfb exits 0, its
@@ -555,7 +581,7 @@ fn view_orbits_the_light_and_reads_back_only_the_screenshot() {
     let o = view(&args, true);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
-    assert!(stdout.contains("1 frame in the mean, 30 in all; 1 copy to host memory"), "{stdout}");
+    assert!(stdout.contains("1 frame in the mean, 30 in all, 0 real-time; 1 copy to host memory"), "{stdout}");
     let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
     let frames = d.join("frames");
     let mut a = vec!["render", scene.to_str().unwrap(), "--frames", "30", "--out-dir", frames.to_str().unwrap()];

@@ -34,6 +34,12 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     f.voxel_dims = [3001, 3002, 3003, 3004];
     f.light_map = [3501, 3502, 3503, 3504];
     f.vpl = [next(), next(), next(), next()];
+    for c in 0..4 {
+        for r in 0..4 {
+            f.prev_view_proj[c][r] = next();
+        }
+    }
+    f.camera = [next(), next(), next(), next()];
     let gp = GatherPush {
         mode: 4001,
         samples: 4002,
@@ -74,6 +80,17 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
         groups: 9006,
         pad: [9007, 9008],
     };
+    let rp = ReprojectPush { history: 9501, plane: next(), normal: next(), pad: 9504 };
+    let dp = DenoisePush {
+        history: 9601,
+        step: 9602,
+        last: 9603,
+        add_direct: 9604,
+        alpha: next(),
+        sigma_l: next(),
+        sigma_n: next(),
+        sigma_z: next(),
+    };
     let mut input = vec![];
     input.extend_from_slice(bytemuck::bytes_of(&v));
     input.extend_from_slice(bytemuck::bytes_of(&m));
@@ -87,6 +104,8 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     input.extend_from_slice(bytemuck::bytes_of(&vp));
     input.extend_from_slice(bytemuck::bytes_of(&pp));
     input.extend_from_slice(bytemuck::bytes_of(&pr));
+    input.extend_from_slice(bytemuck::bytes_of(&rp));
+    input.extend_from_slice(bytemuck::bytes_of(&dp));
 
     let inb = Buffer::with_data(&gpu, "echo in", vk::BufferUsageFlags::STORAGE_BUFFER, &input).unwrap();
     let outb = Buffer::new(&gpu, &BufferDesc::storage("echo out", input.len() as u64)).unwrap();

@@ -5,7 +5,7 @@
 //! candidate and no reuse it is its source method; candidates from the presampled pool are unbiased too, with the near window as well
 //! (two lights, every light map); the candidates' split over dispatches (lavapipe's
 //! loop limit) does not change the image; bad flag combinations are a `SettingsError`. The shade's
-//! unshadowed control variate is unbiased over progressive frames, and applied only without reuse; so
+//! unshadowed control variate is unbiased over progressive frames, without reuse and over the spatial pass's inputs; so
 //! are several picks from one reservoir's candidates, with and without reuse.
 
 use crate::vpl::{converges_to, indirect_with};
@@ -155,7 +155,9 @@ fn ris_from_a_presampled_pool_is_unbiased() {
 /// shadow rays, so frames are correlated through it) the mean converges to `all`, with the pool and
 /// the near window, for the voxel and the exact visibility; with one reservoir per frame, where β
 /// comes from earlier frames alone. And it is really applied: a frame differs from the same seed's
-/// with `off`, and `off` with reuse is the same image as `on` with reuse (where it stays off).
+/// with `off`. With spatial reuse it is the last pass's, U_g = Σ_i m_i(y_i) f(y_i) W_i over the pass's
+/// inputs (the mean of f(y) W given them): a second frame differs with it on, and the progressive mean
+/// converges to `all` too.
 #[test]
 fn ris_control_variate_is_unbiased_over_progressive_frames() {
     const FRAMES: u64 = 3;
@@ -180,15 +182,25 @@ fn ris_control_variate_is_unbiased_over_progressive_frames() {
     r.clear_frame_cache();
     let off = indirect_with(&mut r, settings(Visibility::Exact, 5, false, 4), w, h, res, vox);
     assert_ne!(on, off, "the control variate changed nothing");
-    let reused = |control| {
-        let mut s = settings(Visibility::Exact, 5, control, 4);
+    // With spatial reuse the control is the last pass's (U_g over its inputs): the second frame, whose β
+    // counts the first frame's rays, differs from the same frames without it.
+    let reused = |control, seed| {
+        let mut s = settings(Visibility::Exact, seed, control, 4);
         s.ris.spatial_passes = 1;
         s
     };
-    r.clear_frame_cache();
-    let a = indirect_with(&mut r, reused(true), w, h, res, vox);
-    r.clear_frame_cache();
-    assert_eq!(a, indirect_with(&mut r, reused(false), w, h, res, vox), "the control variate ran with reuse");
+    let second = |r: &mut Renderer, control| {
+        r.clear_frame_cache();
+        indirect_with(r, reused(control, 5), w, h, res, vox);
+        indirect_with(r, reused(control, 6), w, h, res, vox)
+    };
+    let (on, off) = (second(&mut r, true), second(&mut r, false));
+    assert_ne!(on, off, "the control variate did not run with reuse");
+    converges_to(
+        "ris (control variate over the spatial pass's inputs, pool of 3 tiles, exact)",
+        &all(&mut r, Visibility::Exact),
+        |run| progressive_mean(&mut r, FRAMES, |k| reused(true, run * FRAMES + k)),
+    );
 }
 
 /// Several picks per reservoir's candidates (`--picks K`): K choices among the same M candidates

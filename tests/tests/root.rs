@@ -15,6 +15,7 @@ mod layout;
 mod lightmaps;
 mod present;
 mod psm;
+mod realtime;
 mod reference;
 mod ris;
 mod stress;

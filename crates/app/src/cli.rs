@@ -107,6 +107,11 @@ pub const METHODS: Choices<Method> = Choices(&[
         Method::Ris,
         "Resampling: --vpls reservoirs per pixel, each one of --candidates VPLs from --source by its unshadowed contribution, spatial and temporal reuse",
     ),
+    (
+        "realtime",
+        Method::Realtime,
+        "Real time: one reservoir and one shadow ray per pixel, reused across frames (reprojected) and pixels, then denoised (--denoise)",
+    ),
 ]);
 
 pub const RIS_SOURCES: Choices<RisSource> = Choices(&[
@@ -127,16 +132,42 @@ pub const VISIBILITIES: Choices<Visibility> = Choices(&[
     ),
 ]);
 
-/// `rsm`'s field of view here is a placeholder: [`FrameArgs::settings`] puts `--rsm-fov` in.
+/// `rsm` is 90°; `rsm:FOV` another field of view ([`LightMaps`]).
 pub const LIGHT_MAPS: Choices<LightMap> = Choices(&[
     ("dprsm", LightMap::Dprsm, "Dual paraboloid RSM: two faces, every direction (the thesis's choice)"),
     (
         "rsm",
         LightMap::Rsm { fov_deg: 90.0 },
-        "One perspective RSM of --rsm-fov looking at the scene's centre (misses what lies outside)",
+        "One perspective RSM of 90° (rsm:FOV: FOV degrees) looking at the scene's centre (misses what lies outside)",
     ),
     ("cube", LightMap::Cube, "Cube-map RSM: six 90° faces"),
 ]);
+
+/// `--light-map`'s parser: [`LIGHT_MAPS`]' names, and `rsm:FOV` for a perspective map of FOV degrees
+/// (one value for one concept: the map and its field of view).
+#[derive(Clone, Copy)]
+pub struct LightMaps;
+
+impl TypedValueParser for LightMaps {
+    type Value = LightMap;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<LightMap, clap::Error> {
+        if let Some(fov) = value.to_str().and_then(|v| v.strip_prefix("rsm:")) {
+            return fov.parse::<f32>().map(|fov_deg| LightMap::Rsm { fov_deg }).map_err(|_| {
+                clap::Error::raw(
+                    clap::error::ErrorKind::ValueValidation,
+                    format!("--light-map rsm:FOV needs a number of degrees (got `{fov}`)\n"),
+                )
+                .with_cmd(cmd)
+            });
+        }
+        LIGHT_MAPS.parse_ref(cmd, arg, value)
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        LIGHT_MAPS.possible_values()
+    }
+}
 
 pub const VPL_KERNELS: Choices<VplKernel> = Choices(&[
     (
@@ -285,11 +316,8 @@ pub struct FrameArgs {
     #[arg(long, default_value_t = d().psm_res)]
     pub psm_res: u32,
     /// The VPL map at each light (its faces are --dprsm-res² each).
-    #[arg(long, value_parser = LIGHT_MAPS, default_value = LIGHT_MAPS.name_of(&d().light_map))]
+    #[arg(long, value_parser = LightMaps, default_value = LIGHT_MAPS.name_of(&d().light_map))]
     pub light_map: LightMap,
-    /// Field of view of --light-map rsm, degrees.
-    #[arg(long, default_value_t = 90.0)]
-    pub rsm_fov: f32,
     /// Seed of the importance's gather points and rays (default: --seed). `bounce view` keeps it fixed
     /// across its progressive frames.
     #[arg(long)]
@@ -306,6 +334,10 @@ pub struct FrameArgs {
     /// own shadow ray (1 to 4; default 1, or chosen per view under `render --time-limit` without --vpls).
     #[arg(long)]
     pub picks: Option<u32>,
+    /// --method realtime shows its estimate through the denoiser (SVGF: temporal accumulation and an
+    /// edge-aware à-trous filter): `on` or `off` (the raw estimate).
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub denoise: bool,
     /// Switches that exist for A/B measurement (the `lab` cargo feature; BENCHMARKS.md says what each
     /// measured): ris's reuse, pool and near window, learned visibility, control variate, the 1/d² clamp.
     #[cfg(feature = "lab")]
@@ -394,10 +426,7 @@ impl FrameArgs {
             spp: self.spp.unwrap_or(d().spp),
             visibility: self.visibility,
             psm_res: self.psm_res,
-            light_map: match self.light_map {
-                LightMap::Rsm { .. } => LightMap::Rsm { fov_deg: self.rsm_fov },
-                other => other,
-            },
+            light_map: self.light_map,
             mis_weights: self.mis_weights,
             cdf_samples: self.cdf_samples,
             regions: self.regions,
@@ -409,6 +438,7 @@ impl FrameArgs {
             shadow_res: self.shadow_res,
             voxels: self.voxels,
             vpl_kernel: self.vpl_kernel,
+            denoise: self.denoise,
             ris: RisSettings {
                 source: self.source.unwrap_or(RisSettings::default().source),
                 candidates: self.candidates.unwrap_or(RisSettings::default().candidates),
@@ -682,73 +712,6 @@ pub struct CompareArgs {
     pub heatmap: Option<PathBuf>,
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use clap::CommandFactory;
-
-    fn parse(args: &[&str]) -> Command {
-        Cli::try_parse_from(["bounce"].iter().chain(args)).expect("valid arguments").command
-    }
-
-    #[test]
-    fn the_schema_is_consistent() {
-        Cli::command().debug_assert();
-    }
-
-    #[test]
-    fn every_choice_parses_to_its_graph_value() {
-        for (name, value, _) in METHODS.0 {
-            let Command::Render(a) = parse(&["render", "s.toml", "--method", name]) else { panic!() };
-            assert_eq!(a.picture.method, Some(*value));
-        }
-        for (name, value, _) in VISIBILITIES.0 {
-            let Command::Render(a) = parse(&["render", "s.toml", "--visibility", name]) else { panic!() };
-            assert_eq!(a.frame.visibility, *value);
-        }
-        let Command::Render(a) = parse(&["render", "s.toml", "--light-map", "rsm", "--rsm-fov", "60"]) else {
-            panic!()
-        };
-        assert_eq!(a.frame.settings(8, 8).light_map, LightMap::Rsm { fov_deg: 60.0 });
-        let Command::Bench(a) = parse(&["bench", "s.toml", "--out", "o", "--methods", "gbg,mis"]) else { panic!() };
-        assert_eq!(a.methods, [Method::Gbg, Method::Mis]);
-        assert!(Cli::try_parse_from(["bounce", "render", "s.toml", "--face", "sideways"]).is_err());
-    }
-
-    #[test]
-    fn each_command_keeps_its_own_defaults() {
-        let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
-        assert_eq!((r.picture.vpls, r.frame.dprsm_res, r.frame.shadow_res), (None, 512, 2048));
-        let Command::View(v) = parse(&["view", "s.toml"]) else { panic!() };
-        assert_eq!((v.picture.vpls, v.frame.dprsm_res, v.frame.shadow_res), (Some(16), 256, 1024));
-        let Command::Bench(b) = parse(&["bench", "s.toml", "--out", "o"]) else { panic!() };
-        assert_eq!((b.width, b.height, b.frame.dprsm_res, b.frame.shadow_res), (128, 128, 128, 2048));
-    }
-
-    /// Both schedules give the frames of an unchanged scene fresh seeds (so a static view's progressive
-    /// mean converges: `view_30_frames_under_xvfb_shows_the_scene` checks it against `all` with the
-    /// default, `coherent`); after each change `coherent` starts again from the base seed, `fresh` never.
-    #[test]
-    fn temporal_schedules() {
-        for t in [Temporal::Coherent, Temporal::Fresh] {
-            let seeds: Vec<u64> = (0..5).map(|k| t.seed(7, k, k)).collect();
-            assert_eq!(seeds, [7, 8, 9, 10, 11], "{t:?}: an unchanged scene's frames");
-        }
-        let moving = |t: Temporal| (0..4).map(|k| t.seed(7, k, 0)).collect::<Vec<_>>();
-        assert_eq!(moving(Temporal::Coherent), [7, 7, 7, 7]);
-        assert_eq!(moving(Temporal::Fresh), [7, 8, 9, 10]);
-    }
-
-    /// The flags' defaults are the graph's defaults, so a command that sets nothing renders what
-    /// `FrameSettings::default()` describes (size and the per-command defaults aside).
-    #[test]
-    fn frame_flag_defaults_are_the_graph_defaults() {
-        let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
-        let (ours, graph) = (r.frame.settings(256, 256), FrameSettings::default());
-        assert_eq!(format!("{ours:?}"), format!("{graph:?}"));
-    }
-}
-
 /// `--learn-visibility`: `auto`, `off`, or a floor δ.
 #[cfg(feature = "lab")]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -777,7 +740,6 @@ fn parse_learn(s: &str) -> Result<Learn, String> {
     }
 }
 
-#[cfg(feature = "lab")]
 fn parse_on_off(s: &str) -> Result<bool, String> {
     match s {
         "on" => Ok(true),
@@ -785,3 +747,7 @@ fn parse_on_off(s: &str) -> Result<bool, String> {
         _ => Err(format!("expected on or off, got {s:?}")),
     }
 }
+
+#[cfg(test)]
+#[path = "cli_tests.rs"]
+mod tests;

@@ -26,8 +26,13 @@ pub struct FrameUniforms {
     /// x: the weight s of a VPL's patch area in its kernel 1/√(d⁴ + (s·A_v)²) (`--vpl-kernel`; 0: 1/d²),
     /// yzw unused.
     pub vpl: [f32; 4],
+    /// Last frame's `view_proj` (this frame's on a first frame): where a surface point was on screen.
+    pub prev_view_proj: [[f32; 4]; 4],
+    /// x: 2 tan(fov_y / 2) / height, a pixel's angle (the denoiser's depth tolerance); yzw unused.
+    pub camera: [f32; 4],
 }
-const _: () = assert!(size_of::<FrameUniforms>() == 224);
+const _: () = assert!(size_of::<FrameUniforms>() == 304);
+const _: () = assert!(offset_of!(FrameUniforms, prev_view_proj) == 224);
 const _: () = assert!(offset_of!(FrameUniforms, vpl) == 208);
 const _: () = assert!(offset_of!(FrameUniforms, voxel_origin) == 160);
 const _: () = assert!(offset_of!(FrameUniforms, eye) == 64);
@@ -210,3 +215,39 @@ pub struct PresentPush {
 }
 const _: () = assert!(size_of::<PresentPush>() == 32);
 const _: () = assert!(offset_of!(PresentPush, exposure) == 16);
+
+/// reproject push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ReprojectPush {
+    /// 1: last frame's surface is kept; 0: a first frame, nothing reprojects.
+    pub history: u32,
+    /// Disocclusion: the most a point may lie off last frame's surface, in pixel footprints.
+    pub plane: f32,
+    /// Disocclusion: the least cosine between this frame's and last frame's normals.
+    pub normal: f32,
+    pub pad: u32,
+}
+const _: () = assert!(size_of::<ReprojectPush>() == 16);
+
+/// denoise push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct DenoisePush {
+    /// Temporal stage: 1 when last frame's accumulation is kept.
+    pub history: u32,
+    /// The à-trous kernel's tap spacing, pixels.
+    pub step: u32,
+    /// 1 in the last à-trous iteration (remodulate, add the direct light).
+    pub last: u32,
+    /// 1: the raw estimate holds the direct light.
+    pub add_direct: u32,
+    /// The temporal blend's least weight of the new frame.
+    pub alpha: f32,
+    /// Edge stops: luminance (standard deviations), normals (cosine exponent), plane distance (pixel
+    /// footprints per pixel of offset).
+    pub sigma_l: f32,
+    pub sigma_n: f32,
+    pub sigma_z: f32,
+}
+const _: () = assert!(size_of::<DenoisePush>() == 32);

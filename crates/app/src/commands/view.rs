@@ -105,7 +105,14 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
     }
     let path = a.animation.light_path.as_deref().map(|p| LightPath::parse(p, &scene)).transpose()?;
     let camera = a.animation.camera_path.as_deref().map(|p| CameraPath::parse(p, &scene)).transpose()?;
-    let mut app = Viewer { args: a, scene: &scene, settings, path, camera, state: None, error: None, log: vec![] };
+    // Without --method the viewer is real time while anything moves (ris accumulates while nothing does);
+    // --method realtime is real time always; any other method is what was asked, every frame.
+    let realtime = match a.picture.method {
+        None | Some(Method::Realtime) => Some(settings.method == Method::Realtime),
+        Some(_) => None,
+    };
+    let mut app =
+        Viewer { args: a, scene: &scene, settings, realtime, path, camera, state: None, error: None, log: vec![] };
     event_loop.run_app(&mut app).context("running the window's event loop")?;
     for line in &app.log {
         writeln!(out, "{line}")?;
@@ -120,6 +127,9 @@ struct Viewer<'a> {
     args: &'a ViewArgs,
     scene: &'a Scene,
     settings: FrameSettings,
+    /// `Some(always)`: frames are `realtime` (denoised, never accumulated) while the camera or a light
+    /// moves, and always where `always`; `None`: every frame is `settings.method`'s.
+    realtime: Option<bool>,
     /// `--light-path`: where the lights are at each frame of the run.
     path: Option<LightPath>,
     /// `--camera-path`: where the camera is at each frame of the run (the fly camera's keys then do
@@ -145,6 +155,8 @@ struct State {
     /// Frames in the running mean (since the last change), and since the start.
     frames: u32,
     total: u32,
+    /// Frames rendered by `realtime` (while moving).
+    realtime_frames: u32,
     /// Copies to host memory before the first frame (the run's count is reported against it).
     readbacks: u64,
     accumulate: bool,
@@ -325,6 +337,7 @@ impl Viewer<'_> {
             ldr,
             frames: 0,
             total: 0,
+            realtime_frames: 0,
             accumulate: true,
             shot_requested: false,
             last: Instant::now(),
@@ -343,14 +356,17 @@ impl Viewer<'_> {
         let now = Instant::now();
         let dt = (now - st.last).as_secs_f32();
         st.last = now;
+        let mut moved = false;
         match &self.camera {
             Some(c) => {
+                let before = st.renderer.camera();
                 c.apply(&mut st.renderer, st.total);
+                moved |= st.renderer.camera() != before;
                 st.frames = 0;
             }
             None if st.fly.step(dt) => {
                 st.renderer.set_camera(st.fly.camera());
-                st.frames = 0;
+                (st.frames, moved) = (0, true);
             }
             None => {}
         }
@@ -360,8 +376,9 @@ impl Viewer<'_> {
             None => _ = st.lamp.step(&st.fly.keys, &mut st.renderer, dt),
         }
         if st.renderer.lights() != before.as_slice() {
-            st.frames = 0;
+            (st.frames, moved) = (0, true);
         }
+        let realtime = self.realtime.is_some_and(|always| always || moved);
         if !st.accumulate {
             st.frames = 0;
         }
@@ -370,7 +387,11 @@ impl Viewer<'_> {
         // The run's seed where this accumulation began, then its frame st.frames as `render --time-limit`
         // takes it (seed + k; the reference: the next samples of one sequence).
         let seed = self.args.animation.temporal().seed(self.settings.seed, st.total.saturating_sub(st.frames), 0);
-        let s = frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames);
+        let s = match realtime {
+            // One real-time frame, shown alone: its history lives in the renderer, not in the mean.
+            true => FrameSettings { method: Method::Realtime, ..self.settings.clone() },
+            false => frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames),
+        };
         let params = PresentParams {
             frames: st.frames + 1,
             reset: st.frames == 0,
@@ -385,6 +406,11 @@ impl Viewer<'_> {
         }
         st.frames += 1;
         st.total += 1;
+        if realtime {
+            // The next still frame starts a new mean.
+            st.frames = 0;
+            st.realtime_frames += 1;
+        }
         let (presented, access) =
             st.swapchain.present_image(&st.ldr.res, st.ldr.last_access()).map_err(error::device)?;
         st.ldr.set_last_access(access);
@@ -414,9 +440,10 @@ impl Viewer<'_> {
         passes.sort_by(|a, b| b.1.total_cmp(&a.1));
         let shown: Vec<String> = passes.iter().take(4).map(|(n, ms)| format!("{n} {ms:.1}")).collect();
         let reused: Vec<&str> = st.full_passes.iter().copied().filter(|p| !f.ran.contains(p)).collect();
+        let method = if f.ran.contains(&"denoise_temporal") { Method::Realtime } else { s.method };
         let mut title = format!(
             "bounce view — {} · {} VPLs · {} · {} frame{} · {} · {frame_ms:.0} ms · GPU ms: {}",
-            s.method.name(),
+            method.name(),
             s.vpls,
             s.component.name(),
             st.frames,
@@ -448,13 +475,16 @@ impl Viewer<'_> {
         ];
         output::write_exr_and_png(&exr, Some(png), &img, &meta)?;
         let copies = st.gpu.readbacks() - st.readbacks;
+        // A real-time frame is shown alone (`frames` is already 0 for the next still one).
+        let mean = st.frames.max(1);
         self.log.push(format!(
-            "wrote {} and {} ({} frame{} in the mean, {} in all; {copies} cop{} to host memory)",
+            "wrote {} and {} ({} frame{} in the mean, {} in all, {} real-time; {copies} cop{} to host memory)",
             png.display(),
             exr.display(),
-            st.frames,
-            if st.frames == 1 { "" } else { "s" },
+            mean,
+            if mean == 1 { "" } else { "s" },
             st.total,
+            st.realtime_frames,
             if copies == 1 { "y" } else { "ies" }
         ));
         Ok(())

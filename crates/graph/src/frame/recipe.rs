@@ -49,6 +49,10 @@ pub struct FrameOut {
     pub second_moment: Option<Handle<Image>>,
     /// The CDF the gather sampled (sampled methods).
     pub cdf: Option<Handle<Buffer>>,
+    /// The raw estimate, where `radiance` is the denoised one (`Method::Realtime`).
+    pub raw: Option<Handle<Image>>,
+    /// The frame's shadow rays, one uint (ris and realtime).
+    pub rays: Option<Handle<Buffer>>,
 }
 
 /// What the recipe reads besides the settings: the frame's keys, the importance parameters and grid.
@@ -85,7 +89,7 @@ pub fn build_frame<'a>(
     let direct = g.cached("direct", &k.direct, |g| r.direct.add(g, f, &gbuffer, &shadow));
     let combined = (s.component == Component::Combined).then_some(direct);
     if s.component == Component::Direct {
-        return Ok(FrameOut { radiance: direct, second_moment: None, cdf: None });
+        return Ok(FrameOut { radiance: direct, ..FrameOut::default_for(direct) });
     }
     let desc = |name| radiance_desc(name, f.width, f.height);
     let mut out = g.temporal_image("radiance", desc(out_name(s.method)), &()).handle;
@@ -99,7 +103,7 @@ pub fn build_frame<'a>(
         };
         let (push, per_dispatch) = (reference_push(s, chunk), i.reference_per_dispatch);
         r.reference.add(g, f, io, &mut out, &mut sq, push, per_dispatch)?;
-        return Ok(FrameOut { radiance: out, second_moment: Some(sq), cdf: None });
+        return Ok(FrameOut { second_moment: Some(sq), ..FrameOut::default_for(out) });
     }
     let p = i.importance;
     let rows = f.vpl_faces * f.scene.light_count * f.dprsm_res;
@@ -124,13 +128,39 @@ pub fn build_frame<'a>(
         // CDF strategy's samples; the gathering rays stay per pixel.
         inputs.psm = Some(r.psm.add(g, f, &vpls, cdf.importance, cdf.cdf, s.psm_res, push)?);
     }
-    if s.method == Method::Ris {
-        r.ris.add(g, f, &inputs, &mut out, push, ris_frame(s, i, push))?;
-        return Ok(FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) });
+    if s.uses_ris() {
+        let frame = ris_frame(s, i, push);
+        // Temporal reuse follows each pixel's surface to where it was last frame.
+        let motion = (frame.push.history_cap > 0.0).then(|| r.reproject.add(g, f, &gbuffer)).transpose()?;
+        let rays = Some(r.ris.add(g, f, &inputs, &mut out, push, frame, motion)?);
+        let cdf = Some(cdf.cdf);
+        if let (Method::Realtime, true, Some(m)) = (s.method, s.denoise, motion) {
+            let denoised = r.denoise.add(g, f, &gbuffer, &m, out, combined)?;
+            return Ok(FrameOut { raw: Some(out), rays, cdf, ..FrameOut::default_for(denoised) });
+        }
+        return Ok(FrameOut { rays, cdf, ..FrameOut::default_for(out) });
     }
     let pass = if s.method == Method::Mis { &r.mis } else { &r.gather };
     pass.add(g, f, &inputs, &mut out, push)?;
-    Ok(FrameOut { radiance: out, second_moment: None, cdf: Some(cdf.cdf) })
+    Ok(FrameOut { cdf: Some(cdf.cdf), ..FrameOut::default_for(out) })
+}
+
+impl FrameOut {
+    /// Marks what the frame hands back as wanted (the graph culls passes nothing wants).
+    pub fn export(&self, g: &mut Graph) {
+        g.export(&self.radiance);
+        for h in self.raw.iter() {
+            g.export(h);
+        }
+        for h in self.rays.iter() {
+            g.export(h);
+        }
+    }
+
+    /// A frame whose only product is `radiance`.
+    fn default_for(radiance: Handle<Image>) -> FrameOut {
+        FrameOut { radiance, second_moment: None, cdf: None, raw: None, rays: None }
+    }
 }
 
 /// The radiance image's name (labels and validation messages).
@@ -206,13 +236,21 @@ fn gather_push(s: &FrameSettings, f: FrameInputs, p: ImportanceParams, chunk: Ra
 
 /// ris's stages' parameters. The history's key is everything the reservoirs depend on but the seed: the
 /// camera and size (G-buffer key), the CDF, and every sampling and reuse setting.
+///
+/// `Method::Realtime`'s history is kept across camera and light moves (its temporal stage reprojects,
+/// and a reservoir's VPL is a light-map texel, re-evaluated where it now is): its key is the size and the
+/// settings alone.
 fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFrame {
-    let ris = &s.ris;
+    let ris = &s.ris_settings();
     let push = ris_push(s);
     let sampling = GatherPush { seed: 0, ..gather };
+    let view = if s.method == Method::Realtime {
+        crate::graph::fingerprint(&(s.width, s.height))
+    } else {
+        crate::graph::fingerprint(&(i.keys.gbuffer, i.keys.cdf))
+    };
     let key = crate::graph::fingerprint(&(
-        i.keys.gbuffer,
-        i.keys.cdf,
+        view,
         bytemuck::bytes_of(&sampling),
         bytemuck::bytes_of(&push),
         ris.spatial_passes,
@@ -225,16 +263,16 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
 
 /// Whether ris's candidates take the uniform source's shortcut (`RisFrame::uniform_source`).
 pub(crate) fn ris_uniform_source(s: &FrameSettings) -> bool {
-    s.ris.source == RisSource::Uniform && s.face == FaceMode::RussianRoulette
+    s.ris_settings().source == RisSource::Uniform && s.face == FaceMode::RussianRoulette
 }
 
 /// ris's stages' settings (`pass` and `history` are set per stage).
 pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
-    let ris = &s.ris;
+    let ris = &s.ris_settings();
     RisPush {
         candidates: ris.candidates,
-        // Each of the --vpls candidate streams keeps `picks` VPLs, a layer of reservoirs each.
-        reservoirs: s.vpls * ris.picks,
+        // Each candidate stream (--vpls of them; realtime: one) keeps `picks` VPLs, a layer of reservoirs each.
+        reservoirs: s.ris_streams() * ris.picks,
         picks: ris.picks,
         neighbors: ris.spatial_neighbors,
         radius: ris.spatial_radius,
@@ -246,10 +284,15 @@ pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
         // The near window needs the pool: off otherwise.
         near_candidates: if ris.pool_tiles > 0 { ris.near_candidates.min(ris.candidates.saturating_sub(1)) } else { 0 },
         near_radius: ris.near_radius,
-        // The control variate's mean is 0 given a reservoir's own candidates: without reuse only. With one
-        // candidate it is 0 outright (U_g = g(y) W), so it is not computed.
-        control: (ris.control_variate && ris.candidates > 1 && ris.spatial_passes == 0 && ris.temporal_cap == 0.0)
-            as u32,
+        // The control variate's mean is 0 given the last resampling's inputs: a reservoir's own candidates
+        // without reuse (with one candidate it is 0 outright, U_g = g(y) W, so it is not computed), the last
+        // spatial pass's reservoirs with it. Temporal reuse alone has no U_g.
+        control: match (ris.control_variate, ris.spatial_passes, ris.temporal_cap > 0.0) {
+            (false, _, _) => RIS_CONTROL_OFF,
+            (true, 0, false) if ris.candidates > 1 => RIS_CONTROL_CANDIDATES,
+            (true, 0, _) => RIS_CONTROL_OFF,
+            (true, _, _) => RIS_CONTROL_REUSE,
+        },
         ..RisPush::default()
     }
 }

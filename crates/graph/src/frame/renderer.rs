@@ -53,6 +53,11 @@ pub struct FrameState {
     /// The point lights, in the scene's local coordinates (as `Scene::lights`).
     pub lights: Vec<Light>,
     pub retained: Retained,
+    /// The camera of the last frame rendered (reprojection's `FrameUniforms::prev_view_proj`).
+    pub previous_camera: Option<Camera>,
+    /// Frames rendered: `Method::Realtime` draws each frame's random numbers from it and the seed, so
+    /// the frames whose reservoirs it reuses are independent draws.
+    pub frames: u64,
 }
 
 /// Renders frames of one scene. Derefs to its [`RenderContext`] (the read-only part).
@@ -83,6 +88,10 @@ pub struct FrameOutput {
     /// The reference integrator's own Monte Carlo error: the RMS over pixels and channels of the standard
     /// error of the mean (indirect component only).
     pub stderr: Option<f64>,
+    /// The raw estimate where `radiance` is the denoised one (`Method::Realtime`), as `radiance`.
+    pub raw: Option<Vec<[f32; 4]>>,
+    /// Shadow rays the frame traced per pixel (ris and realtime: counted by the shade).
+    pub rays_per_pixel: Option<f64>,
 }
 
 impl FrameOutput {
@@ -104,7 +113,13 @@ impl Renderer {
             bvh_nodes: flat.nodes,
             blocked: None,
         };
-        let state = FrameState { camera: scene.camera, lights: scene.lights.clone(), retained: Retained::default() };
+        let state = FrameState {
+            camera: scene.camera,
+            lights: scene.lights.clone(),
+            retained: Retained::default(),
+            previous_camera: None,
+            frames: 0,
+        };
         Ok(Renderer { ctx, state })
     }
 
@@ -119,6 +134,11 @@ impl Renderer {
         self.state.lights[i] = crate::scene::point_light(position, intensity);
     }
 
+    /// The current camera.
+    pub fn camera(&self) -> Camera {
+        self.state.camera
+    }
+
     /// Moves the camera (the viewer's fly camera). The next frame re-records what depends on it.
     pub fn set_camera(&mut self, camera: Camera) {
         self.state.camera = camera;
@@ -128,6 +148,7 @@ impl Renderer {
     /// before each timed frame, so that every method pays for its full frame.
     pub fn clear_frame_cache(&mut self) {
         self.state.retained.clear();
+        self.state.previous_camera = None;
     }
 
     /// An untimed frame of `s` at about 8 × 8 pixels (maps about 32² a face), then
@@ -164,9 +185,13 @@ impl Renderer {
         self.ctx.uniforms(s, &self.state.camera)
     }
 
-    /// A uniform buffer for `s` with the current camera.
+    /// A uniform buffer for `s` with the current camera (and last frame's, for reprojection).
     pub fn uniform_buffer(&self, s: &FrameSettings) -> Result<Buffer> {
-        self.ctx.uniform_buffer(s, &self.state.camera)
+        let mut u = self.uniforms(s);
+        if let Some(previous) = &self.state.previous_camera {
+            u.prev_view_proj = self.ctx.uniforms(s, previous).view_proj;
+        }
+        self.ctx.uniform_buffer(&u)
     }
 
     /// Build, execute and read back one frame.
@@ -223,12 +248,23 @@ impl Renderer {
         self.check(s)?;
         let auto = self.auto_learn(s)?;
         let s = auto.as_ref().unwrap_or(s);
-        if s.method == Method::Ris {
+        if s.uses_ris() {
             let push = super::recipe::ris_push(s);
             let uniform_source = super::recipe::ris_uniform_source(s);
             self.ctx.passes.ris.prepare(&push, uniform_source, self.ctx.scene.light_count > 1)?;
         }
         Ok(())
+    }
+
+    /// `s` as this frame renders it (None: as it is): `--learn-visibility auto` decided for the current
+    /// view; a real-time frame's seed moved on by the frames rendered, so that each draws new random
+    /// numbers and its reuse combines independent frames.
+    fn effective(&mut self, s: &FrameSettings) -> Result<Option<FrameSettings>> {
+        if s.method == Method::Realtime {
+            let seed = s.seed.wrapping_add(self.state.frames.wrapping_mul(0x9E37_79B9));
+            return Ok(Some(FrameSettings { seed, ..s.clone() }));
+        }
+        self.auto_learn(s)
     }
 
     /// `s` with `--learn-visibility auto` decided for the current view (None: `s` as it is).
@@ -257,8 +293,8 @@ impl Renderer {
         present: Option<PresentTo>,
     ) -> Result<FrameOutput> {
         self.check(s)?;
-        let auto = self.auto_learn(s)?;
-        let s = auto.as_ref().unwrap_or(s);
+        let effective = self.effective(s)?;
+        let s = effective.as_ref().unwrap_or(s);
         self.ctx.scene.write_lights(&self.state.lights)?;
         self.ctx.max_intensity = max_intensity(&self.state.lights);
         let uniforms = self.uniform_buffer(s)?;
@@ -266,11 +302,11 @@ impl Renderer {
         let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
         let (total, per_chunk) = ctx.chunking(s, &i);
         let mut log = FrameLog::default();
-        let mut read = (vec![], None);
+        let mut read = Read::default();
         for_each_chunk(total, per_chunk, progress, |chunk, last| {
             let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
             let out = build_frame(&ctx.passes, &mut g, s, &i, chunk)?;
-            g.export(&out.radiance);
+            out.export(&mut g);
             let presented = match &present {
                 Some(p) if last => {
                     let mut ldr = g.import_image(p.ldr);
@@ -283,7 +319,7 @@ impl Renderer {
             let done = g.execute()?;
             log.add(&done);
             match (&present, presented) {
-                (Some(p), Some(sum)) if p.read_mean => read.0 = done.read_image(&sum)?,
+                (Some(p), Some(sum)) if p.read_mean => read.radiance = done.read_image(&sum)?,
                 (Some(_), _) => {}
                 (None, _) => {
                     if done.ran.contains(&"cdf_reduce") {
@@ -292,21 +328,21 @@ impl Renderer {
                         }
                     }
                     if last {
-                        let sq = out.second_moment.map(|h| done.read_image(&h)).transpose()?;
-                        read = (done.read_image(&out.radiance)?, sq);
+                        read = Read::of(&done, &out)?;
                     }
                 }
             }
             Ok(())
         })?;
         state.retained.next_frame();
-        let (radiance, second) = read;
-        let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&radiance);
+        state.previous_camera = Some(state.camera);
+        state.frames += 1;
+        let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
         if let Some(p) = &present {
             let k = p.params.frames.max(1) as f32;
             radiance.iter_mut().for_each(|px| *px = px.map(|c| c / k));
         }
-        let stderr = second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
+        let stderr = read.second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
         log.warnings.extend(rsm_warning(s));
         Ok(FrameOutput {
             width: s.width,
@@ -317,6 +353,32 @@ impl Renderer {
             skipped: log.skipped,
             warnings: log.warnings,
             stderr,
+            raw: read.raw.map(|b| bytemuck::pod_collect_to_vec(&b)),
+            rays_per_pixel: read.rays.map(|b| {
+                let count: u32 = bytemuck::pod_read_unaligned(&b[..4]);
+                count as f64 / (s.width as f64 * s.height as f64)
+            }),
+        })
+    }
+}
+
+/// A frame's products read back: the radiance (or the viewer's mean), the reference's second moment,
+/// the raw estimate beside a denoised one, the shadow-ray count.
+#[derive(Default)]
+struct Read {
+    radiance: Vec<u8>,
+    second: Option<Vec<u8>>,
+    raw: Option<Vec<u8>>,
+    rays: Option<Vec<u8>>,
+}
+
+impl Read {
+    fn of(done: &crate::graph::Executed, out: &super::recipe::FrameOut) -> Result<Read> {
+        Ok(Read {
+            radiance: done.read_image(&out.radiance)?,
+            second: out.second_moment.map(|h| done.read_image(&h)).transpose()?,
+            raw: out.raw.map(|h| done.read_image(&h)).transpose()?,
+            rays: out.rays.map(|h| done.read_buffer(&h)).transpose()?,
         })
     }
 }
@@ -429,7 +491,7 @@ impl RenderContext {
                 self.gpu.loop_iteration_limit,
                 importance.kind.method_sections(),
                 s.light_map.faces() * self.scene.light_count,
-                s.ris.pool_tiles > 0,
+                s.ris_settings().pool_tiles > 0,
             ),
             reference_per_dispatch: Reference::per_dispatch(&self.gpu, &self.bvh, self.scene.light_count),
         }
@@ -476,7 +538,9 @@ impl RenderContext {
         let c_ref = i_max * 4.0 * (2.0 / s.dprsm_res as f32).powi(2) / (std::f32::consts::PI.powi(2) * min_d * min_d);
         ImportanceParams {
             kind: match s.sampling_method() {
-                Method::Uniform | Method::All | Method::Reference | Method::Ris => ImportanceKind::Uniform,
+                Method::Uniform | Method::All | Method::Reference | Method::Ris | Method::Realtime => {
+                    ImportanceKind::Uniform
+                }
                 Method::Global => ImportanceKind::Global,
                 Method::Stratified => ImportanceKind::Stratified,
                 Method::Local => ImportanceKind::Local { side: (s.regions as f64).sqrt().round() as u32 },
@@ -515,9 +579,12 @@ impl RenderContext {
         let far_light = diag * 1.01;
         let (voxel_origin, voxel_dims) = self.voxel_spec(s).uniforms_fields();
         let vpl_slots = s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res;
+        let view_proj = camera.view_proj(s.width, s.height, far_cam, near).to_cols_array_2d();
         FrameUniforms {
             // near and far swapped: reverse Z (see passes/gbuffer.rs).
-            view_proj: camera.view_proj(s.width, s.height, far_cam, near).to_cols_array_2d(),
+            view_proj,
+            prev_view_proj: view_proj,
+            camera: [2.0 * camera.tan_half_fov() / s.height as f32, 0.0, 0.0, 0.0],
             eye: [eye.x, eye.y, eye.z, 0.0],
             scene_min: [lo.x, lo.y, lo.z, diag],
             scene_max: [hi.x, hi.y, hi.z, far_light],
@@ -557,8 +624,8 @@ impl RenderContext {
         }
     }
 
-    /// A host-visible uniform buffer holding [`RenderContext::uniforms`] (written once, before recording).
-    pub fn uniform_buffer(&self, s: &FrameSettings, camera: &Camera) -> Result<Buffer> {
+    /// A host-visible uniform buffer holding `u` (written once, before recording).
+    pub fn uniform_buffer(&self, u: &FrameUniforms) -> Result<Buffer> {
         let mut uniforms = Buffer::new(
             &self.gpu,
             &BufferDesc {
@@ -568,10 +635,7 @@ impl RenderContext {
                 location: MemoryLocation::CpuToGpu,
             },
         )?;
-        uniforms
-            .mapped_mut()
-            .context("uniform buffer is not host-visible")?
-            .copy_from_slice(bytemuck::bytes_of(&self.uniforms(s, camera)));
+        uniforms.mapped_mut().context("uniform buffer is not host-visible")?.copy_from_slice(bytemuck::bytes_of(u));
         Ok(uniforms)
     }
 
@@ -617,9 +681,9 @@ impl RenderContext {
             reject!("the CDF would take {cdf_texels} texels, over the device limit maxTexelBufferElements ({max_texels}); lower --dprsm-res or --regions");
         }
         voxelize::check_grid(&self.gpu, &self.voxel_spec(s)).map_err(|e| SettingsError(e.to_string()))?;
-        if let (Method::Ris, Some(limit)) = (s.method, self.gpu.loop_iteration_limit) {
+        if let (true, Some(limit)) = (s.uses_ris(), self.gpu.loop_iteration_limit) {
             // A spatial pass evaluates (k + 1)² targets per reservoir.
-            let evals = (s.ris.spatial_neighbors + 1).pow(2);
+            let evals = (s.ris_settings().spatial_neighbors + 1).pow(2);
             if evals * 64 + 256 > limit {
                 reject!("ris: {evals} target evaluations of a spatial pass overrun this device's loop limit ({limit}); lower --spatial-neighbors");
             }

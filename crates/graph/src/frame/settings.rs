@@ -60,6 +60,10 @@ pub enum Method {
     /// VPLs from a source CDF by their unshadowed contribution there, with spatial and temporal reuse
     /// (`passes/ris.rs`).
     Ris,
+    /// The real-time frame: ris with one reservoir per pixel ([`RisSettings::realtime`]), reused across
+    /// frames through reprojection (`passes/reproject.rs`) and across pixels, one shadow ray per pixel,
+    /// and the denoiser for display (`passes/denoise.rs`, `FrameSettings::denoise`).
+    Realtime,
 }
 
 /// The source distribution of `Method::Ris`'s candidates: one of the CDF methods' mixtures.
@@ -138,6 +142,27 @@ pub struct RisSettings {
     /// one. Where a frame's error is the kept samples' own (their visibility, the choice among the
     /// candidates) rather than the candidates', K picks cut it nearly as K reservoirs would.
     pub picks: u32,
+}
+
+impl RisSettings {
+    /// `Method::Realtime`'s ris: one reservoir of 32 candidates (8 from the near window) from the pool,
+    /// last frame's reservoir combined in through reprojection with its confidence capped at 20 M (RTXDI
+    /// caps at 20 frames), one spatial pass of 4 neighbours within 16 pixels, the control variate over the
+    /// spatial pass's inputs; no learned visibility (it needs a reservoir's own candidates, which reuse
+    /// replaces). Measured in BENCHMARKS.md, "Real time under motion".
+    pub fn realtime() -> Self {
+        RisSettings {
+            temporal_cap: 20.0,
+            spatial_passes: 1,
+            spatial_neighbors: 4,
+            spatial_radius: 16.0,
+            learn_visibility: 0.0,
+            learn_auto: false,
+            control_variate: true,
+            picks: 1,
+            ..RisSettings::default()
+        }
+    }
 }
 
 impl Default for RisSettings {
@@ -286,7 +311,7 @@ pub enum MisWeights {
 
 impl Method {
     /// Every method, in declaration order.
-    pub const ALL: [Method; 9] = [
+    pub const ALL: [Method; 10] = [
         Method::Uniform,
         Method::All,
         Method::Global,
@@ -296,6 +321,7 @@ impl Method {
         Method::Mis,
         Method::Reference,
         Method::Ris,
+        Method::Realtime,
     ];
 
     pub fn name(self) -> &'static str {
@@ -309,6 +335,7 @@ impl Method {
             Method::Mis => "mis",
             Method::Reference => "reference",
             Method::Ris => "ris",
+            Method::Realtime => "realtime",
         }
     }
 }
@@ -387,6 +414,9 @@ pub struct FrameSettings {
     pub shadow_slope_bias: f32,
     /// `Method::Ris`'s source, candidates and reuse.
     pub ris: RisSettings,
+    /// `Method::Realtime` shows its estimate through the denoiser (`passes/denoise.rs`); the raw
+    /// estimate is read beside it either way.
+    pub denoise: bool,
 }
 
 /// The one table of defaults: what a frame is when nothing says otherwise, the same for the library, the
@@ -427,6 +457,7 @@ impl Default for FrameSettings {
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
             ris: RisSettings::default(),
+            denoise: true,
         }
     }
 }
@@ -442,13 +473,37 @@ impl FrameSettings {
             && self.method != Method::Reference
     }
 
-    /// The method whose CDF and source mixture the frame samples: `Method::Ris`'s source, else the
-    /// method itself.
+    /// The method whose CDF and source mixture the frame samples: ris's source, else the method itself.
     pub fn sampling_method(&self) -> Method {
-        if self.method == Method::Ris {
-            self.ris.source.method()
+        if self.uses_ris() {
+            self.ris_settings().source.method()
         } else {
             self.method
+        }
+    }
+
+    /// Whether the frame runs ris's stages: `Method::Ris` and `Method::Realtime`.
+    pub fn uses_ris(&self) -> bool {
+        matches!(self.method, Method::Ris | Method::Realtime)
+    }
+
+    /// The ris settings the frame runs: `ris` for `Method::Ris`, [`RisSettings::realtime`] for
+    /// `Method::Realtime`.
+    pub fn ris_settings(&self) -> RisSettings {
+        if self.method == Method::Realtime {
+            RisSettings::realtime()
+        } else {
+            self.ris
+        }
+    }
+
+    /// Reservoirs (candidate streams) per pixel of a ris frame: `vpls` for `Method::Ris`, one for
+    /// `Method::Realtime` (one shadow ray per pixel).
+    pub fn ris_streams(&self) -> u32 {
+        if self.method == Method::Realtime {
+            1
+        } else {
+            self.vpls
         }
     }
 
@@ -469,12 +524,12 @@ impl FrameSettings {
 
     /// `Method::Ris`'s settings against each other and the device's limits (other methods ignore them).
     fn validate_ris(&self, gpu: &Gpu) -> Result<(), SettingsError> {
-        if self.method != Method::Ris {
+        if !self.uses_ris() {
             return Ok(());
         }
-        let r = &self.ris;
+        let r = &self.ris_settings();
         if self.visibility.shared_set() {
-            reject!("--method ris tests visibility per pixel and sample: --visibility psm shares one VPL set across pixels (use voxel or exact)");
+            reject!("--method ris and realtime test visibility per pixel and sample: --visibility psm shares one VPL set across pixels (use voxel or exact)");
         }
         if !(1..=1024).contains(&r.candidates) {
             reject!("--candidates must be between 1 and 1024 (got {})", r.candidates);
@@ -511,7 +566,7 @@ impl FrameSettings {
         if !(r.temporal_cap.is_finite() && r.temporal_cap >= 0.0) {
             reject!("--temporal-cap must be finite and non-negative (got {})", r.temporal_cap);
         }
-        let layers = self.vpls as u64 * r.picks as u64;
+        let layers = self.ris_streams() as u64 * r.picks as u64;
         let bytes = crate::passes::ris::Ris::layer_bytes(self.width, self.height) * layers;
         let range = gpu.limits().max_storage_buffer_range as u64;
         if bytes > range {
@@ -541,7 +596,7 @@ impl FrameSettings {
         }
         if let LightMap::Rsm { fov_deg } = self.light_map {
             if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0) {
-                reject!("--rsm-fov must be in (0, 180) degrees (got {fov_deg})");
+                reject!("--light-map rsm:FOV must be in (0, 180) degrees (got {fov_deg})");
             }
         }
         if self.visibility.shared_set() {

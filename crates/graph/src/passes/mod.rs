@@ -2,6 +2,7 @@
 //! pass struct owns its pipeline; its `add` declares reads and writes on the graph and records.
 
 pub mod cdf_reduce;
+pub mod denoise;
 pub mod direct;
 pub mod dprsm;
 pub mod end_balls;
@@ -12,6 +13,7 @@ pub mod mis;
 pub mod present;
 pub mod psm;
 pub mod reference;
+pub mod reproject;
 pub mod ris;
 pub mod voxelize;
 
@@ -34,6 +36,10 @@ pub struct Passes {
     pub psm: psm::Psm,
     pub reference: reference::Reference,
     pub ris: ris::Ris,
+    /// Motion from the G-buffer and the surface kept for the next frame (temporal reuse).
+    pub reproject: reproject::Reproject,
+    /// The real-time frame's display filter.
+    pub denoise: denoise::Denoise,
     /// The viewer's running mean and tone mapping.
     pub present: present::Present,
 }
@@ -55,6 +61,8 @@ impl Passes {
             psm: psm::Psm::new(gpu).context("creating the psm pass")?,
             reference: reference::Reference::new(gpu, textured).context("creating the reference pass")?,
             ris: ris::Ris::new(gpu).context("creating the ris pass")?,
+            reproject: reproject::Reproject::new(gpu).context("creating the reproject pass")?,
+            denoise: denoise::Denoise::new(gpu).context("creating the denoise pass")?,
             present: present::Present::new(gpu).context("creating the present pass")?,
         })
     }

@@ -105,6 +105,7 @@
 //! transient one.
 
 use super::gather::{GatherInputs, VisibilityVariants};
+use super::reproject::Motion;
 use super::FrameInputs;
 use crate::bindings::*;
 use crate::frame::Visibility;
@@ -134,6 +135,17 @@ pub struct Ris {
     /// The shade in the gather's per-pixel visibility variants (voxel, exact).
     shade: VisibilityVariants,
     sampler: Sampler,
+}
+
+/// The shade's inputs and outputs: the final reservoirs and their U_g; the counts it adds to (learned
+/// visibility, control variate, rays); the radiance it writes.
+struct ShadeIo<'h> {
+    reservoirs: Handle<Buffer>,
+    unshadowed: Handle<Buffer>,
+    vis: &'h mut Handle<Buffer>,
+    cv: &'h mut Handle<Buffer>,
+    rays: &'h mut Handle<Buffer>,
+    out: &'h mut Handle<Image>,
 }
 
 /// What a ris frame does besides the gather's sampling fields.
@@ -288,14 +300,24 @@ impl Ris {
             b
         };
         let initial = with(&[Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_UNSHADOWED)]);
-        let temporal = with(&[Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_HISTORY)]);
+        let temporal = with(&[
+            Binding::storage_buffer(B_RIS_OUT),
+            Binding::storage_buffer(B_RIS_HISTORY),
+            Binding::sampled_image(B_MOTION),
+            Binding::sampled_image(B_PREV_POSITION),
+            Binding::sampled_image(B_PREV_SURFACE),
+        ]);
         let mut pooled = initial.clone();
         pooled.push(Binding::uniform_texel_buffer(B_RIS_POOL));
         let mut learned = pooled.clone();
         learned.push(Binding::uniform_texel_buffer(B_RIS_VIS));
-        let spatial = with(&[Binding::storage_buffer(B_RIS_IN), Binding::storage_buffer(B_RIS_OUT)]);
+        let spatial = with(&[
+            Binding::storage_buffer(B_RIS_IN),
+            Binding::storage_buffer(B_RIS_OUT),
+            Binding::storage_buffer(B_RIS_UNSHADOWED),
+        ]);
         let mut shade = base();
-        shade.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV].map(Binding::storage_buffer));
+        shade.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV, B_RIS_RAYS].map(Binding::storage_buffer));
         shade.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
         Ok(Ris {
             presample: Lazy::new(
@@ -323,8 +345,9 @@ impl Ris {
     }
 
     /// Record a ris frame into `out` (overwritten; the direct image added when `push.add_direct`):
-    /// initial (+ temporal), `spatial_passes` spatial passes, shade. `push` holds the gather's sampling
-    /// fields (`samples` = R).
+    /// initial (+ temporal, with `motion`), `spatial_passes` spatial passes, shade. `push` holds the
+    /// gather's sampling fields (`samples` = R). Returns the shade's shadow-ray count (one uint).
+    #[allow(clippy::too_many_arguments)]
     pub fn add<'a>(
         &'a self,
         g: &mut Graph<'a>,
@@ -333,11 +356,16 @@ impl Ris {
         out: &mut Handle<Image>,
         push: GatherPush,
         r: RisFrame,
-    ) -> Result<()> {
+        motion: Option<Motion>,
+    ) -> Result<Handle<Buffer>> {
         let reservoirs = r.push.reservoirs;
         let desc = |name: &str| BufferDesc::storage(name, Self::layer_bytes(f.width, f.height) * reservoirs as u64);
         let history = g.history_buffer("ris.reservoirs", desc("ris.reservoirs"), &r.key);
-        let previous = history.previous.filter(|_| r.push.history_cap > 0.0);
+        // Last frame's reservoirs, with where each pixel was (and last frame's surface), when both were kept.
+        let previous = match (history.previous, motion) {
+            (Some(p), Some(m)) if r.push.history_cap > 0.0 && m.history => Some((p, m)),
+            _ => None,
+        };
         // Stage s (0: initial, 1..=P: spatial) writes the history's current buffer when P − s is even, so
         // the last stage's reservoirs are the ones kept for the next frame.
         let mut current = history.current;
@@ -386,8 +414,8 @@ impl Ris {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
             self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
-            if let Some(previous) = previous {
-                self.add_temporal(g, f, i, previous, dst, push, r.push)?;
+            if let Some((previous, motion)) = previous {
+                self.add_temporal(g, f, i, previous, motion, dst, push, r.push)?;
             }
         }
         for pass in 0..r.spatial_passes {
@@ -397,10 +425,15 @@ impl Ris {
                 (false, Some(t)) => (current, t),
                 (_, None) => unreachable!("spatial passes have a scratch buffer"),
             };
-            self.add_spatial(g, f, i, src, dst, push, RisPush { pass, ..r.push })?;
+            // Only the last pass's inputs are the final choice's: it alone writes U_g (RIS_CONTROL_REUSE).
+            let control = if s == r.spatial_passes { r.push.control } else { RIS_CONTROL_OFF };
+            self.add_spatial(g, f, i, src, dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
         }
-        self.add_shade(g, f, i, current, unshadowed, &mut vis, &mut cv, out, push, r.push)?;
-        Ok(())
+        let mut rays = g.create_buffer(BufferDesc::storage("ris.rays", 4));
+        g.add_clear("ris_rays_clear", &mut [&mut rays]);
+        let shade = ShadeIo { reservoirs: current, unshadowed, vis: &mut vis, cv: &mut cv, rays: &mut rays, out };
+        self.add_shade(g, f, i, shade, push, r.push)?;
+        Ok(rays)
     }
 
     /// The descriptor writes every stage shares: scene, G-buffer, VPLs, voxels, importance, CDF.
@@ -548,18 +581,26 @@ impl Ris {
         f: FrameInputs<'a>,
         i: &GatherInputs,
         previous: Handle<Buffer>,
+        m: Motion,
         dst: &mut Handle<Buffer>,
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
         let (i, o) = (*i, *dst);
         let pipeline = self.temporal.pipeline()?;
-        let b = Self::reads(g.add_pass("ris_temporal"), &i).read(&previous, Access::ComputeRead);
+        let mut b = Self::reads(g.add_pass("ris_temporal"), &i).read(&previous, Access::ComputeRead);
+        for h in [m.motion, m.prev_position, m.prev_surface] {
+            b = b.read(&h, Access::ComputeRead);
+        }
         b.write(dst, Access::ComputeWrite).record(move |ctx| {
+            let s = self.sampler.raw;
             let writes = self
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
-                .storage_buffer(B_RIS_HISTORY, ctx.buffer(&previous));
+                .storage_buffer(B_RIS_HISTORY, ctx.buffer(&previous))
+                .sampled_image(B_MOTION, ctx.image(&m.motion), s)
+                .sampled_image(B_PREV_POSITION, ctx.image(&m.prev_position), s)
+                .sampled_image(B_PREV_SURFACE, ctx.image(&m.prev_surface), s);
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
             pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
@@ -575,17 +616,21 @@ impl Ris {
         i: &GatherInputs,
         src: Handle<Buffer>,
         dst: &mut Handle<Buffer>,
+        unshadowed: &mut Handle<Buffer>,
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
-        let (i, o) = (*i, *dst);
+        let (i, o, u) = (*i, *dst, *unshadowed);
         let pipeline = self.spatial.pipeline()?;
         let b = Self::reads(g.add_pass("ris_spatial"), &i).read(&src, Access::ComputeRead);
+        // U_g is written by the last pass only (declared by each: the stand-in or the buffer).
+        let b = b.write(unshadowed, Access::ComputeWrite);
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
             let writes = self
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_IN, ctx.buffer(&src))
-                .storage_buffer(B_RIS_OUT, ctx.buffer(&o));
+                .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
+                .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u));
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
             pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
@@ -593,35 +638,34 @@ impl Ris {
         Ok(())
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn add_shade<'a>(
         &'a self,
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        reservoirs: Handle<Buffer>,
-        unshadowed: Handle<Buffer>,
-        vis: &mut Handle<Buffer>,
-        cv: &mut Handle<Buffer>,
-        out: &mut Handle<Image>,
+        io: ShadeIo,
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
-        let (i, o, hv, hc) = (*i, *out, *vis, *cv);
+        let (reservoirs, unshadowed) = (io.reservoirs, io.unshadowed);
+        let (i, o, hv, hc, hr) = (*i, *io.out, *io.vis, *io.cv, *io.rays);
         let pipeline = self.shade.pipeline(&f)?;
         let mut b = Self::reads(g.add_pass("ris_shade"), &i)
             .read(&reservoirs, Access::ComputeRead)
             .read(&unshadowed, Access::ComputeRead);
         // The learned visibility's and the control's counts are added to (or, off, the stand-ins are never
-        // touched).
-        b = b.write(vis, Access::ComputeWrite).write(cv, Access::ComputeWrite);
+        // touched), and so is the ray count.
+        b = b
+            .write(io.vis, Access::ComputeWrite)
+            .write(io.cv, Access::ComputeWrite)
+            .write(io.rays, Access::ComputeWrite);
         if let Some(d) = &i.direct {
             b = b.read(d, Access::ComputeRead);
         }
         for h in i.end_ball_images() {
             b = b.read(&h, Access::ComputeRead);
         }
-        b.overwrite(out, Access::ComputeWrite).record(move |ctx| {
+        b.overwrite(io.out, Access::ComputeWrite).record(move |ctx| {
             let direct = match (&i.direct, push.add_direct) {
                 (Some(d), 1) => ctx.image(d),
                 _ => ctx.image(&i.g_albedo),
@@ -632,6 +676,7 @@ impl Ris {
                 .storage_buffer(B_RIS_VIS, ctx.buffer(&hv))
                 .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&unshadowed))
                 .storage_buffer(B_RIS_CV, ctx.buffer(&hc))
+                .storage_buffer(B_RIS_RAYS, ctx.buffer(&hr))
                 .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
             // The gather's visibility variants, chosen and bound as the gather's (with the end balls where
@@ -649,6 +694,7 @@ impl Ris {
                     ctx.serialize(&o);
                     ctx.serialize(&hv);
                     ctx.serialize(&hc);
+                    ctx.serialize(&hr);
                 }
                 let block = RisPushBlock { gather: whole.chunk(first, last), ris };
                 pipeline.dispatch(

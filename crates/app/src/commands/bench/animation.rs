@@ -76,9 +76,14 @@ struct FrameSample {
     temporal: Temporal,
     frame: u32,
     gpu_ms: f64,
+    /// Shadow rays per pixel the frame traced (NaN where the method does not count them).
+    rays: f64,
+    /// Of the raw estimate.
     rel_mse: f64,
     /// None for the first frame (no previous frame).
     flicker: Option<f64>,
+    /// Of the denoised output, where the method has one (`realtime`).
+    denoised: Option<(f64, Option<f64>)>,
 }
 
 /// The animated sweep: settings checked, references rendered or read, every method × mode rendered.
@@ -114,20 +119,36 @@ pub(super) fn run(
         r.warm_up(&FrameSettings { method, vpls, ..base.clone() })?;
         for &temporal in &a.temporal {
             r.clear_frame_cache();
-            let mut previous: Option<RgbImage> = None;
+            // The raw estimate's frames and (realtime) the denoised output's.
+            let mut previous: Option<(RgbImage, Option<RgbImage>)> = None;
             for k in 0..a.frames {
                 motion.apply(r, k);
                 let seed = temporal.seed(1, k, 0);
                 let s = FrameSettings { method, vpls, seed, cdf_seed: Some(seed), ..base.clone() };
                 let f = r.render(&s)?;
-                let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
-                let t = &truth[k as usize].pixels;
-                let flick =
-                    previous.as_ref().map(|p| flicker(&img.pixels, &p.pixels, t, &truth[k as usize - 1].pixels));
-                let rel_mse = Metrics::of(&img.pixels, t).rel_mse;
-                let gpu_ms = f.gpu_ms().unwrap_or(f64::NAN);
-                samples.push(FrameSample { method, temporal, frame: k, gpu_ms, rel_mse, flicker: flick });
-                previous = Some(img);
+                let shown = RgbImage::from_rgba(f.width, f.height, &f.radiance);
+                let (img, denoised) = match &f.raw {
+                    Some(raw) => (RgbImage::from_rgba(f.width, f.height, raw), Some(shown)),
+                    None => (shown, None),
+                };
+                let (t, t_prev) = (&truth[k as usize].pixels, k.checked_sub(1).map(|j| &truth[j as usize].pixels));
+                let score = |now: &RgbImage, before: Option<&RgbImage>| {
+                    let flick = before.zip(t_prev).map(|(p, tp)| flicker(&now.pixels, &p.pixels, t, tp));
+                    (Metrics::of(&now.pixels, t).rel_mse, flick)
+                };
+                let (rel_mse, flick) = score(&img, previous.as_ref().map(|p| &p.0));
+                let denoised_score = denoised.as_ref().map(|d| score(d, previous.as_ref().and_then(|p| p.1.as_ref())));
+                samples.push(FrameSample {
+                    method,
+                    temporal,
+                    frame: k,
+                    gpu_ms: f.gpu_ms().unwrap_or(f64::NAN),
+                    rays: f.rays_per_pixel.unwrap_or(f64::NAN),
+                    rel_mse,
+                    flicker: flick,
+                    denoised: denoised_score,
+                });
+                previous = Some((img, denoised));
                 bar.inc(1);
             }
         }
@@ -182,7 +203,8 @@ fn references(
 /// One row per method, mode and frame, then per method and mode a row with frame `mean`: the means
 /// bench.md reports (GPU ms and flicker over frames 1.., relMSE over all frames).
 fn csv(samples: &[FrameSample]) -> String {
-    let mut csv = String::from("method,temporal,frame,gpu_ms,rel_mse,flicker\n");
+    let mut csv =
+        String::from("method,temporal,frame,gpu_ms,rays_per_pixel,rel_mse,flicker,denoised_rel_mse,denoised_flicker\n");
     let mut modes: Vec<(&str, &str)> = vec![];
     for s in samples {
         let mode = (s.method.name(), s.temporal.name());
@@ -190,25 +212,34 @@ fn csv(samples: &[FrameSample]) -> String {
             modes.push(mode);
         }
     }
+    let e = |v: Option<f64>| v.map(|f| format!("{f:.6e}")).unwrap_or_default();
     for s in samples {
+        let (dr, df) = s.denoised.map_or((None, None), |(r, f)| (Some(r), f));
         csv.push_str(&format!(
-            "{},{},{},{:.4},{:.6e},{}\n",
+            "{},{},{},{:.4},{:.4},{:.6e},{},{},{}\n",
             s.method.name(),
             s.temporal.name(),
             s.frame,
             s.gpu_ms,
+            s.rays,
             s.rel_mse,
-            s.flicker.map(|f| format!("{f:.6e}")).unwrap_or_default()
+            e(s.flicker),
+            e(dr),
+            e(df),
         ));
     }
     for (m, t) in modes {
         let of = || samples.iter().filter(move |s| s.method.name() == m && s.temporal.name() == t);
         let later = || of().filter(|s| s.frame > 0);
+        let finite = |x: f64| x.is_finite().then_some(x);
         csv.push_str(&format!(
-            "{m},{t},mean,{:.4},{:.6e},{:.6e}\n",
+            "{m},{t},mean,{:.4},{:.4},{:.6e},{:.6e},{},{}\n",
             mean(later().map(|s| s.gpu_ms)),
+            mean(of().map(|s| s.rays)),
             mean(of().map(|s| s.rel_mse)),
-            mean(later().filter_map(|s| s.flicker))
+            mean(later().filter_map(|s| s.flicker)),
+            e(finite(mean(of().filter_map(|s| s.denoised.map(|d| d.0))))),
+            e(finite(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))))),
         ));
     }
     csv
@@ -235,9 +266,11 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
          {} VPLs per pixel per frame, {} frames of `{arg}`. Ground truth: `--method reference` at {} spp per frame. \
          relMSE: mean over frames; flicker: mean over frames 1..{} of the relMSE of the frame-to-frame difference \
          against the ground truth's; GPU ms: mean over frames 1..{} (the light side and the gather; voxels and \
-         G-buffer kept). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
-         | method | temporal | GPU ms / frame | relMSE | flicker | median relMSE | median flicker |\n\
-         |---|---|---:|---:|---:|---:|---:|\n",
+         G-buffer kept); rays: shadow rays per pixel per frame, counted (– where a method does not count them). \
+         relMSE and flicker are of the raw estimate; `denoised`: of the displayed output where a method has a \
+         denoiser (realtime). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
+         | method | temporal | GPU ms / frame | rays / px | relMSE | flicker | denoised relMSE | denoised flicker | median relMSE | median flicker |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         b.width,
         b.height,
         b.dprsm_res,
@@ -251,13 +284,17 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
     for &m in &a.methods {
         for &t in &a.temporal {
             let later = || of(samples, m, t).filter(|s| s.frame > 0);
+            let num = |x: f64, digits: usize| if x.is_finite() { format!("{x:.digits$}") } else { "–".into() };
             md.push_str(&format!(
-                "| {} | {} | {:.2} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+                "| {} | {} | {:.2} | {} | {:.4} | {:.4} | {} | {} | {:.4} | {:.4} |\n",
                 m.name(),
                 t.name(),
                 mean(later().map(|s| s.gpu_ms)),
+                num(mean(of(samples, m, t).map(|s| s.rays)), 2),
                 mean(of(samples, m, t).map(|s| s.rel_mse)),
                 mean(later().filter_map(|s| s.flicker)),
+                num(mean(of(samples, m, t).filter_map(|s| s.denoised.map(|d| d.0))), 4),
+                num(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))), 4),
                 super::median(of(samples, m, t).map(|s| s.rel_mse).collect()),
                 super::median(later().filter_map(|s| s.flicker).collect()),
             ));

@@ -1,0 +1,63 @@
+//! The command line's parsing (`crate::cli`), unit-tested.
+
+use super::*;
+use clap::CommandFactory;
+
+fn parse(args: &[&str]) -> Command {
+    Cli::try_parse_from(["bounce"].iter().chain(args)).expect("valid arguments").command
+}
+
+#[test]
+fn the_schema_is_consistent() {
+    Cli::command().debug_assert();
+}
+
+#[test]
+fn every_choice_parses_to_its_graph_value() {
+    for (name, value, _) in METHODS.0 {
+        let Command::Render(a) = parse(&["render", "s.toml", "--method", name]) else { panic!() };
+        assert_eq!(a.picture.method, Some(*value));
+    }
+    for (name, value, _) in VISIBILITIES.0 {
+        let Command::Render(a) = parse(&["render", "s.toml", "--visibility", name]) else { panic!() };
+        assert_eq!(a.frame.visibility, *value);
+    }
+    let Command::Render(a) = parse(&["render", "s.toml", "--light-map", "rsm:60"]) else { panic!() };
+    assert_eq!(a.frame.settings(8, 8).light_map, LightMap::Rsm { fov_deg: 60.0 });
+    let Command::Bench(a) = parse(&["bench", "s.toml", "--out", "o", "--methods", "gbg,mis"]) else { panic!() };
+    assert_eq!(a.methods, [Method::Gbg, Method::Mis]);
+    assert!(Cli::try_parse_from(["bounce", "render", "s.toml", "--face", "sideways"]).is_err());
+}
+
+#[test]
+fn each_command_keeps_its_own_defaults() {
+    let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
+    assert_eq!((r.picture.vpls, r.frame.dprsm_res, r.frame.shadow_res), (None, 512, 2048));
+    let Command::View(v) = parse(&["view", "s.toml"]) else { panic!() };
+    assert_eq!((v.picture.vpls, v.frame.dprsm_res, v.frame.shadow_res), (Some(16), 256, 1024));
+    let Command::Bench(b) = parse(&["bench", "s.toml", "--out", "o"]) else { panic!() };
+    assert_eq!((b.width, b.height, b.frame.dprsm_res, b.frame.shadow_res), (128, 128, 128, 2048));
+}
+
+/// Both schedules give the frames of an unchanged scene fresh seeds (so a static view's progressive
+/// mean converges: `view_30_frames_under_xvfb_shows_the_scene` checks it against `all` with the
+/// default, `coherent`); after each change `coherent` starts again from the base seed, `fresh` never.
+#[test]
+fn temporal_schedules() {
+    for t in [Temporal::Coherent, Temporal::Fresh] {
+        let seeds: Vec<u64> = (0..5).map(|k| t.seed(7, k, k)).collect();
+        assert_eq!(seeds, [7, 8, 9, 10, 11], "{t:?}: an unchanged scene's frames");
+    }
+    let moving = |t: Temporal| (0..4).map(|k| t.seed(7, k, 0)).collect::<Vec<_>>();
+    assert_eq!(moving(Temporal::Coherent), [7, 7, 7, 7]);
+    assert_eq!(moving(Temporal::Fresh), [7, 8, 9, 10]);
+}
+
+/// The flags' defaults are the graph's defaults, so a command that sets nothing renders what
+/// `FrameSettings::default()` describes (size and the per-command defaults aside).
+#[test]
+fn frame_flag_defaults_are_the_graph_defaults() {
+    let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
+    let (ours, graph) = (r.frame.settings(256, 256), FrameSettings::default());
+    assert_eq!(format!("{ours:?}"), format!("{graph:?}"));
+}

@@ -1,0 +1,180 @@
+//! denoise: the real-time frame's display filter, spatiotemporal variance-guided filtering (SVGF,
+//! Schied et al. 2017) on the indirect light. Three stages, one shader each over `glsl/shared/denoise.glsl`:
+//!
+//! - `denoise_temporal`: the raw estimate's indirect light, demodulated by the albedo, ĩ = (L − L_direct)
+//!   / ρ, is blended into last frame's accumulation at the pixel's previous pixel (`passes/reproject.rs`;
+//!   restarted where the surface was disoccluded): Ī ← (1 − a) Ī_prev + a ĩ with a = max(α, 1 / n), n the
+//!   history's length, and so are the luminance moments (l, l²). The accumulation (rgb, n) and moments
+//!   are kept for the next frame (`denoise.color`, `denoise.moments`, histories keyed by the size).
+//! - `denoise_variance`: σ² = E[l²] − E[l]² per pixel; where n < 4, illumination and moments come from
+//!   the 7 × 7 neighbourhood weighted by the geometric edge stops, σ² raised by 4 / n.
+//! - `denoise_atrous` × `DENOISE_ITERATIONS` (tap spacing 1, 2, 4, 8, 16): the 5 × 5 B3-spline kernel
+//!   h(k) with edge stops w = h · max(0, n_p · n_q)^σ_n · exp(−|n_p · (x_q − x_p)| / (σ_z θ_px |x_p − eye|
+//!   · |Δ|)) · exp(−|l_p − l_q| / (σ_l √(G₃ₓ₃ ∗ σ²)_p)); the variance is filtered with w². The plane
+//!   distance in pixel footprints makes the depth stop scale-free. The last iteration writes ρ · Ī + L_direct.
+//!
+//! Inputs: the raw radiance (direct light included when `add_direct`), the direct light, the G-buffer,
+//! the frame's `Motion`. Output: the denoised radiance, RGBA32F. The raw estimate is untouched (what the
+//! error of the estimator is measured on); the filter is biased by design (it trades variance for blur and
+//! lag), so its output's error against the ground truth is reported beside the raw one (`bounce bench
+//! --animate`). The history fed back is the unfiltered accumulation (SVGF feeds back its first à-trous
+//! iteration's output, which blurs further with each frame).
+
+use super::reproject::Motion;
+use super::FrameInputs;
+use crate::bindings::*;
+use crate::graph::{Graph, Handle, PassBuilder};
+use crate::passes::gbuffer::GBufferOut;
+use crate::pipelines::Lazy;
+use crate::shader_types::DenoisePush;
+use crate::shaders;
+use anyhow::Result;
+use bounce_device::sync::Access;
+use bounce_device::{vk, Binding, Gpu, Image, ImageDesc, Sampler};
+
+/// The filter's constants (SVGF's published values: α = 0.2, σ_l = 4, σ_n = 128; σ_z = 1 footprint per
+/// pixel of offset).
+pub const DEFAULTS: DenoisePush =
+    DenoisePush { history: 0, step: 1, last: 0, add_direct: 0, alpha: 0.2, sigma_l: 4.0, sigma_n: 128.0, sigma_z: 1.0 };
+
+pub struct Denoise {
+    temporal: Lazy<1>,
+    variance: Lazy<1>,
+    atrous: Lazy<1>,
+    sampler: Sampler,
+}
+
+/// A stage's pass: it reads the G-buffer and `reads`.
+fn stage<'g, 'a>(
+    g: &'g mut Graph<'a>,
+    name: &'static str,
+    gb: &GBufferOut,
+    reads: &[Handle<Image>],
+) -> PassBuilder<'g, 'a> {
+    let mut b = g.add_pass(name);
+    for r in [gb.position, gb.normal, gb.albedo].iter().chain(reads) {
+        b = b.read(r, Access::ComputeRead);
+    }
+    b
+}
+
+fn image(name: &str, w: u32, h: u32) -> ImageDesc {
+    ImageDesc::new(
+        name,
+        w,
+        h,
+        vk::Format::R32G32B32A32_SFLOAT,
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
+    )
+}
+
+impl Denoise {
+    pub fn new(gpu: &Gpu) -> Result<Self> {
+        let with = |extra: &[Binding]| {
+            let mut b = crate::gpu_scene::scene_bindings();
+            b.extend(super::gbuffer_bindings());
+            b.extend_from_slice(extra);
+            b
+        };
+        let push = std::mem::size_of::<DenoisePush>() as u32;
+        let sampled = Binding::sampled_image;
+        let temporal = with(&[
+            sampled(B_DENOISE_IN),
+            sampled(B_GATHER_DIRECT),
+            sampled(B_MOTION),
+            sampled(B_DENOISE_PREV_COLOR),
+            sampled(B_DENOISE_PREV_MOMENTS),
+            Binding::storage_image(B_DENOISE_COLOR_OUT),
+            Binding::storage_image(B_DENOISE_MOMENTS_OUT),
+        ]);
+        let variance =
+            with(&[sampled(B_DENOISE_IN), sampled(B_DENOISE_MOMENTS), Binding::storage_image(B_DENOISE_OUT)]);
+        let atrous = with(&[sampled(B_DENOISE_IN), sampled(B_GATHER_DIRECT), Binding::storage_image(B_DENOISE_OUT)]);
+        Ok(Denoise {
+            temporal: Lazy::new(gpu, "denoise_temporal", shaders::DENOISE_TEMPORAL_COMP, &temporal, push),
+            variance: Lazy::new(gpu, "denoise_variance", shaders::DENOISE_VARIANCE_COMP, &variance, push),
+            atrous: Lazy::new(gpu, "denoise_atrous", shaders::DENOISE_ATROUS_COMP, &atrous, push),
+            sampler: Sampler::nearest(gpu)?,
+        })
+    }
+
+    /// The denoised radiance of `raw` (which holds `direct` when it is given).
+    pub fn add<'a>(
+        &'a self,
+        g: &mut Graph<'a>,
+        f: FrameInputs<'a>,
+        gb: &GBufferOut,
+        m: &Motion,
+        raw: Handle<Image>,
+        direct: Option<Handle<Image>>,
+    ) -> Result<Handle<Image>> {
+        let (w, h) = (f.width, f.height);
+        let (temporal, variance, atrous) =
+            (self.temporal.pipeline()?, self.variance.pipeline()?, self.atrous.pipeline()?);
+        let color = g.history_image("denoise.color", image("denoise.color", w, h), &(w, h));
+        let moments = g.history_image("denoise.moments", image("denoise.moments", w, h), &(w, h));
+        let history = color.previous.is_some() && moments.previous.is_some();
+        let (prev_color, prev_moments) = match (color.previous, moments.previous) {
+            (Some(c), Some(m)) => (c, m),
+            // Stand-ins the shader does not read (history = 0).
+            _ => (
+                g.create_image(image("denoise.color (none)", 1, 1)),
+                g.create_image(image("denoise.moments (none)", 1, 1)),
+            ),
+        };
+        // The direct light, or (never read) a stand-in.
+        let direct_or = direct.unwrap_or_else(|| g.create_image(image("denoise.direct (none)", 1, 1)));
+        let gb = *gb;
+        let base = DenoisePush { add_direct: direct.is_some() as u32, ..DEFAULTS };
+        let m = *m;
+        let s = self.sampler.raw;
+        let gbw = move |ctx: &crate::graph::PassContext| {
+            super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&gb.position, &gb.normal, &gb.albedo], s)
+        };
+        let size = [w, h, 1];
+        let (mut acc, mut mom) = (color.current, moments.current);
+        let (ca, cm) = (acc, mom);
+        let push = DenoisePush { history: history as u32, ..base };
+        stage(g, "denoise_temporal", &gb, &[raw, direct_or, m.motion, prev_color, prev_moments])
+            .overwrite(&mut acc, Access::ComputeWrite)
+            .overwrite(&mut mom, Access::ComputeWrite)
+            .record(move |ctx| {
+                let writes = gbw(ctx)
+                    .sampled_image(B_DENOISE_IN, ctx.image(&raw), s)
+                    .sampled_image(B_GATHER_DIRECT, ctx.image(&direct_or), s)
+                    .sampled_image(B_MOTION, ctx.image(&m.motion), s)
+                    .sampled_image(B_DENOISE_PREV_COLOR, ctx.image(&prev_color), s)
+                    .sampled_image(B_DENOISE_PREV_MOMENTS, ctx.image(&prev_moments), s)
+                    .storage_image(B_DENOISE_COLOR_OUT, ctx.image(&ca))
+                    .storage_image(B_DENOISE_MOMENTS_OUT, ctx.image(&cm));
+                temporal.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
+            });
+        let mut ping = g.create_image(image("denoise.ping", w, h));
+        let p = ping;
+        stage(g, "denoise_variance", &gb, &[acc, mom]).overwrite(&mut ping, Access::ComputeWrite).record(move |ctx| {
+            let writes = gbw(ctx)
+                .sampled_image(B_DENOISE_IN, ctx.image(&acc), s)
+                .sampled_image(B_DENOISE_MOMENTS, ctx.image(&mom), s)
+                .storage_image(B_DENOISE_OUT, ctx.image(&p));
+            variance.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&base), size, [WG_2D, WG_2D, 1]);
+        });
+        for i in 0..DENOISE_ITERATIONS {
+            let last = i + 1 == DENOISE_ITERATIONS;
+            let name = if last { "denoise.out" } else { "denoise.pong" };
+            let mut next = g.create_image(image(name, w, h));
+            let (src, dst) = (ping, next);
+            let push = DenoisePush { step: 1 << i, last: last as u32, ..base };
+            stage(g, "denoise_atrous", &gb, &[src, direct_or]).overwrite(&mut next, Access::ComputeWrite).record(
+                move |ctx| {
+                    let writes = gbw(ctx)
+                        .sampled_image(B_DENOISE_IN, ctx.image(&src), s)
+                        .sampled_image(B_GATHER_DIRECT, ctx.image(&direct_or), s)
+                        .storage_image(B_DENOISE_OUT, ctx.image(&dst));
+                    atrous.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
+                },
+            );
+            ping = next;
+        }
+        Ok(ping)
+    }
+}

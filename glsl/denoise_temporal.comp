@@ -1,0 +1,41 @@
+#version 460
+// denoise, temporal stage (dispatch W × H): the raw estimate's indirect illumination (radiance minus
+// the direct light, demodulated by the albedo) blended into last frame's accumulation at the pixel's
+// previous pixel (passes/reproject.rs), with its first two luminance moments; the blend's weight of the
+// new frame is max(α, 1 / history length), the history restarting where the surface was disoccluded.
+#include "shared/denoise.glsl"
+
+layout(set = 0, binding = B_DENOISE_IN) uniform sampler2D raw;
+layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
+layout(set = 0, binding = B_MOTION) uniform sampler2D motion;
+layout(set = 0, binding = B_DENOISE_PREV_COLOR) uniform sampler2D prev_color;
+layout(set = 0, binding = B_DENOISE_PREV_MOMENTS) uniform sampler2D prev_moments;
+layout(set = 0, binding = B_DENOISE_COLOR_OUT, rgba32f) uniform writeonly image2D color_out;
+layout(set = 0, binding = B_DENOISE_MOMENTS_OUT, rgba32f) uniform writeonly image2D moments_out;
+
+// The longest history counted (the blend's weight stays at α beyond 1 / α frames anyway).
+const float MAX_HISTORY = 255.0;
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
+    vec3 c = texelFetch(raw, px, 0).rgb;
+    if (pc.add_direct != 0u) c -= texelFetch(direct_radiance, px, 0).rgb;
+    vec3 illum = max(demodulate(c, texelFetch(g_albedo, px, 0).rgb), vec3(0.0));
+    float l = luminance(illum);
+    vec4 moments = vec4(l, l * l, 0.0, 0.0);
+    float len = 1.0;
+    vec4 mv = texelFetch(motion, px, 0);
+    if (pc.history != 0u && mv.z != 0.0) {
+        ivec2 q = ivec2(mv.xy);
+        vec4 h = texelFetch(prev_color, q, 0);
+        if (h.a > 0.0) {
+            len = min(h.a + 1.0, MAX_HISTORY);
+            float a = max(pc.alpha, 1.0 / len);
+            illum = mix(h.rgb, illum, a);
+            moments = mix(texelFetch(prev_moments, q, 0), moments, a);
+        }
+    }
+    imageStore(color_out, px, vec4(illum, len));
+    imageStore(moments_out, px, moments);
+}

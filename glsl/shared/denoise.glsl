@@ -1,0 +1,56 @@
+// The denoiser's shared part (glsl/denoise_<stage>.comp include it first; crates/graph/src/passes/
+// denoise.rs states the filter): the push constants, the G-buffer, demodulation and the edge stops.
+#ifndef BOUNCE_DENOISE_GLSL
+#define BOUNCE_DENOISE_GLSL
+#include "scene.glsl"
+
+layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
+layout(push_constant) uniform Push { DenoisePush pc; };
+
+layout(set = 0, binding = B_GATHER_GPOSITION) uniform sampler2D g_position;
+layout(set = 0, binding = B_GATHER_GNORMAL) uniform sampler2D g_normal;
+layout(set = 0, binding = B_GATHER_GALBEDO) uniform sampler2D g_albedo;
+
+// Illumination = radiance / albedo (per channel; a channel of albedo 0 reflects nothing, so its
+// radiance is 0 and its illumination is left 0): the filter then never blurs texture detail.
+vec3 demodulate(vec3 c, vec3 albedo) {
+    return vec3(albedo.r > 0.0 ? c.r / albedo.r : 0.0, albedo.g > 0.0 ? c.g / albedo.g : 0.0,
+                albedo.b > 0.0 ? c.b / albedo.b : 0.0);
+}
+
+// A pixel's surface: point, normal, footprint (its width at that distance: θ_px · |x − eye|).
+struct Surface {
+    vec3 x;
+    vec3 n;
+    float footprint;
+    bool hit;
+};
+
+Surface surface_at(ivec2 p) {
+    vec4 gp = texelFetch(g_position, p, 0);
+    Surface s;
+    s.x = gp.xyz;
+    s.n = texelFetch(g_normal, p, 0).xyz;
+    s.footprint = frame.camera.x * distance(gp.xyz, frame.eye.xyz);
+    s.hit = gp.w != 0.0;
+    return s;
+}
+
+// The geometric edge stop between p's surface and q's, `pixels` apart: normals (cos^σ_n) and q's
+// distance off p's tangent plane against σ_z footprints per pixel of offset (scale-free).
+float geometry_weight(Surface p, Surface q, float pixels) {
+    if (!q.hit) return 0.0;
+    float wn = pow(max(0.0, dot(p.n, q.n)), pc.sigma_n);
+    float off = abs(dot(p.n, q.x - p.x));
+    float wz = off == 0.0 ? 1.0 : exp(-off / (pc.sigma_z * p.footprint * pixels));
+    return wn * wz;
+}
+
+// The luminance edge stop: |l_p − l_q| against σ_l standard deviations of p's (filtered) variance; 1
+// for equal values (also where the variance is 0), 0 for different ones there.
+float luminance_weight(float lp, float lq, float sd) {
+    float d = abs(lp - lq);
+    return d == 0.0 ? 1.0 : exp(-d / (pc.sigma_l * sd));
+}
+
+#endif
