@@ -2,7 +2,10 @@
 // ris, spatial stage (dispatch W × H × R): the reservoir combined with k neighbours' of the same layer,
 // generalized balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y). With ris.control ==
 // RIS_CONTROL_REUSE (the last pass) it also writes the control variate's U_g = Σ_i m_i(y_i) f_x(y_i) W_i,
-// the mean of f_x(y) W over this resampling's choice given its inputs (passes/ris.rs).
+// the mean of f_x(y) W over this resampling's choice given its inputs (passes/ris.rs). With the learned
+// visibility every target carries its factor at its own pixel's tile, and the control's g is f · s (s the
+// learned guess at this pixel's tile) as in the initial stage.
+#define RIS_LEARNED_READ
 #include "shared/ris.glsl"
 
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
@@ -65,13 +68,19 @@ void main() {
     Reservoir r = empty_reservoir(confidence);
     float sum = 0.0;
     vec3 ug = vec3(0.0);
+    // The kept VPL's s / (p̂ / luminance(f)) (the initial stage's u.w): 1 without the learned visibility.
+    float ratio = 1.0;
     for (uint i = 0u; i < n; i++) {
         Reservoir in_i = inputs[i];
         if (in_i.vpl == RIS_NONE || !(in_i.weight > 0.0)) continue;
         Vpl vpl = vpl_fetch(in_i.vpl);
         float num = 0.0, den = 0.0, here = 0.0;
+        vec2 learned_here = vec2(1.0);
         for (uint j = 0u; j < n; j++) {
             float t = vpl_unshadowed_luminance(xs[j], ns[j], vpl_luminance_albedo(albs[j]), vpl, pc.clamp_d2);
+            vec2 l = learned_at(q[j], in_i.vpl);
+            t *= l.x;
+            if (j == 0u) learned_here = l;
             den += inputs[j].confidence * t;
             if (j == i) num = inputs[j].confidence * t;
             if (j == 0u) here = t;
@@ -79,16 +88,18 @@ void main() {
         float w = den > 0.0 ? num / den * here * in_i.weight : 0.0;
         if (!(w > 0.0)) continue;
         sum += w;
-        // m_i f_x(y_i) W_i = w_i f_x(y_i) / p̂_x(y_i), p̂_x = luminance(f_x).
-        if (ris.control == RIS_CONTROL_REUSE) ug += w / here * vpl_unshadowed(xs[0], ns[0], albs[0], vpl, pc.clamp_d2);
+        // m_i g_x(y_i) W_i = w_i f_x(y_i) s(y_i) / p̂_x(y_i), p̂_x = luminance(f_x) · max(V̂, δ).
+        if (ris.control == RIS_CONTROL_REUSE) {
+            ug += w / here * learned_here.y * vpl_unshadowed(xs[0], ns[0], albs[0], vpl, pc.clamp_d2);
+        }
         if (ris_rand(px, 8u + ris.pass, layer * 16u + i) * sum < w) {
             r.vpl = in_i.vpl;
             r.target = here;
+            ratio = learned_here.y / learned_here.x;
         }
     }
     r.weight = r.vpl != RIS_NONE ? sum / r.target : 0.0;
     if (!(r.weight > 0.0)) r = empty_reservoir(confidence);
     res_out[idx] = r;
-    // w: the kept VPL's ratio s / (p̂ / luminance(f)) as the initial stage's, 1 for this target.
-    if (ris.control == RIS_CONTROL_REUSE) unshadowed[idx] = vec4(r.vpl != RIS_NONE ? ug : vec3(0.0), 1.0);
+    if (ris.control == RIS_CONTROL_REUSE) unshadowed[idx] = vec4(r.vpl != RIS_NONE ? ug : vec3(0.0), ratio);
 }

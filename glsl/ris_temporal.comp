@@ -5,7 +5,11 @@
 // weights m_i(y) = c_i p̂_i(y) / (c_0 p̂_0(y) + c_1 p̂_1(y)), p̂_0 this pixel's target and p̂_1 the target
 // at last frame's surface at q (its point, normal and albedo, with this frame's VPLs), the history's
 // confidence capped at --temporal-cap times M. With the view unchanged q is the pixel itself and p̂_1 =
-// p̂_0 (up to the albedo's unorm8), so the weights are the confidences'.
+// p̂_0 (up to the albedo's unorm8), so the weights are the confidences'. With the learned visibility
+// both targets carry its factor, at this pixel's tile and at q's (this frame's counts: any positive
+// functions with the unshadowed support make weights that sum to 1 where the history can be, which is
+// all unbiasedness asks of them).
+#define RIS_LEARNED_READ
 #include "shared/ris.glsl"
 
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
@@ -33,8 +37,10 @@ void main() {
     float ch = min(h.confidence, ris.history_cap * m);
     bool has0 = r.vpl != RIS_NONE && r.weight > 0.0, has1 = h.vpl != RIS_NONE && h.weight > 0.0;
     // Each sample's target here and at q: (p̂_0, p̂_1).
-    vec2 t0 = has0 ? vec2(r.target, target_at(xq, nq, aq, r.vpl)) : vec2(0.0);
-    vec2 t1 = has1 ? vec2(target_at(x, nx, ax, h.vpl), target_at(xq, nq, aq, h.vpl)) : vec2(0.0);
+    vec2 t0 = has0 ? vec2(r.target, target_at(xq, nq, aq, r.vpl) * learned_at(q, r.vpl).x) : vec2(0.0);
+    vec2 t1 = has1 ? vec2(target_at(x, nx, ax, h.vpl) * learned_at(px, h.vpl).x,
+                          target_at(xq, nq, aq, h.vpl) * learned_at(q, h.vpl).x)
+                   : vec2(0.0);
     float d0 = m * t0.x + ch * t0.y, d1 = m * t1.x + ch * t1.y;
     float w0 = d0 > 0.0 ? m * t0.x / d0 * t0.x * r.weight : 0.0;
     float w1 = d1 > 0.0 ? ch * t1.y / d1 * t1.x * h.weight : 0.0;

@@ -21,7 +21,8 @@
 #                                       # choose (defaults: 4 scenes, 512 and 1024, uniform, 256, exact)
 #
 # `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
-# (1) the gather's GPU ms by visibility (voxel, exact, and the end balls' own passes) on every scene of
+# (0) the real-time frame (`--method realtime`) at 1920×1080 on Sibenik and Conference while the camera
+# walks and the light orbits, each pass's GPU ms (the goal on an H200: at most 8 ms a frame); (1) the gather's GPU ms by visibility (voxel, exact, and the end balls' own passes) on every scene of
 # the suite at 256 VPLs per pixel, median of 3 frames (the cost bound: the default visibility's gather
 # no dearer than the voxel march's), at 512² and at the 64² of the lavapipe tables;
 # (2) for Sibenik and Conference the thesis configuration (512², 800 VPLs per pixel; global, local, gbg,
@@ -242,6 +243,28 @@ pass_tables() {
   done
 }
 
+# The real-time frame (`--method realtime`, denoised) at $1 × $2 on each of $scenes while the camera
+# walks its path (assets/<scene>/camera-path.toml) and the light orbits: each pass's GPU ms, the median
+# over frames 1..$3 (frame 0 builds what the others keep), and the shadow rays per pixel.
+realtime_table() {
+  local out="$1" md="$2" w="$3" h="$4" frames="$5" dprsm="$6" shadow="$7"
+  local scene
+  for scene in "${scenes[@]}"; do
+    local toml="$here/assets/$scene/scene.toml"
+    {
+      echo
+      echo "## $scene: the real-time frame at ${w}×${h}, camera path and light orbit ($frames frames; GPU ms, median over frames 1..)"
+      echo
+      echo '```text'
+      "$bin" render "$toml" --method realtime --width "$w" --height "$h" --dprsm-res "$dprsm" --shadow-res "$shadow" \
+        --frames "$frames" --out-dir "$out/rt-$scene" \
+        --camera-path "$here/assets/$scene/camera-path.toml" --light-path orbit --timings 2>/dev/null
+      echo '```'
+    } | tee -a "$md"
+    rm -rf "$out/rt-$scene"
+  done
+}
+
 # Each method's error against the path-traced ground truth at equal wall time, for each of $scenes.
 equal_time() {
   local out="$1" md="$2"
@@ -277,11 +300,12 @@ equal_time() {
 }
 
 # $1 OUT_DIR; $2 size, $3 VPLs per pixel, $4 DPRSM resolution, $5 reference spp, $6 equal-time budget (s),
-# $7 direct-light shadow resolution, $8 the visibility tables' sizes (comma-separated); the rest: scenes of
-# the thesis tables (the visibility tables take every scene of the suite).
+# $7 direct-light shadow resolution, $8 the visibility tables' sizes (comma-separated), $9 the real-time
+# frame's WIDTHxHEIGHT; the rest: scenes of the thesis tables (the visibility tables take every scene of
+# the suite).
 run_bench() {
-  local out="$1" size="$2" vpls="$3" dprsm="$4" spp="$5" budget="$6" shadow="$7" vis_sizes="$8"
-  shift 8
+  local out="$1" size="$2" vpls="$3" dprsm="$4" spp="$5" budget="$6" shadow="$7" vis_sizes="$8" rt_size="$9"
+  shift 9
   local scenes=("$@")
   bin="$stage/bin/bounce"
   [ -x "$bin" ] || { echo "error: $bin is missing: run 'lab/gpu-bench.sh stage' first" >&2; exit 2; }
@@ -304,6 +328,9 @@ run_bench() {
   local vs
   IFS=, read -ra vs <<<"$vis_sizes"
   SECONDS=0
+  # The real-time frame first: the issue's 1080p goal.
+  realtime_table "$out" "$md" "${rt_size%x*}" "${rt_size#*x}" 24 "$dprsm" "$shadow"
+  echo "real-time frames: done at ${SECONDS} s" >&2
   vis_table "$out" "$md" "${vs[0]}" "$vis_vpls" "$dprsm" "$shadow" "${suite[@]}"
   echo "visibility table at ${vs[0]}²: done at ${SECONDS} s" >&2
   pass_tables "$out" "$md"
@@ -321,7 +348,7 @@ run_bench() {
 
 case "$mode" in
   stage) stage_binary release ;;
-  run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 2048 512,64 sibenik conference ;;
+  run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 2048 512,64 1920x1080 sibenik conference ;;
   stage-ab)
     [ $# -eq 2 ] || { echo "error: usage: lab/gpu-bench.sh stage-ab LABEL" >&2; exit 2; }
     stage_ab "$2" release
@@ -335,7 +362,7 @@ case "$mode" in
     # A stage of its own, so that CI's debug build never replaces a staged release build.
     stage="$here/out/gpu-bench-tiny-stage"
     stage_binary dev
-    run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 256 16 sibenik conference
+    run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 256 16 32x18 sibenik conference
     # The A/B steps on one build staged under two labels (their images must match).
     stage_ab tiny-a dev
     stage_ab tiny-b dev

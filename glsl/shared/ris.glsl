@@ -95,6 +95,21 @@ uint vis_tile_base(ivec2 q) {
     return 2u * tile * (lm_faces() * frame.size.z * side * side);
 }
 
+#ifdef RIS_LEARNED_READ
+// The reuse stages' view of the learned visibility (ris.learned > 0; a stand-in is bound when off):
+// for pixel q's screen tile and VPL v, x = max(V̂, δ_L) with V̂ = (visible + 1) / (traced + 2), the
+// target's factor (as the initial stage's), and y = visible / (traced + 1), the control's visibility
+// guess s. From earlier frames' counts only (this frame's shade adds after the reuse stages read them).
+layout(set = 0, binding = B_RIS_VIS) uniform usamplerBuffer vis_texels;
+
+vec2 learned_at(ivec2 q, uint v) {
+    if (!(ris.learned > 0.0)) return vec2(1.0);
+    uint vi = vis_tile_base(q) + 2u * vis_cell_of(v);
+    uint seen = texelFetch(vis_texels, int(vi)).r, traced = texelFetch(vis_texels, int(vi + 1u)).r;
+    return vec2(max(float(seen + 1u) / float(traced + 2u), ris.learned), float(seen) / float(traced + 1u));
+}
+#endif
+
 Reservoir empty_reservoir(float confidence) {
     return Reservoir(RIS_NONE, 0.0, confidence, 0.0);
 }

@@ -1,7 +1,7 @@
 //! `--method realtime` (ris with one reservoir per pixel, reused across frames through reprojection and
 //! across pixels, `passes/reproject.rs`, and denoised, `passes/denoise.rs`) against independent judges:
 //! each raw frame is unbiased with respect to `all` on a static view after frames of temporal and spatial
-//! reuse (with the reuse's control variate), and so is the first frame after a camera move, whose history
+//! reuse (with the reuse's control variate and the learned visibility in every target), and so is the first frame after a camera move, whose history
 //! is reprojected; the frame traces at most two shadow rays per pixel, counted by the shade, while the
 //! camera and a light move; the denoiser's output has a lower error than the raw estimate, and `--denoise
 //! off` shows the raw estimate.

@@ -39,7 +39,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     }
     renderer.check(&settings)?;
     if let Some(frames) = a.frames {
-        animate(a, &mut renderer, &settings, path.as_ref(), camera.as_ref(), frames, err)?;
+        animate(a, &mut renderer, &settings, (path.as_ref(), camera.as_ref()), frames, (out, err))?;
         return super::check_validation(&gpu, a.frame.validation);
     }
     note_single_frame(a, &settings, err)?;
@@ -132,17 +132,18 @@ fn check_animation_flags(a: &RenderArgs) -> Result<()> {
 
 /// Frame k of the animation: the lights at `path`'s frame k, the camera at `camera`'s, the seed of the
 /// seed schedule; an EXR and a PNG each.
-#[allow(clippy::too_many_arguments)]
+/// `render --frames N --out-dir DIR`: N frames along the light and camera paths, each an EXR and a PNG;
+/// with `--timings` the frames' per-pass GPU times on `out` ([`frame_timings`]).
 fn animate(
     a: &RenderArgs,
     r: &mut Renderer,
     s: &FrameSettings,
-    path: Option<&LightPath>,
-    camera: Option<&CameraPath>,
+    (path, camera): (Option<&LightPath>, Option<&CameraPath>),
     frames: u32,
-    err: &mut dyn Write,
+    (out, err): (&mut dyn Write, &mut dyn Write),
 ) -> Result<()> {
     let dir = a.out_dir.as_ref().expect("checked: --frames comes with --out-dir");
+    let mut timed = vec![];
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let gpu_name = r.gpu.name.clone();
     // So that frame 0's `gpu_ms` is its work, as every later frame's is.
@@ -167,8 +168,41 @@ fn animate(
         let stem = dir.join(format!("frame_{k:04}"));
         output::write_exr(&stem.with_extension("exr"), &img, &meta)?;
         output::write_png(&stem.with_extension("png"), &img)?;
+        timed.push(FrameOutput { radiance: vec![], raw: None, ..f });
     }
     writeln!(err, "wrote {frames} frame(s) to {} (frame_0000.exr/.png …)", dir.display())?;
+    if a.timings {
+        frame_timings(out, &timed, &gpu_name)?;
+    }
+    Ok(())
+}
+
+/// `render --frames N --timings`: per pass, the median over frames 1..N of its GPU ms in a frame (a pass
+/// recorded several times, as the denoiser's à-trous iterations, summed), the frames' median total, and
+/// the shadow rays per pixel where the method counts them. Frame 0 builds what the others keep, so it is
+/// left out (with one frame, it is all there is).
+fn frame_timings(out: &mut dyn Write, frames: &[FrameOutput], device: &str) -> Result<()> {
+    let later = if frames.len() > 1 { &frames[1..] } else { frames };
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    let mut names: Vec<&str> = vec![];
+    for t in later.iter().flat_map(|f| &f.timings) {
+        if !names.contains(&t.name) {
+            names.push(t.name);
+        }
+    }
+    let cell = |m: Option<f64>| m.map(|m| format!("{m:10.3}")).unwrap_or_else(|| format!("{:>10}", "n/a"));
+    writeln!(out, "{:<16} {:>10}   (median over frames 1..{} of {device})", "pass", "GPU ms", frames.len())?;
+    for name in names {
+        let per_frame = later.iter().map(|f| f.timings.iter().filter(|t| t.name == name).filter_map(|t| t.ms).sum());
+        writeln!(out, "{name:<16} {}", cell(median(per_frame.collect())))?;
+    }
+    writeln!(out, "{:<16} {}", "total", cell(median(later.iter().filter_map(|f| f.gpu_ms()).collect())))?;
+    if let Some(rays) = median(later.iter().filter_map(|f| f.rays_per_pixel).collect()) {
+        writeln!(out, "shadow rays per pixel {rays:.3}")?;
+    }
     Ok(())
 }
 

@@ -110,7 +110,7 @@ pub struct RisSettings {
     pub pool_tiles: u32,
     /// δ_L in (0, 1], or 0 for off: the target weighs a VPL by max(V̂, δ_L), V̂ the fraction of earlier
     /// frames' shadow rays from the pixel's screen tile to the VPL's light-map cell that were unoccluded
-    /// (progressive frames of one view; needs the pool and no reuse).
+    /// (progressive frames of one view, or `Method::Realtime`'s frames; needs the pool).
     pub learn_visibility: f32,
     /// `--learn-visibility auto` (the default): with `learn_visibility` 0, the renderer turns learning on
     /// (δ_L = `passes::ris::AUTO_LEARN_FLOOR`) for a view where visibility blocks most of the unshadowed
@@ -148,15 +148,16 @@ impl RisSettings {
     /// `Method::Realtime`'s ris: one reservoir of 32 candidates (8 from the near window) from the pool,
     /// last frame's reservoir combined in through reprojection with its confidence capped at 20 M (RTXDI
     /// caps at 20 frames), one spatial pass of 4 neighbours within 16 pixels, the control variate over the
-    /// spatial pass's inputs; no learned visibility (it needs a reservoir's own candidates, which reuse
-    /// replaces). Measured in BENCHMARKS.md, "Real time under motion".
+    /// spatial pass's inputs, and the learned visibility always (δ_L = `AUTO_LEARN_FLOOR`: its counts
+    /// carry over camera and light moves, and a per-view decision would drop the history whenever it
+    /// flipped). Measured in BENCHMARKS.md, "Real time under motion".
     pub fn realtime() -> Self {
         RisSettings {
             temporal_cap: 20.0,
             spatial_passes: 1,
             spatial_neighbors: 4,
             spatial_radius: 16.0,
-            learn_visibility: 0.0,
+            learn_visibility: crate::passes::ris::AUTO_LEARN_FLOOR,
             learn_auto: false,
             control_variate: true,
             picks: 1,
@@ -554,8 +555,8 @@ impl FrameSettings {
         if !(r.learn_visibility >= 0.0 && r.learn_visibility <= 1.0) {
             reject!("--learn-visibility must be in [0, 1] (got {})", r.learn_visibility);
         }
-        if r.learn_visibility > 0.0 && (r.pool_tiles == 0 || r.spatial_passes > 0 || r.temporal_cap > 0.0) {
-            reject!("--learn-visibility needs the pool (--pool-tiles ≥ 1) and no reuse (--spatial-passes 0, --temporal-cap 0)");
+        if r.learn_visibility > 0.0 && r.pool_tiles == 0 {
+            reject!("--learn-visibility needs the pool (--pool-tiles ≥ 1)");
         }
         if r.near_radius > 1024 {
             reject!("--near-radius must be at most 1024 texels (got {})", r.near_radius);

@@ -1,6 +1,7 @@
 //! ris: resampled importance sampling over the VPLs (Talbot et al. 2005) with spatial and temporal
-//! reuse (ReSTIR, Bitterli et al. 2020; generalized RIS, Lin et al. 2022). `glsl/ris.comp`, three
-//! graph passes, and a fourth before them with `--pool-tiles` T > 0 (the default):
+//! reuse (ReSTIR, Bitterli et al. 2020; generalized RIS, Lin et al. 2022), for `Method::Ris` and
+//! `Method::Realtime` (one reservoir per pixel with both reuses, `RisSettings::realtime`). One shader
+//! per stage (`glsl/ris_<stage>.comp`), the presampling first with `--pool-tiles` T > 0 (the default):
 //!
 //! - `ris_presample` (1024 × T invocations): the candidate pool, T tiles of `RIS_POOL_TILE` = 1024 draws
 //!   of the source; tile j holds points 0..1024 of one stratified set (seeded by j and the frame's seed)
@@ -14,13 +15,16 @@
 //!   p(x_i), whose expectation is Σ_v f(v) however the candidates depend on each other (they do: a
 //!   tile's entries are stratified, and neighbouring pixels share tiles). Pixels sharing a tile have
 //!   correlated errors; what that does to each pixel's error is measured (BENCHMARKS.md), not assumed.
-//! - With `--learn-visibility δ_L` > 0 (the pool, no reuse): the target is p̂(v) · max(V̂, δ_L), where V̂ =
+//! - With `--learn-visibility δ_L` > 0 (the pool; `Method::Realtime` always): the target is p̂(v) · max(V̂, δ_L), where V̂ =
 //!   (visible + 1) / (traced + 2) counts the earlier frames' shadow rays from the pixel's screen tile to
 //!   the VPL's light-map cell (`ris.visibility`, kept across the frames of one view like the history; the
 //!   shade adds to it after the frame's initial stage has read it). Unbiased frame by frame: a frame's
 //!   target depends on earlier frames only, so given them it is a fixed function, positive wherever p̂
 //!   is (δ_L > 0), and RIS is unbiased for any such target; the progressive mean of unbiased frames is
-//!   unbiased. It is what makes a VPL behind a wall rare once the rays have seen the wall.
+//!   unbiased. It is what makes a VPL behind a wall rare once the rays have seen the wall. The reuse
+//!   stages weigh every input's target by the factor at that input's pixel (this frame's counts):
+//!   every such target has the unshadowed one's support, so their balance weights sum to 1 wherever
+//!   any input can hold a VPL, which is all the combination needs.
 //! - With `--near-candidates N` > 0 (the default, 8 of 32; the pool, not the voxel target): the last N
 //!   candidates are texels of (2r + 1)² windows (`--near-radius r`) around where x projects into each
 //!   light's map: the VPLs next to x, which hold the target's tail. A near candidate picks light l's
@@ -60,7 +64,7 @@
 //!   gather's visibility (`contribution()`: voxel march or exact shadow rays). Exact rays go
 //!   through the gather's queue (`glsl/shared/shadow_queue.glsl`): a block's rays are traced back to
 //!   back first, then its reservoirs are shaded in order with their answers (the same image).
-//! - With `--control-variate on` (the default; only without reuse, and with M > 1) each reservoir's
+//! - With `--control-variate on` (the default; with M > 1 or reuse) each reservoir's
 //!   term is f(y) V(y) W + β (U_g − g(y) W), the **unshadowed control variate**. g = f · s for a guess s
 //!   at visibility fixed before the frame, U_g = 1/M Σ_i g(v_i) / p(v_i) over the reservoir's own
 //!   candidates (the initial stage sums it as it streams them, into `ris.unshadowed`). Given the
@@ -78,8 +82,12 @@
 //!   pixel's screen tile and the VPL's light-map cell, the counts the target already read: U_g is then
 //!   the estimate with the learned visibility in place of the real one, and the shadow ray only
 //!   corrects it. The term is computed as g(y) W = (f / luminance(f))(y) · p̂(y) W · s(y) / (p̂ /
-//!   luminance(f))(y), the last ratio carried with the reservoir. Reuse would replace the candidates
-//!   the identity is about, so it stays off there; with one candidate it is 0 outright.
+//!   luminance(f))(y), the last ratio carried with the reservoir. With one candidate it is 0 outright.
+//!   **With spatial reuse** the identity is the last spatial pass's: given its inputs (y_i, W_i), the
+//!   kept y is y_i with probability w_i / Σw and W = Σw / p̂(y), so E[g(y) W | inputs] = Σ_i m_i(y_i)
+//!   g(y_i) W_i =: U_g, which that pass writes (`RIS_CONTROL_REUSE`); β as above. Where the kept VPL is
+//!   visible the estimate is then the inputs' unshadowed mean: the colour of several well-chosen VPLs
+//!   instead of one's.
 //!
 //! **Why this is unbiased with respect to `all`.** A combination of reservoirs (y_i, W_i, c_i), each with
 //! E[g(y_i) W_i] = Σ_v g(v) for every g vanishing outside {p̂_i > 0} (its target p̂_i, i.e. the pixel it
@@ -94,8 +102,14 @@
 //! integrand: E[f(y) V(y) W] = Σ_v f(v) V(v), the `all` sum. (A target with visibility would need it
 //! re-evaluated at the receiving pixel for every neighbour sample; the unshadowed one needs no ray.)
 //! The source needs p_v > 0 wherever p̂ > 0: the defensive share ε > 0 of the CDF sources, or `uniform`.
-//! The temporal input is last frame's final reservoir at the same pixel, valid for the same camera and
-//! settings (the history's key), so its target is this frame's and the weights reduce to c_i / Σ c_j.
+//! The temporal input is last frame's final reservoir at the pixel's previous pixel q (`passes/
+//! reproject.rs`; the pixel itself for an unchanged view), weighted with p̂_1 evaluated at last frame's
+//! surface at q (kept by reproject), where the history was made. A VPL is a light-map texel: when a
+//! light moves, the history's VPL is re-evaluated where it now is, and p̂_1 takes this frame's VPL data.
+//! Every such target has the unshadowed support, so the weights still sum to 1 wherever the history can
+//! hold a VPL; the exception is a texel that was empty last frame and is lit now, which the history is
+//! weighted for without being able to hold it: a darkening where a moving light map's silhouette sweeps,
+//! measured in BENCHMARKS.md ("Real time under motion").
 //!
 //! Loop bounds: the initial stage's candidates are split over dispatches ([`candidates_per_dispatch`]),
 //! its streaming state (y, Σw, p̂(y)) carried in the output; the shade's reservoirs too (the gather's
@@ -306,6 +320,7 @@ impl Ris {
             Binding::sampled_image(B_MOTION),
             Binding::sampled_image(B_PREV_POSITION),
             Binding::sampled_image(B_PREV_SURFACE),
+            Binding::uniform_texel_buffer(B_RIS_VIS),
         ]);
         let mut pooled = initial.clone();
         pooled.push(Binding::uniform_texel_buffer(B_RIS_POOL));
@@ -315,6 +330,7 @@ impl Ris {
             Binding::storage_buffer(B_RIS_IN),
             Binding::storage_buffer(B_RIS_OUT),
             Binding::storage_buffer(B_RIS_UNSHADOWED),
+            Binding::uniform_texel_buffer(B_RIS_VIS),
         ]);
         let mut shade = base();
         shade.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV, B_RIS_RAYS].map(Binding::storage_buffer));
@@ -373,22 +389,7 @@ impl Ris {
         let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
         let pool =
             (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push, r.uniform_source)).transpose()?;
-        // The learned visibility's counts: kept across the frames of one view (the history's key), zeroed
-        // when new; a stand-in the shade never writes when off.
-        let mut vis = if r.push.learned > 0.0 {
-            let faces = f.vpl_faces * f.scene.light_count;
-            let bytes = vis_bytes(f.width, f.height, r.push.vis_tile, f.dprsm_res, faces);
-            let mut desc = BufferDesc::storage("ris.visibility", bytes);
-            desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
-            let t = g.temporal_buffer("ris.visibility", desc, &r.key);
-            let mut h = t.handle;
-            if t.fresh {
-                g.add_clear("ris_visibility_clear", &mut [&mut h]);
-            }
-            h
-        } else {
-            g.create_buffer(BufferDesc::storage("ris.visibility (off)", 16))
-        };
+        let mut vis = Self::learned_counts(g, f, &r);
         // The control variate's U_g per reservoir (this frame's), and its per-pixel shadow-ray counts, kept
         // across the frames of one view like the learned visibility (stand-ins, never touched, when off).
         let mut unshadowed = if r.push.control != 0 {
@@ -415,7 +416,7 @@ impl Ris {
             let learned = (r.push.learned > 0.0).then_some(vis);
             self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
             if let Some((previous, motion)) = previous {
-                self.add_temporal(g, f, i, previous, motion, dst, push, r.push)?;
+                self.add_temporal(g, f, i, (previous, motion, vis), dst, push, r.push)?;
             }
         }
         for pass in 0..r.spatial_passes {
@@ -427,13 +428,36 @@ impl Ris {
             };
             // Only the last pass's inputs are the final choice's: it alone writes U_g (RIS_CONTROL_REUSE).
             let control = if s == r.spatial_passes { r.push.control } else { RIS_CONTROL_OFF };
-            self.add_spatial(g, f, i, src, dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
+            self.add_spatial(g, f, i, (src, vis), dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
         }
         let mut rays = g.create_buffer(BufferDesc::storage("ris.rays", 4));
         g.add_clear("ris_rays_clear", &mut [&mut rays]);
         let shade = ShadeIo { reservoirs: current, unshadowed, vis: &mut vis, cv: &mut cv, rays: &mut rays, out };
         self.add_shade(g, f, i, shade, push, r.push)?;
         Ok(rays)
+    }
+
+    /// The learned visibility's counts: kept across the frames of one view (the history's key; realtime's
+    /// across moves), zeroed when new; off, a stand-in that the shade never writes and the reuse stages,
+    /// which bind it as a texel buffer either way, never read.
+    fn learned_counts<'a>(g: &mut Graph<'a>, f: FrameInputs<'a>, r: &RisFrame) -> Handle<Buffer> {
+        if r.push.learned > 0.0 {
+            let faces = f.vpl_faces * f.scene.light_count;
+            let bytes = vis_bytes(f.width, f.height, r.push.vis_tile, f.dprsm_res, faces);
+            let mut desc = BufferDesc::storage("ris.visibility", bytes);
+            desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+            let t = g.temporal_buffer("ris.visibility", desc, &r.key);
+            let mut h = t.handle;
+            if t.fresh {
+                g.add_clear("ris_visibility_clear", &mut [&mut h]);
+            }
+            h
+        } else {
+            // The reuse stages bind it as a texel buffer either way (and read it only when on).
+            let mut desc = BufferDesc::storage("ris.visibility (off)", 16);
+            desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+            g.create_buffer(desc)
+        }
     }
 
     /// The descriptor writes every stage shares: scene, G-buffer, VPLs, voxels, importance, CDF.
@@ -580,8 +604,7 @@ impl Ris {
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        previous: Handle<Buffer>,
-        m: Motion,
+        (previous, m, vis): (Handle<Buffer>, Motion, Handle<Buffer>),
         dst: &mut Handle<Buffer>,
         push: GatherPush,
         ris: RisPush,
@@ -589,6 +612,7 @@ impl Ris {
         let (i, o) = (*i, *dst);
         let pipeline = self.temporal.pipeline()?;
         let mut b = Self::reads(g.add_pass("ris_temporal"), &i).read(&previous, Access::ComputeRead);
+        b = b.read(&vis, Access::ComputeRead);
         for h in [m.motion, m.prev_position, m.prev_surface] {
             b = b.read(&h, Access::ComputeRead);
         }
@@ -600,7 +624,8 @@ impl Ris {
                 .storage_buffer(B_RIS_HISTORY, ctx.buffer(&previous))
                 .sampled_image(B_MOTION, ctx.image(&m.motion), s)
                 .sampled_image(B_PREV_POSITION, ctx.image(&m.prev_position), s)
-                .sampled_image(B_PREV_SURFACE, ctx.image(&m.prev_surface), s);
+                .sampled_image(B_PREV_SURFACE, ctx.image(&m.prev_surface), s)
+                .texel_view(B_RIS_VIS, ctx.buffer(&vis));
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
             pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
@@ -614,7 +639,7 @@ impl Ris {
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        src: Handle<Buffer>,
+        (src, vis): (Handle<Buffer>, Handle<Buffer>),
         dst: &mut Handle<Buffer>,
         unshadowed: &mut Handle<Buffer>,
         push: GatherPush,
@@ -622,7 +647,8 @@ impl Ris {
     ) -> Result<()> {
         let (i, o, u) = (*i, *dst, *unshadowed);
         let pipeline = self.spatial.pipeline()?;
-        let b = Self::reads(g.add_pass("ris_spatial"), &i).read(&src, Access::ComputeRead);
+        let b =
+            Self::reads(g.add_pass("ris_spatial"), &i).read(&src, Access::ComputeRead).read(&vis, Access::ComputeRead);
         // U_g is written by the last pass only (declared by each: the stand-in or the buffer).
         let b = b.write(unshadowed, Access::ComputeWrite);
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
@@ -630,7 +656,8 @@ impl Ris {
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_IN, ctx.buffer(&src))
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
-                .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u));
+                .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u))
+                .texel_view(B_RIS_VIS, ctx.buffer(&vis));
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
             pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
