@@ -310,7 +310,16 @@ fn plot(file: &Path, a: &BenchArgs, samples: &[FrameSample], b: &FrameSettings, 
         for &t in &a.temporal {
             let name = format!("{} ({})", m.name(), t.name());
             rel.push((name.clone(), of(samples, m, t).map(|s| (s.frame as f64, s.rel_mse)).collect()));
-            flick.push((name, of(samples, m, t).filter_map(|s| Some((s.frame as f64, s.flicker?))).collect()));
+            flick.push((name.clone(), of(samples, m, t).filter_map(|s| Some((s.frame as f64, s.flicker?))).collect()));
+            // The displayed output beside the raw estimate, where the method denoises.
+            if of(samples, m, t).any(|s| s.denoised.is_some()) {
+                let d = format!("{name}, denoised");
+                rel.push((
+                    d.clone(),
+                    of(samples, m, t).filter_map(|s| Some((s.frame as f64, s.denoised?.0))).collect(),
+                ));
+                flick.push((d, of(samples, m, t).filter_map(|s| Some((s.frame as f64, s.denoised?.1?))).collect()));
+            }
         }
     }
     let panels = [
