@@ -4,7 +4,8 @@
 //! reuse (with the reuse's control variate and the learned visibility in every target), and so is the first frame after a camera move, whose history
 //! is reprojected; the frame traces at most two shadow rays per pixel, counted by the shade, while the
 //! camera and a light move; the denoiser's output has a lower error than the raw estimate, and `--denoise
-//! off` shows the raw estimate.
+//! off` shows the raw estimate; a light move and visibility reuse stay within their stated biases; and a
+//! static view's progressive mean of realtime frames converges to the unbiased image.
 
 use crate::vpl::{converges_to, indirect_with};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, RisSettings};
@@ -237,4 +238,24 @@ fn realtime_visibility_reuse_stays_within_its_stated_bias_and_two_rays() {
     assert!((m - target).abs() <= 0.03 * target + 4.0 * se, "beyond the stated bias: {m} ± {se} vs {target}");
     assert!(rays.iter().all(|&n| n > 1.0 && n <= 2.0), "{rays:?}");
     assert!(errors[1] < errors[0], "visibility reuse does not help: {errors:?}");
+}
+
+/// A static view's progressive mean (`render --time-limit`'s averaging, `progressive::render_for`) of
+/// realtime frames averages their raw estimates, not the denoised output, so it converges to the
+/// unbiased image: after a 2 s budget its image mean is within 1 % of `all`'s.
+#[test]
+fn realtime_progressive_frames_converge_to_the_unbiased_image() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let all = all(&mut r);
+    let s = FrameSettings { width: w, height: h, dprsm_res: res, voxels: vox, denoise: true, ..realtime(7) };
+    let budget = std::time::Duration::from_secs(2);
+    let p = bounce_graph::frame::progressive::render_for(&mut r, &s, budget, &mut |_, _| {}).unwrap();
+    let img: Vec<[f32; 3]> = p.radiance.iter().map(|c| [c[0], c[1], c[2]]).collect();
+    let (m, target) = (bounce_tests::mean(&img), bounce_tests::mean(&all));
+    eprintln!("realtime, {} progressive frames: image mean {m:.5} vs all {target:.5}", p.frames);
+    assert!(p.frames >= 4, "only {} frames in 2 s", p.frames);
+    assert!((m / target - 1.0).abs() <= 0.01, "the progressive mean is off: {m} vs {target}");
 }

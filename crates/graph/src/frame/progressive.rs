@@ -12,6 +12,8 @@
 //! still uniform, so the mean stays unbiased. Measured: BENCHMARKS.md, "The path tracer's frames".
 //!
 //! `all` and the direct component are the same every frame: they render one frame, whatever the budget.
+//! `realtime`'s frames are averaged raw (its denoised output is biased by design); they reuse one
+//! another's reservoirs, so they are correlated, and the mean's error falls slower than 1/frames.
 //!
 //! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
 //! upload). A frame is started only if it should end within the budget, judged by the last frame's time;
@@ -72,8 +74,10 @@ pub fn render_for(
     let last = loop {
         let frame_s = frame_settings(s, frames);
         let f = r.render(&frame_s)?;
-        sum.resize(f.radiance.len(), [0.0; 4]);
-        for (a, p) in sum.iter_mut().zip(&f.radiance) {
+        // `realtime`'s raw estimate, each frame unbiased, not its denoised output, which is not.
+        let estimate = f.raw.as_ref().unwrap_or(&f.radiance);
+        sum.resize(estimate.len(), [0.0; 4]);
+        for (a, p) in sum.iter_mut().zip(estimate) {
             for c in 0..4 {
                 a[c] += p[c] as f64;
             }
