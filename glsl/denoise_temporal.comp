@@ -3,6 +3,8 @@
 // the direct light, demodulated by the albedo) blended into last frame's accumulation at the pixel's
 // previous pixel (passes/reproject.rs), with its first two luminance moments; the blend's weight of the
 // new frame is max(α, 1 / history length), the history restarting where the surface was disoccluded.
+// The history is first clamped into this frame's neighbourhood (mean ± DENOISE_CLAMP_SIGMAS standard
+// deviations per channel): light that moved is not dragged along for 1 / α frames.
 #include "shared/denoise.glsl"
 
 layout(set = 0, binding = B_DENOISE_IN) uniform sampler2D raw;
@@ -26,10 +28,33 @@ void main() {
     vec4 moments = vec4(l, l * l, 0.0, 0.0);
     float len = 1.0;
     vec4 mv = texelFetch(motion, px, 0);
+    // This frame's neighbourhood: mean ± DENOISE_CLAMP_SIGMAS standard deviations, per channel.
+    vec3 box_lo = vec3(-1e30), box_hi = vec3(1e30);
+    if (DENOISE_CLAMP_SIGMAS > 0.0 && pc.history != 0u && mv.z != 0.0) {
+        vec3 m1 = vec3(0.0), m2 = vec3(0.0);
+        float n = 0.0;
+        for (int dy = -2; dy <= 2; dy++) {
+            for (int dx = -2; dx <= 2; dx++) {
+                ivec2 p = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size.xy) - 1);
+                vec3 a = texelFetch(g_albedo, p, 0).rgb;
+                vec3 cq = texelFetch(raw, p, 0).rgb;
+                if (pc.add_direct != 0u) cq -= texelFetch(direct_radiance, p, 0).rgb;
+                vec3 iq = max(demodulate(cq, a), vec3(0.0));
+                m1 += iq;
+                m2 += iq * iq;
+                n += 1.0;
+            }
+        }
+        m1 /= n;
+        vec3 sd = sqrt(max(m2 / n - m1 * m1, vec3(0.0)));
+        box_lo = m1 - DENOISE_CLAMP_SIGMAS * sd;
+        box_hi = m1 + DENOISE_CLAMP_SIGMAS * sd;
+    }
     if (pc.history != 0u && mv.z != 0.0) {
         ivec2 q = ivec2(mv.xy);
         vec4 h = texelFetch(prev_color, q, 0);
         if (h.a > 0.0) {
+            h.rgb = clamp(h.rgb, box_lo, box_hi);
             len = min(h.a + 1.0, MAX_HISTORY);
             float a = max(pc.alpha, 1.0 / len);
             illum = mix(h.rgb, illum, a);

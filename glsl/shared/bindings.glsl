@@ -208,6 +208,11 @@ const float END_BALL_MAX_RADIUS = 0.03;
 #define B_DENOISE_OUT 64
 // À-trous iterations (tap spacings 1, 2, 4, 8, 16: SVGF's five).
 #define DENOISE_ITERATIONS 5
+// The temporal stage clamps the history into this many standard deviations around the mean of this
+// frame's 5 × 5 neighbourhood (per channel), so that lighting that changed is not dragged along.
+// Measured (BENCHMARKS.md, "Real time under motion"): 2 and 3 both halved the denoised error on Sibenik
+// under a moving light; 3 had the better worst case.
+const float DENOISE_CLAMP_SIGMAS = 3.0;
 
 // ---- present: the viewer's running mean, tone mapping and sRGB encoding (passes/present.rs) -------------
 #define B_PRESENT_RADIANCE 40

@@ -3,8 +3,10 @@
 //!
 //! - `denoise_temporal`: the raw estimate's indirect light, demodulated by the albedo, ĩ = (L − L_direct)
 //!   / ρ, is blended into last frame's accumulation at the pixel's previous pixel (`passes/reproject.rs`;
-//!   restarted where the surface was disoccluded): Ī ← (1 − a) Ī_prev + a ĩ with a = max(α, 1 / n), n the
-//!   history's length, and so are the luminance moments (l, l²). The accumulation (rgb, n) and moments
+//!   restarted where the surface was disoccluded): Ī ← (1 − a) clamp(Ī_prev) + a ĩ with a = max(α, 1 / n),
+//!   n the history's length, and so are the luminance moments (l, l²). The history is first clamped into
+//!   this frame's 5 × 5 neighbourhood, mean ± `DENOISE_CLAMP_SIGMAS` standard deviations per channel (as
+//!   temporal anti-aliasing clamps colours), so that light that moved is not dragged along. The accumulation (rgb, n) and moments
 //!   are kept for the next frame (`denoise.color`, `denoise.moments`, histories keyed by the size).
 //! - `denoise_variance`: σ² = E[l²] − E[l]² per pixel; where n < 4, illumination and moments come from
 //!   the 7 × 7 neighbourhood weighted by the geometric edge stops, σ² raised by 4 / n.
