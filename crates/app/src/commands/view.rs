@@ -323,6 +323,10 @@ impl Viewer<'_> {
         // As `render` does: a driver that compiles a shader at its first dispatch does it here, so the
         // first frame's title shows its passes' own times.
         renderer.warm_up(&frame_settings(&self.settings, 0))?;
+        if self.realtime.is_some() {
+            // The real-time frame's pipelines too, so that the first move does not stall on them.
+            renderer.warm_up(&FrameSettings { method: Method::Realtime, ..self.settings.clone() })?;
+        }
         let fly = Fly::new(&self.scene.camera, self.scene.diagonal());
         let lamp = Lamp::new(self.scene, &renderer);
         let ldr = Present::ldr_image(&gpu, self.settings.width, self.settings.height)?;
