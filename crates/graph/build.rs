@@ -75,8 +75,6 @@ const SHADERS: &[Shader] = &[
     variant("ris_initial.pool_learned.comp", "ris_initial.comp", &["RIS_POOL", "RIS_LEARNED"]),
     file("ris_temporal.comp"),
     file("ris_spatial.comp"),
-    file("ris_visibility.comp"),
-    variant("ris_visibility.exact.comp", "ris_visibility.comp", &["EXACT_VISIBILITY"]),
     file("ris_shade.comp"),
     variant("ris_shade.exact.comp", "ris_shade.comp", &["EXACT_VISIBILITY"]),
     file("reproject.comp"),

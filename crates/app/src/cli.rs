@@ -392,10 +392,6 @@ pub struct LabArgs {
     /// unshadowed sum minus the kept one's, mean 0; without reuse): `on` or `off`.
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub control_variate: bool,
-    /// --method realtime tests each reservoir's sample by a shadow ray before reusing it and drops it
-    /// where occluded (one more ray per pixel; biased): `on` or `off`.
-    #[arg(long, default_value = "off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
-    pub reuse_visible: bool,
 }
 
 #[cfg(feature = "lab")]
@@ -416,7 +412,6 @@ impl LabArgs {
         r.learn_visibility = self.learn_visibility.floor();
         r.learn_auto = self.learn_visibility == Learn::Auto;
         r.control_variate = self.control_variate;
-        r.reuse_visible = self.reuse_visible;
     }
 }
 

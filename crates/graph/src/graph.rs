@@ -553,12 +553,15 @@ impl<'a> Graph<'a> {
 
     /// This frame's and last frame's version of an image (two temporal images that swap roles at each
     /// [`Retained::next_frame`]). `previous` is `None` when last frame's has another description or key,
-    /// or was never written.
+    /// or was never written. This frame's version is exported: the passes that write it run even where
+    /// nothing later in the frame reads it (the next frame does).
     pub fn history_image(&mut self, name: &str, desc: ImageDesc, key: &impl Hash) -> History {
         let frame = self.retained.as_ref().map_or(0, |st| st.frame);
         let slot = |parity: u64| format!("{name}#{}", parity % 2);
         let current = self.temporal_image(&slot(frame), desc.clone(), key).handle;
         let previous = self.temporal_image(&slot(frame + 1), desc, key);
+        // What writes this frame's version is live whether or not this frame reads it: the next frame does.
+        self.export(&current);
         History { current, previous: (!previous.fresh).then_some(previous.handle) }
     }
 
@@ -568,6 +571,7 @@ impl<'a> Graph<'a> {
         let slot = |parity: u64| format!("{name}#{}", parity % 2);
         let current = self.temporal_buffer(&slot(frame), desc.clone(), key).handle;
         let previous = self.temporal_buffer(&slot(frame + 1), desc, key);
+        self.export(&current);
         History { current, previous: (!previous.fresh).then_some(previous.handle) }
     }
 

@@ -254,19 +254,11 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
         bytemuck::bytes_of(&sampling),
         bytemuck::bytes_of(&push),
         ris.spatial_passes,
-        ris.reuse_visible,
     ));
     let candidates_per_dispatch =
         ris.candidates_chunk.map_or(i.ris_candidates_per_dispatch, |c| c.get().min(i.ris_candidates_per_dispatch));
     let uniform_source = ris_uniform_source(s);
-    RisFrame {
-        push,
-        spatial_passes: ris.spatial_passes,
-        candidates_per_dispatch,
-        key,
-        uniform_source,
-        reuse_visible: ris.reuse_visible,
-    }
+    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key, uniform_source }
 }
 
 /// Whether ris's candidates take the uniform source's shortcut (`RisFrame::uniform_source`).

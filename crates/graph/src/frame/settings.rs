@@ -142,11 +142,6 @@ pub struct RisSettings {
     /// one. Where a frame's error is the kept samples' own (their visibility, the choice among the
     /// candidates) rather than the candidates', K picks cut it nearly as K reservoirs would.
     pub picks: u32,
-    /// Visibility reuse (`Method::Realtime`; the `lab` feature's `--reuse-visible`): a shadow ray tests
-    /// each reservoir's sample after the temporal stage and drops it where occluded, so that only visible
-    /// samples are reused. One more ray per pixel; 1.2–3× lower raw error at a bias of −1.6 % on a static
-    /// view (BENCHMARKS.md, "Real time under motion"), so off by default.
-    pub reuse_visible: bool,
 }
 
 impl RisSettings {
@@ -199,7 +194,6 @@ impl Default for RisSettings {
             candidates_chunk: None,
             control_variate: true,
             picks: 1,
-            reuse_visible: false,
         }
     }
 }
@@ -496,10 +490,10 @@ impl FrameSettings {
     }
 
     /// The ris settings the frame runs: `ris` for `Method::Ris`, [`RisSettings::realtime`] for
-    /// `Method::Realtime` (with `ris.reuse_visible`, its one switch).
+    /// `Method::Realtime`.
     pub fn ris_settings(&self) -> RisSettings {
         if self.method == Method::Realtime {
-            RisSettings { reuse_visible: self.ris.reuse_visible, ..RisSettings::realtime() }
+            RisSettings::realtime()
         } else {
             self.ris
         }

@@ -111,10 +111,6 @@ impl Reproject {
                         .storage_image(B_SURFACE_OUT, ctx.image(&cs));
                 pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), [w, h, 1], [WG_2D, WG_2D, 1]);
             });
-        // This frame's surface is the next frame's history: wanted even where this frame reads no motion
-        // (the graph would cull the pass, and the history would never be kept).
-        g.export(&cur_position);
-        g.export(&cur_surface);
         Ok(Motion { motion, prev_position, prev_surface, history })
     }
 }

@@ -145,9 +145,6 @@ pub struct Ris {
     initial: [Lazy<INITIAL_SLOTS>; 3],
     /// Last frame's reservoirs combined in, while they are kept (`--temporal-cap` > 0).
     temporal: Lazy<1>,
-    /// Each reservoir's sample tested before reuse (`RisSettings::reuse_visible`), in the frame's
-    /// visibility variant.
-    visibility: VisibilityVariants,
     spatial: Lazy<1>,
     /// The shade in the gather's per-pixel visibility variants (voxel, exact).
     shade: VisibilityVariants,
@@ -180,8 +177,6 @@ pub struct RisFrame {
     /// What the history depends on (camera, CDF, every setting but the seed): reservoirs are carried to
     /// the next frame only while it is unchanged.
     pub key: u64,
-    /// Visibility reuse (`RisSettings::reuse_visible`): the visibility stage after the temporal one.
-    pub reuse_visible: bool,
 }
 
 /// `--learn-visibility auto` turns the learned visibility on (at this floor) for a view where visibility
@@ -337,8 +332,6 @@ impl Ris {
             Binding::storage_buffer(B_RIS_UNSHADOWED),
             Binding::uniform_texel_buffer(B_RIS_VIS),
         ]);
-        let mut visibility = base();
-        visibility.extend([B_RIS_OUT, B_RIS_RAYS].map(Binding::storage_buffer));
         let mut shade = base();
         shade.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV, B_RIS_RAYS].map(Binding::storage_buffer));
         shade.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
@@ -357,13 +350,6 @@ impl Ris {
             ],
             temporal: Lazy::new(gpu, "ris_temporal", RIS_TEMPORAL_COMP, &temporal, push),
             spatial: Lazy::new(gpu, "ris_spatial", RIS_SPATIAL_COMP, &spatial, push),
-            visibility: VisibilityVariants::new(
-                gpu,
-                "ris_visibility",
-                [RIS_VISIBILITY_COMP, RIS_VISIBILITY_EXACT_COMP],
-                visibility,
-                push,
-            ),
             shade: VisibilityVariants::new(gpu, "ris_shade", [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP], shade, push),
             sampler: Sampler::nearest(gpu)?,
         })
@@ -425,18 +411,12 @@ impl Ris {
         } else {
             g.create_buffer(BufferDesc::storage("ris.cv (off)", 16))
         };
-        // The frame's shadow rays, counted by the stages that trace them (visibility, shade).
-        let mut rays = g.create_buffer(BufferDesc::storage("ris.rays", 4));
-        g.add_clear("ris_rays_clear", &mut [&mut rays]);
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
             self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
             if let Some((previous, motion)) = previous {
                 self.add_temporal(g, f, i, (previous, motion, vis), dst, push, r.push)?;
-            }
-            if r.reuse_visible {
-                self.add_visibility(g, f, i, dst, &mut rays, push, r.push)?;
             }
         }
         for pass in 0..r.spatial_passes {
@@ -450,6 +430,9 @@ impl Ris {
             let control = if s == r.spatial_passes { r.push.control } else { RIS_CONTROL_OFF };
             self.add_spatial(g, f, i, (src, vis), dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
         }
+        // The frame's shadow rays, counted by the shade.
+        let mut rays = g.create_buffer(BufferDesc::storage("ris.rays", 4));
+        g.add_clear("ris_rays_clear", &mut [&mut rays]);
         let shade = ShadeIo { reservoirs: current, unshadowed, vis: &mut vis, cv: &mut cv, rays: &mut rays, out };
         self.add_shade(g, f, i, shade, push, r.push)?;
         Ok(rays)
@@ -644,42 +627,6 @@ impl Ris {
                 .sampled_image(B_PREV_POSITION, ctx.image(&m.prev_position), s)
                 .sampled_image(B_PREV_SURFACE, ctx.image(&m.prev_surface), s)
                 .texel_view(B_RIS_VIS, ctx.buffer(&vis));
-            let block = RisPushBlock { gather: push, ris };
-            let size = [f.width, f.height, ris.reservoirs];
-            pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
-        });
-        Ok(())
-    }
-
-    /// Each reservoir of `dst` tested at its pixel: an occluded sample dropped (visibility reuse).
-    #[allow(clippy::too_many_arguments)]
-    fn add_visibility<'a>(
-        &'a self,
-        g: &mut Graph<'a>,
-        f: FrameInputs<'a>,
-        i: &GatherInputs,
-        dst: &mut Handle<Buffer>,
-        rays: &mut Handle<Buffer>,
-        push: GatherPush,
-        ris: RisPush,
-    ) -> Result<()> {
-        let (i, o, hr) = (*i, *dst, *rays);
-        let pipeline = self.visibility.pipeline(&f)?;
-        let mut b = Self::reads(g.add_pass("ris_visibility"), &i).write(rays, Access::ComputeWrite);
-        for h in i.end_ball_images() {
-            b = b.read(&h, Access::ComputeRead);
-        }
-        b.write(dst, Access::ComputeWrite).record(move |ctx| {
-            let writes = self
-                .base_writes(f, ctx, &i)
-                .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
-                .storage_buffer(B_RIS_RAYS, ctx.buffer(&hr));
-            // The exact variant's layout holds the end balls (unread here: stand-ins where the frame has none).
-            let (writes, _) = match f.visibility {
-                Visibility::Exact => super::gather::end_ball_writes(ctx, &i, writes, self.sampler.raw),
-                _ => (writes, 0),
-            };
-            let writes = VisibilityVariants::writes(&f, writes);
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
             pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&block), size, [WG_2D, WG_2D, 1]);
