@@ -89,7 +89,7 @@ pub fn build_frame<'a>(
     let direct = g.cached("direct", &k.direct, |g| r.direct.add(g, f, &gbuffer, &shadow));
     let combined = (s.component == Component::Combined).then_some(direct);
     if s.component == Component::Direct {
-        return Ok(FrameOut { radiance: direct, ..FrameOut::default_for(direct) });
+        return Ok(FrameOut::default_for(direct));
     }
     let desc = |name| radiance_desc(name, f.width, f.height);
     let mut out = g.temporal_image("radiance", desc(out_name(s.method)), &()).handle;
