@@ -77,6 +77,7 @@ vec3 gather_queued(ivec2 px, bool inside) {
     vec3 nx = texelFetch(g_normal, at, 0).xyz;
     vec3 ax = texelFetch(g_albedo, at, 0).rgb;
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+    mixture_at_pixel(px);
     vec3 o = shadow_origin(x, nx);
     vec4 ball = end_ball_of_pixel(at);
     ray_origin = o;
@@ -138,6 +139,7 @@ void main() {
             // Sample k is point k of the pixel's stratified set (draw_vpl): a seed per pixel decorrelates
             // neighbours, and progressive frames (seed, seed + 1, …) are independent scrambles.
             uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+            mixture_at_pixel(px);
             for (uint k = pc.first; k < pc.last; k++) {
                 float prob;
                 uint v = draw_vpl(k, seed, prob);

@@ -199,6 +199,7 @@ void main() {
         // of the patch set, gathering ray j point j of the ray set; the pixel's seed decorrelates
         // neighbours, and progressive frames (seed, seed + 1, …) are independent scrambles.
         uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
+        mixture_at_pixel(px); // `local`: the regions around px (shared/sampling.glsl)
         float n_c = float(pc.samples), n_g = float(max(pc.rays, 1u));
         bool thesis = pc.mode == MIS_THESIS;
         // Items [first, last) of n_c CDF samples followed by n_g gathering rays (so dispatches split

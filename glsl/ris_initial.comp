@@ -175,6 +175,9 @@ void main() {
         uvec2 window = pool_window(px, stream);
 #else
         uvec2 window = uvec2(0u);
+        // Drawn here, per pixel: `local`'s source is its mixture at px, as the gather's (the pool is
+        // shared by the screen, so it draws every region alike).
+        mixture_at_pixel(px);
 #endif
         if (RIS_NEAR) {
         Near near = near_windows(x);

@@ -32,45 +32,123 @@ float term_prob(uint t, uint v) {
 // No term known to mixture_prob: it computes them all.
 #define TERM_NONE 0xFFFFFFFFu
 
+// The method sections a draw at one pixel chooses among, with their probabilities (summing to 1): the
+// first `count` entries, those with weight.
+struct SectionMix {
+    uvec4 section;
+    vec4 weight;
+    uint count;
+};
+
+// `local` at pixel px (thesis §7.3.3 samples every region's CDF at every pixel: one mixture for the whole
+// screen, in which each region's CDF is a noisier copy of the global one). Here a pixel blends the CDFs of
+// the (up to) four regions whose centres surround it, with bilinear weights: the mixture varies
+// continuously over the screen (no seam at a region border, the thesis's reason for mixing them all) and a
+// pixel draws from the CDFs built from gather points near it. Regions without weight (their gather points
+// all missed) drop out and the rest are renormalised; a pixel with none left samples uniformly. A function
+// of the pixel and the CDF totals only, so the draw's probability is exact.
+SectionMix region_mixture(ivec2 px) {
+    uint side = uint(round(sqrt(float(pc.sections))));
+    vec2 c = (vec2(px) + 0.5) * float(side) / vec2(frame.size.xy) - 0.5;
+    vec2 f = clamp(floor(c), vec2(0.0), vec2(float(side - 1u)));
+    vec2 t = clamp(c - f, vec2(0.0), vec2(1.0));
+    uvec2 a = uvec2(f), b = min(a + 1u, uvec2(side - 1u));
+    // At the screen's edge both neighbours are the same region: all the weight on one entry.
+    if (b.x == a.x) t.x = 0.0;
+    if (b.y == a.y) t.y = 0.0;
+    uvec4 section = 1u + uvec4(a.y * side + a.x, a.y * side + b.x, b.y * side + a.x, b.y * side + b.x);
+    vec4 weight = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
+    // The entries with weight first, so that the draws' loops run over those only (most pixels have one
+    // or two: the four-way blend is a band around the centres' square).
+    SectionMix m = SectionMix(uvec4(0u), vec4(0.0), 0u);
+    float sum = 0.0;
+    for (uint j = 0u; j < 4u; j++) {
+        if (weight[j] > 0.0 && cdf_total_at(section[j] * pc.cdf_len) > 0.0) {
+            m.section[m.count] = section[j];
+            m.weight[m.count] = weight[j];
+            m.count++;
+            sum += weight[j];
+        }
+    }
+    if (sum > 0.0) m.weight /= sum;
+    return m;
+}
+
+// The mixture of the pixel being shaded: mix_by_pixel when draws blend the regions around it (`local`
+// with a pixel; set by mixture_at_pixel, once per pixel, in gather.comp and mis.comp), else every live
+// method section alike (also for the sets psm.comp and ris's pool share over the screen).
+bool mix_by_pixel = false;
+SectionMix mix_pixel = SectionMix(uvec4(0u), vec4(0.0), 0u);
+
+void mixture_at_pixel(ivec2 px) {
+    mix_by_pixel = pc.sections > 1u;
+    if (mix_by_pixel) mix_pixel = region_mixture(px);
+}
+
+// The mixture's entries: the pixel's (entry j: section mix_pixel.section[j], weight
+// mix_pixel.weight[j]) or the method sections (entry j: section j + 1, weight 1 if it has any, summed
+// and then divided by the number that do). Loop bounds, not branches: llvmpipe runs a branch's body
+// under a mask whatever the lanes need, but a loop only while a lane needs it, so the methods that mix
+// no regions pay nothing for `local`'s.
+uint pixel_entries() { return mix_by_pixel ? mix_pixel.count : 0u; }
+uint shared_entries() { return mix_by_pixel ? 0u : pc.sections; }
+uint entry_section(uint j) { return mix_by_pixel ? mix_pixel.section[j & 3u] : j + 1u; }
+float entry_weight(uint j) {
+    if (mix_by_pixel) return mix_pixel.weight[j & 3u]; // & 3: a lane masked off may ask for TERM_NONE
+    return cdf_total_at((j + 1u) * pc.cdf_len) > 0.0 ? 1.0 : 0.0;
+}
+
+// The number of method sections with weight (0 with a pixel's mixture, which weighs its own).
+uint live_sections() {
+    uint live = 0u;
+    for (uint s = 1u; s <= shared_entries(); s++) live += cdf_total_at(s * pc.cdf_len) > 0.0 ? 1u : 0u;
+    return live;
+}
+
+// Whether the mixture has no method entry with weight (then draws are uniform: ε = 1).
+bool mixture_empty(uint live) {
+    return mix_by_pixel ? mix_pixel.count == 0u : live == 0u;
+}
+
 // draw_vpl's p_v of VPL v, given `live` method sections with weight and the effective defensive share eps:
-//   p_v = ε · P_0(v) + (1 − ε)/live · Σ_{s live} P_s(v).
-// Term `known` (TERM_NONE: none) is given as known_p, the bits term_prob(known, v) has: draw_vpl knows the
-// term that drew v, and cdf_sample_rows3_prob gives its probability from the searches' own reads. The
-// other terms are computed one per iteration of a loop, whose count is the same for every lane, so
-// `uniform` (section 0 alone) computes none: a loop runs only while a lane needs it, where llvmpipe runs
-// a branch's body under a mask whatever the lanes need. The method terms are summed in section order as
-// before, the known one in its place, so p_v keeps its bits.
+//   p_v = ε · P_0(v) + (1 − ε) Σ_j w_j P_{s_j}(v) / W,
+// over the mixture's entries j (section s_j, weight w_j; W = 1 for a pixel's, the live sections' number
+// otherwise). Term `known` (0: section 0, 1 + j: entry j, TERM_NONE: none) is given as known_p, the bits
+// term_prob has for it: draw_vpl knows the term that drew v, and cdf_sample_rows3_prob gives its
+// probability from the searches' own reads. The other terms are computed one per iteration of a loop,
+// whose count is the same for every lane, so `uniform` (section 0 alone) computes none. The entries are
+// summed in order, the known one in its place, so draw_vpl and source_prob agree bit for bit.
 float mixture_prob(uint v, uint live, float eps, uint known, float known_p) {
-    uint sections = pc.sections;
+    uint entries = pixel_entries() + shared_entries();
     float uniform_p = known_p, method = 0.0;
-    bool known_summed = known == 0u || known > sections;
-    uint others = known <= sections ? sections : sections + 1u;
-    for (uint j = 0u; j < others; j++) {
-        uint t = j < known ? j : j + 1u;
+    bool known_summed = known == 0u || known > entries;
+    uint others = known <= entries ? entries : entries + 1u;
+    for (uint i = 0u; i < others; i++) {
+        uint t = i < known ? i : i + 1u;
         if (!known_summed && t > known) {
-            method += known_p;
+            method += entry_weight(known - 1u) * known_p;
             known_summed = true;
         }
-        float p = term_prob(t, v);
+        float p = term_prob(t == 0u ? 0u : entry_section(t - 1u), v);
         if (t == 0u) uniform_p = p;
-        else if (cdf_total_at(t * pc.cdf_len) > 0.0) method += p;
+        else method += entry_weight(t - 1u) * p;
     }
-    if (!known_summed) method += known_p;
-    return eps * uniform_p + (live > 0u ? (1.0 - eps) * method / float(live) : 0.0);
+    if (!known_summed) method += entry_weight(known - 1u) * known_p;
+    bool any = mix_by_pixel || live > 0u;
+    return eps * uniform_p + (any ? (1.0 - eps) * method / (mix_by_pixel ? 1.0 : float(live)) : 0.0);
 }
 
 // draw_vpl's p_v of any VPL v: the probability that the sampling mixture draws it.
 float source_prob(uint v) {
-    uint live = 0u;
-    for (uint s = 1u; s <= pc.sections; s++) live += cdf_total_at(s * pc.cdf_len) > 0.0 ? 1u : 0u;
-    return mixture_prob(v, live, live == 0u ? 1.0 : pc.defensive, TERM_NONE, 0.0);
+    uint live = live_sections();
+    return mixture_prob(v, live, mixture_empty(live) ? 1.0 : pc.defensive, TERM_NONE, 0.0);
 }
 
 // The sampling mixture: with probability ε (or when no method section has weight) uniformly among the
-// VPLs (section 0); otherwise a method section s chosen uniformly (local: the regions; else the one),
-// whose face is chosen by its weight (Russian roulette, thesis alg. 9) or uniformly among the faces
-// with weight, then the texel by the face's CDF. Returns v and its exact mixture probability
-//   p_v = ε_eff · valid_v / #VPLs + (1 − ε_eff) · 1/S Σ_s P_s(v).
+// VPLs (section 0); otherwise a method section s: the one, or for `local` a region by the pixel's
+// bilinear weights (region_mixture; without a pixel, the regions uniformly), whose face is chosen by its
+// weight (Russian roulette, thesis alg. 9) or uniformly among the faces with weight, then the texel by
+// the face's CDF. Returns v and its exact mixture probability (mixture_prob).
 // Sample k of the stratified set `seed` (shared/owen_sobol.glsl): three padded sets, each uniform per
 // sample (so p_v is its exact probability and the estimate stays unbiased) and stratified over the
 // samples k of one seed: (defensive, section) together, so the ε share and the sections each get their
@@ -79,11 +157,8 @@ float source_prob(uint v) {
 uint draw_vpl(uint k, uint seed, out float prob) {
     uint len = pc.cdf_len;
     uint n = vpl_slots();
-    uint sections = pc.sections;
-    float eps = pc.defensive;
-    uint live = 0u;
-    for (uint s = 1u; s <= sections; s++) live += cdf_total_at(s * len) > 0.0 ? 1u : 0u;
-    if (live == 0u) eps = 1.0; // all-zero importance: uniform (the host warns)
+    uint live = live_sections();
+    float eps = mixture_empty(live) ? 1.0 : pc.defensive; // all-zero importance: uniform (the host warns)
     vec2 choice = owen_sobol2(k, seed ^ 0x3C6EF372u);
     vec2 face_row = owen_sobol2(k, seed ^ 0xA54FF53Au);
     float texel = owen_sobol1(k, seed ^ 0x510E527Fu);
@@ -95,19 +170,27 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     vec3 ut = u;
     bool per_face = false, found = false;
     if (!(choice.x < eps)) {
-        // A section uniformly among those with weight (a local region whose gather points all missed
-        // has none).
+        // A pixel's entry by its weight: the first whose running sum exceeds choice.y, else the last
+        // (rounding).
+        uint e = pixel_entries() > 0u ? pixel_entries() - 1u : 0u;
+        float acc = 0.0;
+        for (uint j = 0u; j < pixel_entries(); j++) {
+            acc += mix_pixel.weight[j];
+            if (choice.y < acc) { e = j; break; }
+        }
+        // Or a section uniformly among those with weight (a local region whose gather points all
+        // missed has none).
         uint pick = min(uint(choice.y * float(live)), live - 1u);
-        uint s = 1u;
-        for (uint j = 1u; j <= sections; j++) {
-            if (cdf_total_at(j * len) > 0.0) {
-                if (pick == 0u) { s = j; break; }
+        for (uint j = 0u; j < shared_entries(); j++) {
+            if (cdf_total_at((j + 1u) * len) > 0.0) {
+                if (pick == 0u) { e = j; break; }
                 pick--;
             }
         }
+        uint s = entry_section(e);
         cb = s * len;
         ib = s * n;
-        known = s;
+        known = 1u + e;
         if (pc.face_mode == FACE_UNIFORM) {
             // The face uniformly among those with weight, then (row, texel) inside it.
             per_face = true;

@@ -556,10 +556,11 @@ fn around_a_corner_gbg_and_mis_beat_uniform_and_global() {
     }
 }
 
-/// `local` has no seam: every pixel samples the mixture of all region CDFs, so the error (against `all`)
-/// of the columns on either side of the vertical region border has the same mean, within noise.
+/// `local` is unbiased where a pixel blends regions (its mixture's weights change fastest at a region
+/// border): the error (against `all`) of the columns on either side of the vertical region border has
+/// the same mean, within noise.
 #[test]
-fn local_has_no_seam_at_region_borders() {
+fn local_is_unbiased_at_region_borders() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();

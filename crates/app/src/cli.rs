@@ -90,7 +90,7 @@ pub const METHODS: Choices<Method> = Choices(&[
         Method::Stratified,
         "The global CDF with its gather points spread over the 4 screen quarters (thesis §7.3.2)",
     ),
-    ("local", Method::Local, "One CDF per screen region (--regions), every pixel sampling all of them (thesis §7.3.3)"),
+    ("local", Method::Local, "One CDF per screen region (--regions), a pixel sampling those around it blended bilinearly (thesis §7.3.3)"),
     ("gbg", Method::Gbg, "The gathering-based global CDF: --gather-rays cosine rays per pixel (thesis §7.3.4)"),
     (
         "mis",
@@ -118,7 +118,11 @@ pub const RIS_SOURCES: Choices<RisSource> = Choices(&[
     ("uniform", RisSource::Uniform, "Uniformly among the VPLs"),
     ("global", RisSource::Global, "The global CDF (--cdf-samples gather points)"),
     ("stratified", RisSource::Stratified, "The global CDF from gather points over the 4 screen quarters"),
-    ("local", RisSource::Local, "One CDF per screen region (--regions), all sampled by every pixel"),
+    (
+        "local",
+        RisSource::Local,
+        "The local method's CDFs (--regions); the presampled pool, shared by the screen, mixes them all",
+    ),
     ("gbg", RisSource::Gbg, "The gathering-based global CDF (--gather-rays)"),
 ]);
 
@@ -285,7 +289,7 @@ pub struct FrameArgs {
     /// A VPL's falloff with distance.
     #[arg(long, value_parser = VPL_KERNELS, default_value = VPL_KERNELS.name_of(&d().vpl_kernel))]
     pub vpl_kernel: VplKernel,
-    /// Gather points per CDF (global, stratified, local).
+    /// Gather points of the importance (global, stratified; local splits them among its regions).
     #[arg(long, default_value_t = d().cdf_samples)]
     pub cdf_samples: u32,
     /// Screen regions of `local` (a perfect square).

@@ -48,7 +48,8 @@ pub enum Method {
     Global,
     /// Thesis §7.3.2: the global CDF from gather points spread over 4 screen quarters.
     Stratified,
-    /// Thesis §7.3.3: one CDF per screen region, all sampled by every pixel (a mixture: no seams).
+    /// Thesis §7.3.3: one CDF per screen region; a pixel samples the CDFs of the regions around it,
+    /// blended bilinearly (continuous over the screen: no seams).
     Local,
     /// Thesis §7.3.4: the gathering-based global CDF (cosine rays, per-texel averages, median holes).
     Gbg,
@@ -379,7 +380,7 @@ pub struct FrameSettings {
     pub vpl_kernel: VplKernel,
     /// VPLs per tile of the exhaustive (`all`) gather: one submission each.
     pub all_tile: u32,
-    /// Gather points per CDF (global, stratified, local).
+    /// Gather points of the importance (global, stratified; local splits them among its regions).
     pub cdf_samples: u32,
     /// Screen regions of `local` (a perfect square: side × side).
     pub regions: u32,

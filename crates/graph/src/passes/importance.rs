@@ -8,7 +8,8 @@
 //!   (luminance, eq. 7.6) to S gather points drawn uniformly over the image (`--cdf-samples S`);
 //! - `stratified` (§7.3.2): the same with the gather points spread evenly over the 4 screen quarters;
 //! - `local` (§7.3.3): one section per region of a side × side grid (`--regions` = side²), each from
-//!   S gather points of its own region;
+//!   S / side² gather points of its own region (the thesis: S each) (a pixel samples the regions around
+//!   it, blended bilinearly: `region_mixture` in glsl/shared/sampling.glsl);
 //! - `gbg` (§7.3.4): R cosine rays per gather point (`--gather-rays R`) marched through the voxels; the
 //!   first hit projected into each light's DPRSM credits its VPL with its unshadowed contribution; the
 //!   per-texel average (sum / hits) is the weight, and texels no ray reached take the median of their
@@ -64,7 +65,7 @@ impl ImportanceKind {
 #[derive(Clone, Copy, Debug)]
 pub struct ImportanceParams {
     pub kind: ImportanceKind,
-    /// Gather points per CDF (global, stratified, local).
+    /// Gather points of the importance (global, stratified; local splits them among its regions).
     pub samples: u32,
     pub seed: u32,
     /// 1/d² is clamped below this squared distance (importance only).
@@ -171,7 +172,13 @@ impl Importance {
         let res = f.dprsm_res;
         let push = |mode, section| ImportancePush {
             mode,
-            samples: p.samples,
+            // local splits the S gather points among its regions: the importance of every kind costs
+            // the same at one S (the thesis gives each region S: 4× global's cost, which lost at equal
+            // time over the generated suite: BENCHMARKS.md).
+            samples: match p.kind {
+                ImportanceKind::Local { side } => (p.samples / (side * side)).max(1),
+                _ => p.samples,
+            },
             seed: p.seed,
             regions: match p.kind {
                 ImportanceKind::Local { side } => side,
