@@ -91,6 +91,7 @@ const SHADERS: &[Shader] = &[
     file("test/front_part.comp"),
     file("test/layout_echo.comp"),
     file("test/owen_sobol.comp"),
+    file("test/region_weights.comp"),
     file("test/shadow_queue.comp"),
     file("test/voxel_march.comp"),
     file("test/voxel_rcp.comp"),

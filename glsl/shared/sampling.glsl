@@ -3,6 +3,7 @@
 #ifndef BOUNCE_SAMPLING_GLSL
 #define BOUNCE_SAMPLING_GLSL
 #include "owen_sobol.glsl"
+#include "regions.glsl"
 
 
 // Number of faces with weight in method section s (the faces FACE_UNIFORM chooses among).
@@ -49,17 +50,12 @@ struct SectionMix {
 // of the pixel and the CDF totals only, so the draw's probability is exact.
 SectionMix region_mixture(ivec2 px) {
     uint side = uint(round(sqrt(float(pc.sections))));
-    vec2 c = (vec2(px) + 0.5) * float(side) / vec2(frame.size.xy) - 0.5;
-    vec2 f = clamp(floor(c), vec2(0.0), vec2(float(side - 1u)));
-    vec2 t = clamp(c - f, vec2(0.0), vec2(1.0));
-    uvec2 a = uvec2(f), b = min(a + 1u, uvec2(side - 1u));
-    // At the screen's edge both neighbours are the same region: all the weight on one entry.
-    if (b.x == a.x) t.x = 0.0;
-    if (b.y == a.y) t.y = 0.0;
-    uvec4 section = 1u + uvec4(a.y * side + a.x, a.y * side + b.x, b.y * side + a.x, b.y * side + b.x);
-    vec4 weight = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
-    // The entries with weight first, so that the draws' loops run over those only (most pixels have one
-    // or two: the four-way blend is a band around the centres' square).
+    uvec4 region;
+    vec4 weight;
+    region_weights(vec2(px), vec2(frame.size.xy), side, region, weight);
+    uvec4 section = 1u + region;
+    // The entries with weight first, so that the draws' loops run over those only (with 2 × 2 regions
+    // three pixels in four have one or two).
     SectionMix m = SectionMix(uvec4(0u), vec4(0.0), 0u);
     float sum = 0.0;
     for (uint j = 0u; j < 4u; j++) {

@@ -588,6 +588,65 @@ fn local_is_unbiased_at_region_borders() {
     assert!(m.abs() <= 4.0 * se, "a seam: {m} ± {se}");
 }
 
+/// `local`'s blend of regions (`glsl/shared/regions.glsl`, through `glsl/test/region_weights.comp`):
+/// at every pixel of screens of several shapes and grids, the weights are the bilinear weights of the
+/// four nearest region centres (computed here independently, as the tent 1 − |c − k| per axis around
+/// each centre k, clamped at the screen's edges), sum to 1, give a pixel at a region's centre to that
+/// region alone, and change between neighbouring pixels by at most side / size per axis: no seam (the
+/// thesis's one CDF per region would jump by 1 at each border).
+#[test]
+fn local_blends_regions_continuously() {
+    let gpu = TestGpu::new();
+    let mut cases: Vec<[u32; 4]> = vec![];
+    for (w, h, side) in [(32u32, 32u32, 2u32), (48, 20, 3), (17, 29, 4), (64, 64, 8), (9, 9, 1)] {
+        for y in 0..h {
+            for x in 0..w {
+                cases.push([x, y, w | (h << 16), side]);
+            }
+        }
+    }
+    let shader = bounce_graph::shaders::REGION_WEIGHTS_COMP;
+    let got: Vec<f32> = bounce_tests::run_test_kernel(&gpu, "region_weights", shader, &cases, 8 * cases.len());
+    // The weight of each region at case q, summed over the entries that name it.
+    let per_region = |q: usize, side: u32| {
+        let mut r = vec![0.0f64; (side * side) as usize];
+        for j in 0..4 {
+            r[got[q * 8 + j] as usize] += got[q * 8 + 4 + j] as f64;
+        }
+        r
+    };
+    // The tent weight of centre k along one axis at pixel p of n, the edges' halves clamped to the
+    // outermost centre.
+    let tent = |p: u32, n: u32, side: u32, k: u32| {
+        let c = ((p as f64 + 0.5) * side as f64 / n as f64 - 0.5).clamp(0.0, (side - 1) as f64);
+        (1.0 - (c - k as f64).abs()).max(0.0)
+    };
+    let mut worst_step = 0.0f64;
+    for (q, c) in cases.iter().enumerate() {
+        let ([x, y, _, side], (w, h)) = (*c, (c[2] & 0xFFFF, c[2] >> 16));
+        let r = per_region(q, side);
+        assert!((r.iter().sum::<f64>() - 1.0).abs() < 1e-5, "weights do not sum to 1 at {c:?}: {r:?}");
+        for (k, got_w) in r.iter().enumerate() {
+            let (kx, ky) = (k as u32 % side, k as u32 / side);
+            let want = tent(x, w, side, kx) * tent(y, h, side, ky);
+            assert!((got_w - want).abs() < 1e-5, "region {k} at {c:?}: {got_w} against {want}");
+        }
+        // Continuity: against the next pixel to the right and below, on the same screen.
+        for (dx, dy, n) in [(1u32, 0u32, w), (0, 1, h)] {
+            if x + dx >= w || y + dy >= h {
+                continue;
+            }
+            let next = q + (dx + dy * w) as usize;
+            let rn = per_region(next, side);
+            let step = r.iter().zip(&rn).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let bound = side as f64 / n as f64 + 1e-5;
+            assert!(step <= bound, "a seam between {c:?} and its neighbour: {step} > {bound}");
+            worst_step = worst_step.max(step * n as f64 / side as f64);
+        }
+    }
+    eprintln!("local's blend: {} pixels; largest step between neighbours {worst_step:.3} of side / size", cases.len());
+}
+
 /// A given seed gives the same image (bit for bit), also for gbg, whose importance is a sum of atomic
 /// adds (u64 fixed point, so the order threads add in does not matter); another seed gives another.
 #[test]
