@@ -18,43 +18,42 @@ layout(set = 0, binding = B_DENOISE_MOMENTS_OUT, rgba32f) uniform writeonly imag
 // The longest history counted (the blend's weight stays at α beyond 1 / α frames anyway).
 const float MAX_HISTORY = 255.0;
 
+// The raw estimate's indirect light at p, demodulated by the albedo.
+vec3 illumination(ivec2 p) {
+    vec3 c = texelFetch(raw, p, 0).rgb;
+    if (pc.add_direct != 0u) c -= texelFetch(direct_radiance, p, 0).rgb;
+    return max(demodulate(c, texelFetch(g_albedo, p, 0).rgb), vec3(0.0));
+}
+
+// h clamped into this frame's 5 × 5 neighbourhood: its mean ± DENOISE_CLAMP_SIGMAS standard deviations,
+// per channel.
+vec3 clamp_to_neighbourhood(ivec2 px, vec3 h) {
+    vec3 m1 = vec3(0.0), m2 = vec3(0.0);
+    for (int dy = -2; dy <= 2; dy++) {
+        for (int dx = -2; dx <= 2; dx++) {
+            vec3 iq = illumination(clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size.xy) - 1));
+            m1 += iq;
+            m2 += iq * iq;
+        }
+    }
+    m1 /= 25.0;
+    vec3 sd = sqrt(max(m2 / 25.0 - m1 * m1, vec3(0.0)));
+    return clamp(h, m1 - DENOISE_CLAMP_SIGMAS * sd, m1 + DENOISE_CLAMP_SIGMAS * sd);
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
-    vec3 c = texelFetch(raw, px, 0).rgb;
-    if (pc.add_direct != 0u) c -= texelFetch(direct_radiance, px, 0).rgb;
-    vec3 illum = max(demodulate(c, texelFetch(g_albedo, px, 0).rgb), vec3(0.0));
+    vec3 illum = illumination(px);
     float l = luminance(illum);
     vec4 moments = vec4(l, l * l, 0.0, 0.0);
     float len = 1.0;
     vec4 mv = texelFetch(motion, px, 0);
-    // This frame's neighbourhood: mean ± DENOISE_CLAMP_SIGMAS standard deviations, per channel.
-    vec3 box_lo = vec3(-1e30), box_hi = vec3(1e30);
-    if (DENOISE_CLAMP_SIGMAS > 0.0 && pc.history != 0u && mv.z != 0.0) {
-        vec3 m1 = vec3(0.0), m2 = vec3(0.0);
-        float n = 0.0;
-        for (int dy = -2; dy <= 2; dy++) {
-            for (int dx = -2; dx <= 2; dx++) {
-                ivec2 p = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size.xy) - 1);
-                vec3 a = texelFetch(g_albedo, p, 0).rgb;
-                vec3 cq = texelFetch(raw, p, 0).rgb;
-                if (pc.add_direct != 0u) cq -= texelFetch(direct_radiance, p, 0).rgb;
-                vec3 iq = max(demodulate(cq, a), vec3(0.0));
-                m1 += iq;
-                m2 += iq * iq;
-                n += 1.0;
-            }
-        }
-        m1 /= n;
-        vec3 sd = sqrt(max(m2 / n - m1 * m1, vec3(0.0)));
-        box_lo = m1 - DENOISE_CLAMP_SIGMAS * sd;
-        box_hi = m1 + DENOISE_CLAMP_SIGMAS * sd;
-    }
     if (pc.history != 0u && mv.z != 0.0) {
         ivec2 q = ivec2(mv.xy);
         vec4 h = texelFetch(prev_color, q, 0);
         if (h.a > 0.0) {
-            h.rgb = clamp(h.rgb, box_lo, box_hi);
+            h.rgb = clamp_to_neighbourhood(px, h.rgb);
             len = min(h.a + 1.0, MAX_HISTORY);
             float a = max(pc.alpha, 1.0 / len);
             illum = mix(h.rgb, illum, a);

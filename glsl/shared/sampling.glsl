@@ -71,7 +71,8 @@ SectionMix region_mixture(ivec2 px) {
 }
 
 // The mixture of the pixel being shaded: mix_by_pixel when draws blend the regions around it (`local`
-// with a pixel; set by mixture_at_pixel, once per pixel, in gather.comp and mis.comp), else every live
+// with a pixel; set by mixture_at_pixel, once per pixel, in gather.comp, mis.comp and ris_initial.comp
+// without the pool), else every live
 // method section alike (also for the sets psm.comp and ris's pool share over the screen).
 bool mix_by_pixel = false;
 SectionMix mix_pixel = SectionMix(uvec4(0u), vec4(0.0), 0u);
