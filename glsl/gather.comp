@@ -78,6 +78,7 @@ vec3 gather_queued(ivec2 px, bool inside) {
     vec3 ax = texelFetch(g_albedo, at, 0).rgb;
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
     mixture_at_pixel(px);
+    near_at_pixel(x);
     vec3 o = shadow_origin(x, nx);
     vec4 ball = end_ball_of_pixel(at);
     ray_origin = o;
@@ -140,6 +141,7 @@ void main() {
             // neighbours, and progressive frames (seed, seed + 1, …) are independent scrambles.
             uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
             mixture_at_pixel(px);
+            near_at_pixel(x);
             for (uint k = pc.first; k < pc.last; k++) {
                 float prob;
                 uint v = draw_vpl(k, seed, prob);

@@ -8,7 +8,7 @@
 //   the source (its marginal law is p: ris.rs). RIS_LEARNED: the target weighs in the learned visibility.
 // RIS_NEAR (a specialisation; with the pool, ris.near_candidates > 0): the last ris.near_candidates of the
 //   M candidates come from (2r + 1)² windows of light-map texels around where x projects into each
-//   light's map (shared/ris_near.glsl): the VPLs next to x, whose kernel makes the target's tail and
+//   light's map (shared/near_window.glsl): the VPLs next to x, whose kernel makes the target's tail and
 //   which the pool almost never holds. Every candidate, of either strategy, is weighed with the balance
 //   mixture q(v) = (M_pool p_source(v) + M_near p_near(v)) / M (multiple-importance RIS): unbiased, since
 //   the pool's strategy reaches every VPL (ris.rs).
@@ -120,7 +120,7 @@ void add_candidate(inout Reservoir r, inout vec4 u, inout Picks pk, ivec2 px, ui
     }
 }
 
-#include "shared/ris_near.glsl"
+#include "shared/near_window.glsl"
 
 // Finishes a pick after its M candidates: W = Σw / (M p̂(y)).
 Reservoir finish(Reservoir r) {
@@ -180,7 +180,7 @@ void main() {
         mixture_at_pixel(px);
 #endif
         if (RIS_NEAR) {
-        Near near = near_windows(x);
+        Near near = near_windows(x, ris.near_radius);
         // Closed windows give their candidates to the pool.
         uint split = near.open ? ris.candidates - ris.near_candidates : ris.candidates;
         float m_all = float(ris.candidates), m_pool = float(split), m_near = m_all - m_pool;
@@ -200,7 +200,7 @@ void main() {
             for (uint i = max(pc.first, split); i < pc.last; i++) {
                 uint k = stream * ris.candidates + i;
                 float p_near;
-                ivec3 t = near_texel(near, px, k, p_near);
+                ivec3 t = near_texel(near, ris_rand(px, 5u, k), vec2(ris_rand(px, 6u, k), ris_rand(px, 7u, k)), p_near);
                 uint res = frame.size.w;
                 uint v = (uint(t.z) * res + uint(t.y)) * res + uint(t.x);
                 Vpl vpl = vpl_fetch_texel(t);

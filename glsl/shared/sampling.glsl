@@ -4,6 +4,7 @@
 #define BOUNCE_SAMPLING_GLSL
 #include "owen_sobol.glsl"
 #include "regions.glsl"
+#include "near_window.glsl"
 
 
 // Number of faces with weight in method section s (the faces FACE_UNIFORM chooses among).
@@ -135,10 +136,39 @@ float mixture_prob(uint v, uint live, float eps, uint known, float known_p) {
     return eps * uniform_p + (any ? (1.0 - eps) * method / (mix_by_pixel ? 1.0 : float(live)) : 0.0);
 }
 
+// The near share of the pixel being shaded (set by near_at_pixel, once per pixel, in gather.comp and
+// mis.comp): η = pc.near_share where one of x's near windows is open, else 0; then draws come with
+// probability η from x's window (shared/near_window.glsl) and 1 − η from the mixture above:
+//   p_v = η · p_near(v) + (1 − η) · p_mix(v),
+// exact, so the estimate stays unbiased; p_near puts α / K² on each texel of a window (an empty texel
+// is a draw that gives nothing). The pixel's VPLs next to x, which a screen-wide CDF cannot know, are
+// then drawn about η · N / K² times as often as uniformly: a concave edge's fireflies.
+float near_eta = 0.0;
+Near near_px;
+
+void near_at_pixel(vec3 x) {
+    near_eta = 0.0;
+    if (pc.near_share > 0.0) { // (the same for every lane)
+        near_px = near_windows(x, pc.near_radius);
+        near_eta = near_px.open ? pc.near_share : 0.0;
+    }
+}
+
+// A loop bound, not a branch (see pixel_entries): 1 where the pixel draws from its window.
+uint near_draws() { return near_eta > 0.0 ? 1u : 0u; }
+
+// η · p_near(v): the near strategy's part of p_v.
+float near_part(uint v) {
+    float p = 0.0;
+    for (uint i = 0u; i < near_draws(); i++) p = near_eta * near_prob(near_px, v);
+    return p;
+}
+
 // draw_vpl's p_v of any VPL v: the probability that the sampling mixture draws it.
 float source_prob(uint v) {
     uint live = live_sections();
-    return mixture_prob(v, live, mixture_empty(live) ? 1.0 : pc.defensive, TERM_NONE, 0.0);
+    float mix = mixture_prob(v, live, mixture_empty(live) ? 1.0 : pc.defensive, TERM_NONE, 0.0);
+    return near_part(v) + (1.0 - near_eta) * mix;
 }
 
 // The sampling mixture: with probability ε (or when no method section has weight) uniformly among the
@@ -160,6 +190,9 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     vec2 face_row = owen_sobol2(k, seed ^ 0xA54FF53Au);
     float texel = owen_sobol1(k, seed ^ 0x510E527Fu);
     vec3 u = vec3(face_row, texel);
+    // The near share first: choice.x < η draws from x's window, the rest is rescaled to [0, 1).
+    bool near_draw = choice.x < near_eta;
+    choice.x = near_draw ? 0.0 : (choice.x - near_eta) / (1.0 - near_eta);
     // The term that draws (section 0, or method section s) and its rows. One cdf_sample_rows3_prob call
     // with the chosen term's arguments: llvmpipe runs both sides of a branch under masks (it leaves only a
     // loop that no lane needs), so a call on each side, and one per face mode, each paid their reads.
@@ -208,7 +241,17 @@ uint draw_vpl(uint k, uint seed, out float prob) {
     float p;
     uint v = cdf_sample_rows3_prob(cb, ib, ut, r0, r1, p);
     float known_p = per_face ? (found ? p / float(nlive) : 0.0) : p; // term_prob(known, v)'s bits
-    prob = mixture_prob(v, live, eps, known, known_p);
+    for (uint i = 0u; i < near_draws(); i++) {
+        if (near_draw) {
+            // A texel of a window: the window by the texel's uniform, the texel by (face, row)'s.
+            float p_near;
+            ivec3 t = near_texel(near_px, u.z, u.xy, p_near);
+            uint res = frame.size.w;
+            v = (uint(t.z) * res + uint(t.y)) * res + uint(t.x);
+            known = TERM_NONE;
+        }
+    }
+    prob = near_part(v) + (1.0 - near_eta) * mixture_prob(v, live, eps, known, known_p);
     return v;
 }
 

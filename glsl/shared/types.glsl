@@ -63,8 +63,8 @@ struct GatherPush {
     uint cdf_len;     // floats per CDF section
     uint rays;        // mis: gathering rays per pixel (n_g)
     uint end_balls;   // 1: the exact gather's rays skip their ends' empty balls (B_END_BALL_PIXELS/_VPLS)
-    uint pad1;
-    uint pad2;
+    float near_share; // η: the share of a CDF method's draws from the pixel's near window (0: none)
+    uint near_radius; // the near window's half-width, texels (2r + 1 wide)
 };
 
 // ris push constants, after a GatherPush (`draw_vpl`'s sampling fields; first/last: the candidate range

@@ -52,7 +52,7 @@ void main() {
     put4u(uvec4(gp.mode, gp.samples, gp.seed, gp.first));
     put4u(uvec4(gp.last, gp.accumulate, gp.add_direct, floatBitsToUint(gp.clamp_d2)));
     put4u(uvec4(gp.sections, floatBitsToUint(gp.defensive), gp.face_mode, gp.cdf_len));
-    put4u(uvec4(gp.rays, gp.end_balls, gp.pad1, gp.pad2));
+    put4u(uvec4(gp.rays, gp.end_balls, floatBitsToUint(gp.near_share), gp.near_radius));
     put4(pv.position_v);
     put4(pv.normal_p);
     put4u(uvec4(ip.mode, ip.samples, ip.seed, ip.regions));

@@ -999,4 +999,16 @@ fn suite_runs_every_method_on_every_scene_and_aggregates() {
     // A suite without the baseline is one error line.
     let r = bounce(&["suite", cornell.to_str().unwrap(), "--out", out.to_str().unwrap(), "--methods", "gbg"]);
     assert_eq!((r.code, error_lines(&r).len()), (2, 1), "{}", r.stderr);
+    // At equal count every row is one frame of --vpls VPLs; a time budget beside it is an error line.
+    let counted = d.join("counted");
+    let args = ["suite", cornell.to_str().unwrap(), "--out", counted.to_str().unwrap(), "--methods", "uniform,gbg"];
+    let tiny = ["--seeds", "2", "--vpls", "4", "--width", "8", "--height", "8", "--reference-spp", "4"];
+    let r = bounce(&[&args[..], &tiny[..], &["--dprsm-res", "16", "--equal-count", "--validation"]].concat());
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let csv = std::fs::read_to_string(counted.join("suite.csv")).unwrap();
+    let frames: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').nth(4).unwrap()).collect();
+    assert_eq!(frames, ["1"; 4], "{csv}");
+    assert!(std::fs::read_to_string(counted.join("suite.md")).unwrap().contains("4 VPLs a pixel"));
+    let r = bounce(&[&args[..], &["--equal-count", "--time-limit", "1"]].concat());
+    assert_eq!((r.code, error_lines(&r).len()), (2, 1), "{}", r.stderr);
 }

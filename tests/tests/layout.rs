@@ -55,7 +55,8 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
         cdf_len: 4012,
         rays: 4013,
         end_balls: 4014,
-        pad: [4015, 4016],
+        near_share: next(),
+        near_radius: 4016,
     };
     let pv = PsmView { position_v: [next(), next(), next(), next()], normal_p: [next(), next(), next(), next()] };
     let ip = ImportancePush {

@@ -449,7 +449,8 @@ fn ris_with_exact_visibility_agrees_with_the_reference() {
 }
 
 /// One candidate and no reuse: the reservoir keeps the source's sample with W = 1/p, so the image is the
-/// source method's (up to rounding: f · (p̂/p)/p̂ against f/p).
+/// source method's (up to rounding: f · (p̂/p)/p̂ against f/p) without its near share, whose part ris's
+/// near candidates play.
 #[test]
 fn ris_with_one_candidate_is_its_source_method() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
@@ -462,6 +463,7 @@ fn ris_with_one_candidate_is_its_source_method() {
             vpls: 8,
             method: Method::Uniform,
             component: Component::Direct,
+            near_share: 0.0,
             ..FrameSettings::default()
         };
         let ris = RisSettings {

@@ -326,7 +326,8 @@ pub struct FrameArgs {
     /// across its progressive frames.
     #[arg(long)]
     pub cdf_seed: Option<u64>,
-    /// Candidate distribution of --method ris (the CDF methods' mixtures, --defensive included; default
+    /// Candidate distribution of --method ris (the CDF methods' mixtures, --defensive included, without
+    /// their near share: ris has near candidates of its own; default
     /// uniform, or gbg where `render --time-limit` finds the view's transport nearly all blocked).
     #[arg(long, value_parser = RIS_SOURCES)]
     pub source: Option<RisSource>,
@@ -343,7 +344,8 @@ pub struct FrameArgs {
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub denoise: bool,
     /// Switches that exist for A/B measurement (the `lab` cargo feature; BENCHMARKS.md says what each
-    /// measured): ris's reuse, pool and near window, learned visibility, control variate, the 1/d² clamp.
+    /// measured): ris's reuse, pool and near window, the CDF methods' near share, learned visibility,
+    /// control variate, the 1/d² clamp.
     #[cfg(feature = "lab")]
     #[command(flatten)]
     pub lab: LabArgs,
@@ -384,9 +386,15 @@ pub struct LabArgs {
     /// or chosen per view with --candidates).
     #[arg(long)]
     pub near_candidates: Option<u32>,
-    /// Half-width of --near-candidates' window, texels.
+    /// Half-width of the near window (--near-candidates' and --near-share's), texels.
     #[arg(long, default_value_t = RisSettings::default().near_radius)]
     pub near_radius: u32,
+    /// Share of the samples of global, stratified, local and gbg drawn from the pixel's near window, the
+    /// light-map texels around where the pixel projects into a light's map: the VPLs next to it, whose
+    /// 1/d² makes the fireflies of concave edges (0: the thesis's mixtures; the default chosen over the
+    /// generated suite).
+    #[arg(long, default_value_t = d().near_share)]
+    pub near_share: f32,
     /// --method ris weighs its target by the visibility learned from earlier progressive frames' shadow
     /// rays, floored at δ: `auto` (learn at δ = 0.1 where the view's estimated blocked share of the
     /// unshadowed transport is at least 0.4), `off`, or δ in (0, 1].
@@ -403,6 +411,7 @@ impl LabArgs {
     /// `s` with these switches.
     fn apply(&self, s: &mut FrameSettings) {
         s.clamp = self.clamp;
+        s.near_share = self.near_share;
         let r = &mut s.ris;
         r.spatial_passes = self.spatial_passes;
         r.spatial_neighbors = self.spatial_neighbors;
@@ -677,6 +686,10 @@ pub struct SuiteArgs {
     /// Wall-time budget of progressive frames per method, seed and scene (equal time).
     #[arg(long, value_name = "SECONDS", default_value_t = 1.0)]
     pub time_limit: f64,
+    /// One frame of --vpls VPLs per pixel per method and seed (equal VPL count, the thesis's comparison)
+    /// instead of --time-limit's equal time.
+    #[arg(long, conflicts_with = "time_limit")]
+    pub equal_count: bool,
     /// VPLs per pixel per frame (ris: reservoirs).
     #[arg(long, default_value_t = 16)]
     pub vpls: u32,

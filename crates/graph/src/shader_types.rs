@@ -59,7 +59,10 @@ pub struct GatherPush {
     pub rays: u32,
     /// 1: the exact gather's rays skip their ends' empty balls (set by the gather pass where they are bound).
     pub end_balls: u32,
-    pub pad: [u32; 2],
+    /// η: the share of a CDF method's draws from the pixel's near window (`glsl/shared/near_window.glsl`).
+    pub near_share: f32,
+    /// The near window's half-width, texels.
+    pub near_radius: u32,
 }
 const _: () = assert!(size_of::<GatherPush>() == 64);
 

@@ -222,6 +222,12 @@ fn gather_push(s: &FrameSettings, f: FrameInputs, p: ImportanceParams, chunk: Ra
         },
         cdf_len: CdfReduce::section_len(rows, f.dprsm_res) as u32,
         rays: s.gather_rays,
+        // ris has near candidates of its own and mis its gathering rays; `uniform` is the baseline.
+        near_share: match s.method {
+            Method::Global | Method::Stratified | Method::Local | Method::Gbg => s.near_share,
+            _ => 0.0,
+        },
+        near_radius: s.ris.near_radius,
         ..common
     };
     match (s.method, s.mis_weights) {

@@ -389,6 +389,13 @@ pub struct FrameSettings {
     /// Share of samples drawn uniformly among the VPLs by the CDF methods (defensive sampling): it bounds a
     /// VPL's weight by 1 / share times a uniform draw's.
     pub defensive: f32,
+    /// Share η of the CDF methods' draws (global, stratified, local, gbg) from the pixel's near window,
+    /// the light-map texels around where the pixel projects into a light's map
+    /// (`glsl/shared/near_window.glsl`, half-width `ris.near_radius`): p_v = η p_near(v) + (1 − η) p_mix(v).
+    /// The VPLs next to a pixel, a concave edge's fireflies, are the part of the integrand a screen-wide
+    /// CDF cannot know. 0: the thesis's mixtures. mis finds them by its gathering rays, ris by its own
+    /// near candidates: neither takes it.
+    pub near_share: f32,
     pub face: FaceMode,
     pub mis_weights: MisWeights,
     /// Samples per pixel of the reference integrator (a sample is one point of each of its two
@@ -449,6 +456,8 @@ impl Default for FrameSettings {
             // a VPL a CDF underrates weighs up to 10× a uniform draw (gbg 4.3× uniform's error on a scene,
             // global 11.7×); 0.75 gave every method its best worst case.
             defensive: 0.75,
+            // Chosen over the generated suite (BENCHMARKS.md, "On scenes of every kind").
+            near_share: 0.25,
             face: FaceMode::RussianRoulette,
             mis_weights: MisWeights::Consistent,
             spp: 256,
@@ -521,6 +530,20 @@ impl FrameSettings {
                 self.sample_offset,
                 self.spp
             );
+        }
+        Ok(())
+    }
+
+    /// The mixtures' shares and the clamp, each a fraction.
+    fn validate_shares(&self) -> Result<(), SettingsError> {
+        if !(self.defensive.is_finite() && (0.0..=1.0).contains(&self.defensive)) {
+            reject!("--defensive must be in [0, 1] (got {})", self.defensive);
+        }
+        if !(self.near_share.is_finite() && (0.0..1.0).contains(&self.near_share)) {
+            reject!("--near-share must be in [0, 1) (got {})", self.near_share);
+        }
+        if !(self.clamp.is_finite() && (0.0..1.0).contains(&self.clamp)) {
+            reject!("the clamp must be a fraction of the scene diagonal in [0, 1) (got {})", self.clamp);
         }
         Ok(())
     }
@@ -645,12 +668,7 @@ impl FrameSettings {
         if !(1..=256).contains(&self.gather_rays) {
             reject!("--gather-rays must be between 1 and 256 (got {})", self.gather_rays);
         }
-        if !(self.defensive.is_finite() && (0.0..=1.0).contains(&self.defensive)) {
-            reject!("--defensive must be in [0, 1] (got {})", self.defensive);
-        }
-        if !(self.clamp.is_finite() && (0.0..1.0).contains(&self.clamp)) {
-            reject!("the clamp must be a fraction of the scene diagonal in [0, 1) (got {})", self.clamp);
-        }
+        self.validate_shares()?;
         let ok = |v: f32| v.is_finite() && v >= 0.0;
         if !ok(self.shadow_bias) || !ok(self.shadow_slope_bias) {
             reject!("shadow biases must be finite and non-negative");

@@ -10,7 +10,10 @@
 //! its rays walked back to back, so a SIMD lane whose ray is done starts its next at once instead of
 //! waiting for the vector's longest (the same answers and sums, bit for bit; 5–20 % less gather time on
 //! lavapipe, BENCHMARKS.md). Modes:
-//! - sampled: N VPLs per pixel drawn from the CDF of `cdf_reduce`, p_v = importance_v / total;
+//! - sampled: N VPLs per pixel drawn from the mixture of `glsl/shared/sampling.glsl`,
+//!   p_v = η p_near(v) + (1 − η) (ε / #VPLs + (1 − ε) importance_v / total): the near share η
+//!   (`--near-share`) from the pixel's near window, the defensive share ε uniformly, the rest by the
+//!   method's CDF (`cdf_reduce`); `uniform` has η = 0, ε = 1;
 //! - all: every VPL of a tile [first, last) with p_v = 1 and N = 1, accumulated over tiles: the exhaustive
 //!   (converged) VPL estimate, against which every sampling method is judged.
 //!
@@ -53,10 +56,11 @@ pub struct Gather {
 
 /// One shader in its two per-pixel visibility variants (`voxel.glsl`'s march; `EXACT_VISIBILITY`, which
 /// also binds the BVH and the end balls), each built when a frame first needs it: the gather, mis and
-/// ris's shade share it.
+/// ris's shade share it. Each has two specialisations: slot 1 gives the near share every light's window
+/// (`glsl/shared/near_window.glsl`, NEAR_LIGHTS), for scenes of more than one light; slot 0 one window.
 pub struct VisibilityVariants {
-    voxel: Lazy<1>,
-    exact: Lazy<1>,
+    voxel: Lazy<2>,
+    exact: Lazy<2>,
 }
 
 impl VisibilityVariants {
@@ -76,11 +80,14 @@ impl VisibilityVariants {
         VisibilityVariants { voxel, exact }
     }
 
-    /// The variant of the frame's visibility (built on first use).
-    pub fn pipeline(&self, f: &FrameInputs) -> Result<&ComputePipeline> {
+    /// The variant of the frame's visibility (built on first use), with every light's near window when
+    /// `near` (the push's near share) and the scene has more than one light.
+    pub fn pipeline(&self, f: &FrameInputs, near: bool) -> Result<&ComputePipeline> {
+        let multi = near && f.scene.light_count > 1;
+        let spec = [(SPEC_RIS_NEAR_LIGHTS, if multi { RIS_NEAR_LIGHTS } else { 1 })];
         match f.visibility {
-            Visibility::Exact => self.exact.pipeline(),
-            Visibility::Voxel | Visibility::Psm => self.voxel.pipeline(),
+            Visibility::Exact => self.exact.get(multi as usize, &spec),
+            Visibility::Voxel | Visibility::Psm => self.voxel.get(multi as usize, &spec),
         }
     }
 
@@ -236,10 +243,10 @@ impl Gather {
     }
 
     /// The shader variant of the frame's visibility (built on first use).
-    fn pipeline(&self, f: &FrameInputs, i: &GatherInputs) -> Result<&ComputePipeline> {
+    fn pipeline(&self, f: &FrameInputs, i: &GatherInputs, push: &GatherPush) -> Result<&ComputePipeline> {
         match (f.visibility, &i.psm) {
             (Visibility::Psm, Some(_)) => self.psm.pipeline(),
-            _ => self.vis.pipeline(f),
+            _ => self.vis.pipeline(f, push.near_share > 0.0),
         }
     }
 
@@ -283,7 +290,7 @@ impl Gather {
         push: GatherPush,
     ) -> Result<()> {
         let (i, o) = (*i, *out);
-        let pipeline = self.pipeline(&f, &i)?;
+        let pipeline = self.pipeline(&f, &i, &push)?;
         let mut b = g.add_pass(self.name);
         for h in i.images() {
             b = b.read(&h, Access::ComputeRead);

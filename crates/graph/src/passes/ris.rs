@@ -677,7 +677,7 @@ impl Ris {
     ) -> Result<()> {
         let (reservoirs, unshadowed) = (io.reservoirs, io.unshadowed);
         let (i, o, hv, hc, hr) = (*i, *io.out, *io.vis, *io.cv, *io.rays);
-        let pipeline = self.shade.pipeline(&f)?;
+        let pipeline = self.shade.pipeline(&f, false)?;
         let mut b = Self::reads(g.add_pass("ris_shade"), &i)
             .read(&reservoirs, Access::ComputeRead)
             .read(&unshadowed, Access::ComputeRead);

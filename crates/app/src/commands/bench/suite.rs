@@ -4,7 +4,8 @@
 //! The suite is a folder of scene folders (`scripts/make-scenes.py --suite DIR` writes one, a family's
 //! scenes named `<family>-<k>`) or scene files. For each scene it runs `bench`'s equal-time sweep (one
 //! budget, `--time-limit` seconds of progressive frames per method and seed, every method paying for its
-//! whole frames) against the path-traced ground truth, cached in `OUT/<scene>/`. It writes:
+//! whole frames; or, with `--equal-count`, one frame of `--vpls` VPLs a pixel, the thesis's comparison)
+//! against the path-traced ground truth, cached in `OUT/<scene>/`. It writes:
 //! - `suite.csv`: one row per scene, method and seed (frames, wall ms, relMSE, mean ratio, p99.9 |error|);
 //! - `suite.md`: per method over the scenes, the geometric mean and the worst case of its relMSE over
 //!   `uniform`'s (each the median over seeds), how many scenes it loses to `uniform`, the largest bias of
@@ -55,7 +56,7 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         let mut renderer = Renderer::new(&gpu, &scene)?;
         let plan = BenchPlan {
             methods: a.methods.clone(),
-            columns: vec![Column { vpls: a.vpls, seconds: Some(a.time_limit) }],
+            columns: vec![Column { vpls: a.vpls, seconds: (!a.equal_count).then_some(a.time_limit) }],
             repeats: a.seeds,
             base: base.clone(),
             reference: Reference::Path { spp: a.reference_spp },
@@ -179,24 +180,27 @@ fn worst(m: &BTreeMap<String, f64>) -> (String, f64) {
         .map_or((String::from("–"), f64::NAN), |(s, v)| (s.clone(), *v))
 }
 
+/// suite.md's title and the line that says how it was measured.
+fn header(a: &SuiteArgs, scenes: usize, device: &str, command: &str) -> String {
+    let budget = match a.equal_count {
+        true => format!("one frame of {} VPLs a pixel per method and seed (equal count)", a.vpls),
+        false => format!("{} s per method and seed (equal time), {} VPLs a frame", a.time_limit, a.vpls),
+    };
+    format!(
+        "# Suite: {scenes} scenes, {} seeds, {budget}, {}×{}\n\n`{command}` on {device}; relMSE against each \
+         scene's path-traced ground truth ({} spp), the median over seeds; ratios are over `uniform`'s on \
+         the same scene.\n\n",
+        a.seeds, a.width, a.height, a.reference_spp
+    )
+}
+
 fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String {
     let scenes: Vec<String> = {
         let mut s: Vec<String> = rows.iter().map(|r| r.scene.clone()).collect();
         s.dedup();
         s
     };
-    let mut md = format!(
-        "# Suite: {} scenes, {} seeds, {} s per method and seed, {}×{}, {} VPLs a frame\n\n`{command}` on {device}; \
-         relMSE against each scene's path-traced ground truth ({} spp), the median over seeds; ratios are \
-         over `uniform`'s on the same scene.\n\n",
-        scenes.len(),
-        a.seeds,
-        a.time_limit,
-        a.width,
-        a.height,
-        a.vpls,
-        a.reference_spp
-    );
+    let mut md = header(a, scenes.len(), device, command);
     md += "| method | geomean relMSE / uniform | worst (scene) | scenes above uniform | largest |mean − truth| over seeds (scene) | largest spread of the mean over seeds | median p99.9 |error| / uniform |\n";
     md += "|---|---:|---|---:|---|---:|---:|\n";
     let uniform_tail = per_scene(rows, Method::Uniform, |s| s.metrics.p999_abs);

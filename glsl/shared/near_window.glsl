@@ -1,18 +1,19 @@
-// ris's near strategy (glsl/ris_initial.comp, ris.near_candidates > 0, with the pool).
-// The near strategy: a K × K window of light-map texels around where the pixel's point x projects into
-// the map of each light, drawn uniformly: the VPLs next to x, whose kernel makes the target's tail, are
-// found there when the light sees x's surroundings. Light l's window opens only when the texel x
-// projects to sees a point within the window's reach of x, r·√A (A its patch area): behind an occluder
-// it would hold the occluder's lit side, which gives x nothing. A near candidate first picks an open
-// window with probability α_l ∝ luminance(I_l) / d_l², d_l the distance from light l to x (the radiosity
-// of its VPLs next to x), then a texel of it. Every light's map has VPLs next to x, so every light's
-// window is offered: with one window per reservoir, a VPL of the other light's next to x was a rare pool
-// draw with a huge weight (the clutter scene's fireflies). The first RIS_NEAR_LIGHTS lights get
+// The near window: a K × K window of light-map texels around where the pixel's point x projects into
+// the map of each light, drawn uniformly: the VPLs next to x, whose kernel makes the integrand's tail
+// (a concave edge's fireflies), are found there when the light sees x's surroundings. Light l's window
+// opens only when the texel x projects to sees a point within the window's reach of x, r·√A (A its
+// patch area): behind an occluder it would hold the occluder's lit side, which gives x nothing. A near
+// draw first picks an open window with probability α_l ∝ luminance(I_l) / d_l², d_l the distance from
+// light l to x (the radiosity of its VPLs next to x), then a texel of it. Every light's map has VPLs next
+// to x, so every light's window is offered: with one window, a VPL of the other light's next to x was a
+// rare draw with a huge weight (the clutter scene's fireflies). The first RIS_NEAR_LIGHTS lights get
 // windows (NEAR_LIGHTS = RIS_NEAR_LIGHTS, a specialisation for scenes with more than one light; else
-// one window, and a one-light scene pays nothing for the mixture); the pool's candidates cover the rest.
-// All of it is fixed before any candidate, so the estimate stays unbiased whichever windows open.
-#ifndef BOUNCE_RIS_NEAR_GLSL
-#define BOUNCE_RIS_NEAR_GLSL
+// one window, and a one-light scene pays nothing for the mixture); the other strategies cover the rest.
+// All of it is fixed by x before any draw, so an estimate that mixes it in stays unbiased whichever
+// windows open. Used by ris's initial stage (near candidates beside the pool) and by the CDF methods'
+// sampling mixture (shared/sampling.glsl, the near share).
+#ifndef BOUNCE_NEAR_WINDOW_GLSL
+#define BOUNCE_NEAR_WINDOW_GLSL
 layout(constant_id = SPEC_RIS_NEAR_LIGHTS) const uint NEAR_LIGHTS = 1u;
 
 struct NearWindow {
@@ -30,7 +31,7 @@ struct Near {
     float p;    // 1 / K²
 };
 
-NearWindow near_window_of(uint l, vec3 x, int size) {
+NearWindow near_window_of(uint l, vec3 x, int size, uint radius) {
     NearWindow w;
     // Defined even where lm_locate finds no face (the window then stays closed).
     uint face = 0u;
@@ -43,7 +44,7 @@ NearWindow near_window_of(uint l, vec3 x, int size) {
     w.layer = l * lm_faces() + face;
     vec4 seen = texelFetch(vpl_position, ivec3(c, int(w.layer)), 0);
     vec3 dx = seen.xyz - x;
-    float reach2 = float(ris.near_radius * ris.near_radius) * seen.w;
+    float reach2 = float(radius * radius) * seen.w;
     w.open = w.open && seen.w > 0.0 && dot(dx, dx) <= reach2;
     w.alpha = w.open ? luminance(lights[l].intensity.rgb) / max(dot(d, d), 1e-30) : 0.0;
     return w;
@@ -53,17 +54,18 @@ NearWindow near_window_of(uint l, vec3 x, int size) {
 // window is read at a constant index (llvmpipe keeps a dynamically indexed array in memory and reads
 // it lane by lane, which halved the frame rate), and the branch, the same for every lane, skips the
 // lights beyond the scene's (a select would evaluate them).
-Near near_windows(vec3 x) {
+// The windows of x, `radius` texels to each side of x's texel.
+Near near_windows(vec3 x, uint radius) {
     Near nw;
     int res = int(frame.size.w);
-    nw.size = min(2 * int(ris.near_radius) + 1, res);
+    nw.size = min(2 * int(radius) + 1, res);
     nw.p = 1.0 / float(nw.size * nw.size);
     nw.n = min(frame.size.z, uint(NEAR_LIGHTS));
     float total = 0.0;
     for (uint l = 0u; l < uint(NEAR_LIGHTS); l++) {
         nw.w[l] = NearWindow(false, 0u, ivec2(0), 0.0);
         if (l < nw.n) {
-            nw.w[l] = near_window_of(l, x, nw.size);
+            nw.w[l] = near_window_of(l, x, nw.size, radius);
             total += nw.w[l].alpha;
         }
     }
@@ -74,15 +76,15 @@ Near near_windows(vec3 x) {
     return nw;
 }
 
-// The texel of near candidate k, a window by α then a texel of it uniformly, and its probability under
-// the near strategy, α / K².
-ivec3 near_texel(Near nw, ivec2 q, uint k, out float p_near) {
+// The texel of a near draw, a window by α (the uniform u_window) then a texel of it uniformly (u_texel),
+// and its probability under the near strategy, α / K².
+ivec3 near_texel(Near nw, float u_window, vec2 u_texel, out float p_near) {
     ivec2 lo = nw.w[0].lo;
     uint layer = nw.w[0].layer;
     float alpha = nw.w[0].alpha;
     if (NEAR_LIGHTS > 1u && nw.n > 1u) {
         // (The same for every lane.)
-        float u = ris_rand(q, 5u, k), acc = 0.0;
+        float u = u_window, acc = 0.0;
         bool picked = false;
         for (uint j = 0u; j < uint(NEAR_LIGHTS); j++) {
             // The last open window takes what rounding leaves of u.
@@ -96,7 +98,7 @@ ivec3 near_texel(Near nw, ivec2 q, uint k, out float p_near) {
         }
     }
     p_near = alpha * nw.p;
-    ivec2 o = min(ivec2(vec2(ris_rand(q, 6u, k), ris_rand(q, 7u, k)) * float(nw.size)), ivec2(nw.size - 1));
+    ivec2 o = min(ivec2(u_texel * float(nw.size)), ivec2(nw.size - 1));
     return ivec3(lo + o, int(layer));
 }
 
