@@ -1,4 +1,4 @@
-//! `--method realtime` (ris with one reservoir per pixel, reused across frames through reprojection and
+//! `--method realtime` (ris with two reservoirs per pixel, reused across frames through reprojection and
 //! across pixels, `passes/reproject.rs`, and denoised, `passes/denoise.rs`) against independent judges:
 //! each raw frame is unbiased with respect to `all` on a static view after frames of temporal and spatial
 //! reuse (with the reuse's control variate and the learned visibility in every target), and so is the first frame after a camera move, whose history
@@ -87,8 +87,8 @@ fn realtime_frames_are_unbiased_with_reuse_and_after_a_camera_move() {
     });
 }
 
-/// At most two shadow rays per pixel per frame (the bound; realtime traces one, for the final
-/// sample), counted by the shade's counter, while the camera orbits and the light moves; and the counter
+/// At most two shadow rays per pixel per frame (the bound; realtime traces one for each of its
+/// two reservoirs' final samples), counted by the shade's counter, while the camera orbits and the light moves; and the counter
 /// counts: ris with four reservoirs traces more than three per lit pixel on the same frames.
 #[test]
 fn realtime_traces_at_most_two_shadow_rays_per_pixel() {

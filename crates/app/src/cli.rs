@@ -110,7 +110,7 @@ pub const METHODS: Choices<Method> = Choices(&[
     (
         "realtime",
         Method::Realtime,
-        "Real time: one reservoir and one shadow ray per pixel, reused across frames (reprojected) and pixels, then denoised (--denoise)",
+        "Real time: two reservoirs per pixel, one shadow ray each, reused across frames (reprojected) and pixels, then denoised (--denoise)",
     ),
 ]);
 

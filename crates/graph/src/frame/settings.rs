@@ -61,11 +61,17 @@ pub enum Method {
     /// VPLs from a source CDF by their unshadowed contribution there, with spatial and temporal reuse
     /// (`passes/ris.rs`).
     Ris,
-    /// The real-time frame: ris with one reservoir per pixel ([`RisSettings::realtime`]), reused across
-    /// frames through reprojection (`passes/reproject.rs`) and across pixels, one shadow ray per pixel,
-    /// and the denoiser for display (`passes/denoise.rs`, `FrameSettings::denoise`).
+    /// The real-time frame: ris with [`REALTIME_RESERVOIRS`] reservoirs per pixel
+    /// ([`RisSettings::realtime`]), reused across frames through reprojection (`passes/reproject.rs`) and
+    /// across pixels, one shadow ray each, and the denoiser for display (`passes/denoise.rs`,
+    /// `FrameSettings::denoise`).
     Realtime,
 }
+
+/// Reservoirs per pixel of `Method::Realtime`, each with its own reuse chain and one shadow ray: the
+/// issue's bound of two rays a pixel. Two against one (BENCHMARKS.md, "Real time under motion"): half the
+/// raw error and flicker for 1.1–1.4× the frame time, 1.4–1.9× the raw efficiency in four runs of motion.
+pub const REALTIME_RESERVOIRS: u32 = 2;
 
 /// The source distribution of `Method::Ris`'s candidates: one of the CDF methods' mixtures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -146,8 +152,8 @@ pub struct RisSettings {
 }
 
 impl RisSettings {
-    /// `Method::Realtime`'s ris: one reservoir of 32 candidates (8 from the near window) from the pool,
-    /// last frame's reservoir combined in through reprojection with its confidence capped at 8 M, one
+    /// `Method::Realtime`'s ris: [`REALTIME_RESERVOIRS`] reservoirs of 32 candidates (8 from the near
+    /// window) from the pool, last frame's reservoir combined in through reprojection with its confidence capped at 8 M, one
     /// spatial pass of 4 neighbours within 16 pixels, the control variate over the spatial pass's inputs,
     /// and the learned visibility always (δ_L = `AUTO_LEARN_FLOOR`: its counts carry over camera and light
     /// moves, and a per-view decision would drop the history whenever it flipped). The cap was chosen over
@@ -509,11 +515,11 @@ impl FrameSettings {
         }
     }
 
-    /// Reservoirs (candidate streams) per pixel of a ris frame: `vpls` for `Method::Ris`, one for
-    /// `Method::Realtime` (one shadow ray per pixel).
+    /// Reservoirs (candidate streams) per pixel of a ris frame: `vpls` for `Method::Ris`,
+    /// [`REALTIME_RESERVOIRS`] for `Method::Realtime`.
     pub fn ris_streams(&self) -> u32 {
         if self.method == Method::Realtime {
-            1
+            REALTIME_RESERVOIRS
         } else {
             self.vpls
         }

@@ -1,6 +1,6 @@
 //! ris: resampled importance sampling over the VPLs (Talbot et al. 2005) with spatial and temporal
 //! reuse (ReSTIR, Bitterli et al. 2020; generalized RIS, Lin et al. 2022), for `Method::Ris` and
-//! `Method::Realtime` (one reservoir per pixel with both reuses, `RisSettings::realtime`). One shader
+//! `Method::Realtime` (two reservoirs per pixel with both reuses, `RisSettings::realtime`). One shader
 //! per stage (`glsl/ris_<stage>.comp`), the presampling first with `--pool-tiles` T > 0 (the default):
 //!
 //! - `ris_presample` (1024 × T invocations): the candidate pool, T tiles of `RIS_POOL_TILE` = 1024 draws
