@@ -136,8 +136,8 @@ float mixture_prob(uint v, uint live, float eps, uint known, float known_p) {
     return eps * uniform_p + (any ? (1.0 - eps) * method / (mix_by_pixel ? 1.0 : float(live)) : 0.0);
 }
 
-// The near share of the pixel being shaded (set by near_at_pixel, once per pixel, in gather.comp and
-// mis.comp): η = pc.near_share where one of x's near windows is open, else 0; then draws come with
+// The near share of the pixel being shaded (set by near_at_pixel, once per pixel, in gather.comp; mis,
+// psm and ris never set it): η = pc.near_share where one of x's near windows is open, else 0; then draws come with
 // probability η from x's window (shared/near_window.glsl) and 1 − η from the mixture above:
 //   p_v = η · p_near(v) + (1 − η) · p_mix(v),
 // exact, so the estimate stays unbiased; p_near puts α / K² on each texel of a window (an empty texel

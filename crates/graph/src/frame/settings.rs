@@ -70,7 +70,8 @@ pub enum Method {
 
 /// Reservoirs per pixel of `Method::Realtime`, each with its own reuse chain and one shadow ray: the
 /// issue's bound of two rays a pixel. Two against one (BENCHMARKS.md, "Real time under motion"): half the
-/// raw error and flicker for 1.1–1.4× the frame time, 1.4–1.9× the raw efficiency in four runs of motion.
+/// raw error and flicker for 1.1–1.5× the frame time, 1.4–1.9× the raw efficiency in four runs of motion
+/// (Sibenik and the two rooms, camera and light; measured there only).
 pub const REALTIME_RESERVOIRS: u32 = 2;
 
 /// The source distribution of `Method::Ris`'s candidates: one of the CDF methods' mixtures.
@@ -153,9 +154,9 @@ pub struct RisSettings {
 
 impl RisSettings {
     /// `Method::Realtime`'s ris: [`REALTIME_RESERVOIRS`] reservoirs of 32 candidates (8 from the near
-    /// window) from the pool, last frame's reservoir combined in through reprojection with its confidence capped at 8 M, one
-    /// spatial pass of 4 neighbours within 16 pixels, the control variate over the spatial pass's inputs,
-    /// and the learned visibility always (δ_L = `AUTO_LEARN_FLOOR`: its counts carry over camera and light
+    /// window) from the pool, last frame's reservoirs combined in through reprojection with their
+    /// confidence capped at 8 M, one spatial pass of 4 neighbours within 16 pixels, the control variate
+    /// over the spatial pass's inputs, and the learned visibility always (δ_L = `AUTO_LEARN_FLOOR`: its counts carry over camera and light
     /// moves, and a per-view decision would drop the history whenever it flipped). The cap was chosen over
     /// four runs of motion (4/8/20/50; BENCHMARKS.md, "Real time under motion"): 8 lowered the denoised
     /// error in all four against 20, the raw error level.
