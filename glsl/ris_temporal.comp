@@ -3,9 +3,14 @@
 // finished reservoir of the initial stage combined with last frame's final reservoir at the pixel's
 // previous pixel q (passes/reproject.rs; none where the surface was disoccluded). Generalized balance
 // weights m_i(y) = c_i p̂_i(y) / (c_0 p̂_0(y) + c_1 p̂_1(y)), p̂_0 this pixel's target and p̂_1 the target
-// at last frame's surface at q (its point, normal and albedo, with this frame's VPLs), the history's
-// confidence capped at --temporal-cap times M. With the view unchanged q is the pixel itself and p̂_1 =
-// p̂_0 (up to the albedo's unorm8), so the weights are the confidences'. With the learned visibility
+// the history's sample was drawn for: at last frame's surface at q (its point, normal and albedo) with
+// last frame's VPLs (B_PREV_VPL_*), the history's confidence capped at --temporal-cap times M. A VPL
+// keeps its identity (its texel) when a light moves and is re-evaluated where it now is in p̂_0; with
+// this frame's VPLs in p̂_1 instead, a VPL that moved towards x would weigh its history sample as if it
+// had been drawn for its new place, and its contribution weight (drawn for the old one) makes a firefly:
+// Sibenik under a light orbit had 4× the error of no temporal reuse. With the view and the lights
+// unchanged q is the pixel itself and p̂_1 = p̂_0 (up to the albedo's unorm8), so the weights are the
+// confidences'. With the learned visibility
 // both targets carry its factor, at this pixel's tile and at q's (this frame's counts: any positive
 // functions with the unshadowed support make weights that sum to 1 where the history can be, which is
 // all unbiasedness asks of them).
@@ -17,6 +22,16 @@ layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Re
 layout(set = 0, binding = B_MOTION) uniform sampler2D motion;
 layout(set = 0, binding = B_PREV_POSITION) uniform sampler2D prev_position;
 layout(set = 0, binding = B_PREV_SURFACE) uniform usampler2D prev_surface;
+layout(set = 0, binding = B_PREV_VPL_POSITION) uniform sampler2DArray prev_vpl_position;
+layout(set = 0, binding = B_PREV_VPL_NORMAL) uniform sampler2DArray prev_vpl_normal;
+layout(set = 0, binding = B_PREV_VPL_FLUX) uniform sampler2DArray prev_vpl_flux;
+
+// Last frame's target at (x, n, a) for VPL v: with last frame's VPL maps.
+float prev_target_at(vec3 x, vec3 n, vec3 a, uint v) {
+    ivec3 t = vpl_texel(v);
+    vec4 p = texelFetch(prev_vpl_position, t, 0);
+    return target_of(x, n, a, vpl_from(p, texelFetch(prev_vpl_normal, t, 0).xyz, texelFetch(prev_vpl_flux, t, 0).rgb));
+}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -37,9 +52,9 @@ void main() {
     float ch = min(h.confidence, ris.history_cap * m);
     bool has0 = r.vpl != RIS_NONE && r.weight > 0.0, has1 = h.vpl != RIS_NONE && h.weight > 0.0;
     // Each sample's target here and at q: (p̂_0, p̂_1).
-    vec2 t0 = has0 ? vec2(r.target, target_at(xq, nq, aq, r.vpl) * learned_at(q, r.vpl).x) : vec2(0.0);
+    vec2 t0 = has0 ? vec2(r.target, prev_target_at(xq, nq, aq, r.vpl) * learned_at(q, r.vpl).x) : vec2(0.0);
     vec2 t1 = has1 ? vec2(target_at(x, nx, ax, h.vpl) * learned_at(px, h.vpl).x,
-                          target_at(xq, nq, aq, h.vpl) * learned_at(q, h.vpl).x)
+                          prev_target_at(xq, nq, aq, h.vpl) * learned_at(q, h.vpl).x)
                    : vec2(0.0);
     float d0 = m * t0.x + ch * t0.y, d1 = m * t1.x + ch * t1.y;
     float w0 = d0 > 0.0 ? m * t0.x / d0 * t0.x * r.weight : 0.0;

@@ -182,6 +182,11 @@ const float END_BALL_MAX_RADIUS = 0.03;
 #define RIS_MAX_PICKS 4
 // The shade's shadow-ray counter: one uint, the rays the frame traced (added to by each subgroup).
 #define B_RIS_RAYS 57
+// ris's temporal stage: last frame's VPL maps (this frame's when no light moved), for the targets at last
+// frame's surface that weigh the history (the target its sample was drawn for).
+#define B_PREV_VPL_POSITION 65
+#define B_PREV_VPL_NORMAL 66
+#define B_PREV_VPL_FLUX 67
 
 // ---- reproject (passes/reproject.rs): motion from the G-buffer, and the surface kept for the next frame --
 // Written: each pixel's previous pixel (B_MOTION: xy, z = 1 where last frame saw the same surface there)

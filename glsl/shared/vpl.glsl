@@ -12,20 +12,23 @@ struct Vpl {
     bool valid;
 };
 
+// A VPL from its texels in the three maps (position: xyz, area; normal; flux).
+Vpl vpl_from(vec4 p, vec3 normal, vec3 flux) {
+    return Vpl(p.xyz, normal, flux, p.w, p.w != 0.0);
+}
+
 Vpl vpl_fetch_texel(ivec3 t) {
-    Vpl o;
-    vec4 p = texelFetch(vpl_position, t, 0);
-    o.position = p.xyz;
-    o.area = p.w;
-    o.valid = p.w != 0.0;
-    o.normal = texelFetch(vpl_normal, t, 0).xyz;
-    o.flux = texelFetch(vpl_flux, t, 0).rgb;
-    return o;
+    return vpl_from(texelFetch(vpl_position, t, 0), texelFetch(vpl_normal, t, 0).xyz, texelFetch(vpl_flux, t, 0).rgb);
+}
+
+// Texel (column, row, layer) of VPL index v.
+ivec3 vpl_texel(uint v) {
+    uint res = frame.size.w;
+    return ivec3(v % res, (v / res) % res, v / (res * res));
 }
 
 Vpl vpl_fetch(uint v) {
-    uint res = frame.size.w;
-    return vpl_fetch_texel(ivec3(v % res, (v / res) % res, v / (res * res)));
+    return vpl_fetch_texel(vpl_texel(v));
 }
 
 // albedo(x)/π · Φ_v · (cos θ_v / π) · cos θ_x · k(d²), without visibility; 0 for a VPL behind x or facing

@@ -344,8 +344,9 @@ fn read(done: &bounce_graph::graph::Executed, h: &Handle<Image>) -> Vec<f32> {
 }
 
 /// A cached product is made once and lent back to later graphs while its key stays the same (its passes
-/// are not even added again); another key makes it anew and drops the old one; a product whose passes
-/// were culled is not kept.
+/// are not even added again); another key makes it anew and lends the old one for that graph only
+/// (`replaced`: last frame's VPLs after a light moved), then drops it; a product whose passes were culled
+/// is not kept.
 #[test]
 fn cached_products_are_kept_across_graphs_until_their_key_changes() {
     use bounce_graph::graph::Retained;
@@ -359,8 +360,17 @@ fn cached_products_are_kept_across_graphs_until_their_key_changes() {
             make(g, value)
         });
         g.export(&x);
+        // The key changed from 1 to 2 in the third graph only: the old product is 3.0's.
+        let old: Option<Handle<Image>> = g.replaced("x");
+        assert_eq!(old.is_some(), (key, value) == (2, 7.0), "key {key}, value {value}");
+        if let Some(old) = &old {
+            g.export(old);
+        }
         let done = g.execute().unwrap();
         assert!(read(&done, &x).iter().all(|&v| v == want), "key {key}: expected {want}");
+        if let Some(old) = &old {
+            assert!(read(&done, old).iter().all(|&v| v == 3.0), "the replaced product keeps its contents");
+        }
         assert_eq!(done.ran.is_empty(), value != want, "key {key}: ran {:?}", done.ran);
     }
     assert_eq!(built, 2);

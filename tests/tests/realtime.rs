@@ -44,8 +44,9 @@ fn moved(scene: &Scene) -> bounce_graph::camera::Camera {
 /// Frame 3 of a static view (its reservoirs combine two frames of history and four neighbours, and the
 /// control variate's β has counted two frames of rays) is unbiased: over 48 runs, each from an empty
 /// history, its mean converges to `all`; and the history is used: frame 3 has a lower error than frame
-/// 1 (summed over the runs: measured 31 % lower). Then the camera moves: the first frame after the move reprojects two frames of history made from
-/// the old view, and is unbiased against `all` from the new view.
+/// 1 (summed over the runs: measured 27 % lower). Then the camera moves: the first frame after the move
+/// reprojects two frames of history made from the old view, and is unbiased against `all` from the new
+/// view.
 #[test]
 fn realtime_frames_are_unbiased_with_reuse_and_after_a_camera_move() {
     const FRAMES: u64 = 3;
@@ -155,21 +156,21 @@ fn the_denoiser_lowers_the_error_and_off_shows_the_raw_estimate() {
 }
 
 /// A light move: the first frame after it reuses two frames of history whose VPLs (light-map texels) are
-/// re-evaluated where they now are. Its weights evaluate the history's target with this frame's VPL data
-/// (passes/ris.rs), which misses the VPLs the history could not hold (texels empty last frame, or then
-/// behind the pixel's surface): a darkening that grows with the step. The stated bound: within 2 % (and
-/// 4 standard errors of the 48 runs' mean) for a step of 3 % of the scene diagonal per frame, three
-/// times the default orbit's. Measured (mean − all) / all: +0.8 ± 0.3 % at 0.3 %, +0.6 ± 0.4 % at 1 %,
-/// −0.8 ± 0.5 % at 3 %, −5.1 ± 0.7 % at 10 % of the diagonal per frame.
+/// re-evaluated where they now are, weighed with the target the history was made for (last frame's VPL
+/// maps; passes/ris.rs), so it is unbiased however far the light moves: over 48 runs the image mean is
+/// within 4 standard errors of `all`'s after a step of 10 % of the scene diagonal (ten times the default
+/// orbit's step). Weighed with this frame's maps instead (as first built) the history is weighed for VPLs
+/// it could not hold (texels empty last frame, or then behind the pixel's surface): measured −5.1 ± 0.7 %
+/// at this step, which this test fails.
 #[test]
-fn realtime_after_a_light_move_stays_within_its_stated_bias() {
+fn realtime_after_a_light_move_is_unbiased() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h, res, vox) = SIZE;
     let light = r.lights()[0];
     let (p0, intensity) = (Vec3::from_slice(&light.position[..3]), Vec3::from_slice(&light.intensity[..3]));
-    let p1 = p0 + Vec3::new(1.0, -0.5, 0.5).normalize() * (0.03 * scene.diagonal());
+    let p1 = p0 + Vec3::new(1.0, -0.5, 0.5).normalize() * (0.1 * scene.diagonal());
     r.set_light(0, p1, intensity);
     let all_moved = all(&mut r);
     let mut means = vec![];
@@ -188,14 +189,14 @@ fn realtime_after_a_light_move_stays_within_its_stated_bias() {
         "realtime after a light move: {m:.5} ± {se:.5} vs all {target:.5} ({:+.2} %)",
         100.0 * (m / target - 1.0)
     );
-    assert!((m - target).abs() <= 0.02 * target + 4.0 * se, "beyond the stated bias: {m} ± {se} vs {target}");
+    assert!((m - target).abs() <= 4.0 * se, "biased after a light move: {m} ± {se} vs {target}");
 }
 
 /// A static view's progressive mean of realtime frames (`render --time-limit`'s averaging,
 /// `progressive::render_for`) averages their raw estimates, not the denoised output: one frame's mean is
 /// that frame's raw image. And in the steady state of reuse, frames 16–47 of a static view (correlated
 /// through their reuse, each unbiased) average to `all`: over 16 runs their image mean is within 4
-/// standard errors of `all`'s (measured +0.4 ± 0.5 %; one run's 32 frames spread by about 2 %).
+/// standard errors of `all`'s (measured −0.05 ± 0.1 %; one run's 32 frames spread by about 2 %).
 #[test]
 fn realtime_progressive_frames_converge_to_the_unbiased_image() {
     use bounce_graph::frame::progressive::{frame_settings, render_for};

@@ -14,7 +14,8 @@
 //!   depend on. With a stored product of that name and key, its resources are lent to this graph and the
 //!   build closure does not run (its passes are not even added); otherwise the closure adds the passes,
 //!   and when they ran, the products are kept for the next graph. The recipe asks the same way either
-//!   way, so it has no branch on what is cached.
+//!   way, so it has no branch on what is cached. The product a new key replaced is lent for that graph
+//!   only ([`Graph::replaced`]: last frame's VPLs after a light moved).
 //! - [`Graph::temporal_image`] / [`Graph::temporal_buffer`] are one resource per name that lives across
 //!   graphs (accumulators), recreated empty when its description or key changes; [`Graph::history_image`]
 //!   is this frame's and last frame's version of one (ping-pong, swapped by [`Retained::next_frame`]).
@@ -28,6 +29,9 @@ use anyhow::{Context, Result};
 use bounce_device::sync::{self, Access, Target, Tracked};
 use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, ImageDesc, TimestampPool};
 use std::cell::Cell;
+
+mod products;
+pub use products::{Products, RawHandle};
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::marker::PhantomData;
@@ -144,71 +148,6 @@ pub fn fingerprint(key: &impl Hash) -> u64 {
     let mut h = std::hash::SipHasher::new();
     key.hash(&mut h);
     h.finish()
-}
-
-/// A resource handle without its type, for [`Products`].
-#[derive(Clone, Copy, Debug)]
-pub struct RawHandle {
-    id: usize,
-    image: bool,
-}
-
-/// A bundle of handles a pass (or a few passes) produces, that [`Graph::cached`] can keep and lend back.
-/// Implemented for handles, tuples and the passes' output structs ([`crate::products!`]).
-pub trait Products: Copy {
-    /// The handles, in a fixed order.
-    fn handles(&self, out: &mut Vec<RawHandle>);
-    /// The same bundle from handles in [`Products::handles`] order.
-    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self;
-}
-
-impl Products for Handle<Image> {
-    fn handles(&self, out: &mut Vec<RawHandle>) {
-        out.push(RawHandle { id: self.id, image: true });
-    }
-    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self {
-        let h = it.next().expect("a product bundle lost a handle");
-        assert!(h.image, "a cached product changed type (buffer where an image was kept)");
-        Handle::new(h.id)
-    }
-}
-
-impl Products for Handle<Buffer> {
-    fn handles(&self, out: &mut Vec<RawHandle>) {
-        out.push(RawHandle { id: self.id, image: false });
-    }
-    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self {
-        let h = it.next().expect("a product bundle lost a handle");
-        assert!(!h.image, "a cached product changed type (image where a buffer was kept)");
-        Handle::new(h.id)
-    }
-}
-
-impl<A: Products, B: Products> Products for (A, B) {
-    fn handles(&self, out: &mut Vec<RawHandle>) {
-        self.0.handles(out);
-        self.1.handles(out);
-    }
-    fn from_handles(it: &mut dyn Iterator<Item = RawHandle>) -> Self {
-        let a = A::from_handles(it);
-        (a, B::from_handles(it))
-    }
-}
-
-/// `products!(Struct { field, ... })`: implement [`Products`] for a struct whose fields are handles or
-/// other products.
-#[macro_export]
-macro_rules! products {
-    ($t:ident { $($f:ident),+ $(,)? }) => {
-        impl $crate::graph::Products for $t {
-            fn handles(&self, out: &mut Vec<$crate::graph::RawHandle>) {
-                $( $crate::graph::Products::handles(&self.$f, out); )+
-            }
-            fn from_handles(it: &mut dyn Iterator<Item = $crate::graph::RawHandle>) -> Self {
-                $t { $( $f: $crate::graph::Products::from_handles(it), )+ }
-            }
-        }
-    };
 }
 
 /// A temporal resource as a graph lends it.
@@ -410,6 +349,9 @@ pub struct Graph<'a> {
     exported: Vec<usize>,
     retained: Option<&'a mut Retained>,
     requests: Vec<(&'static str, Request)>,
+    /// Products that [`Graph::try_cached`] found under another key: kept for this graph only, for
+    /// [`Graph::replaced`].
+    replaced: Vec<(&'static str, Vec<Kept>)>,
 }
 
 impl<'a> Graph<'a> {
@@ -422,6 +364,7 @@ impl<'a> Graph<'a> {
             exported: vec![],
             retained: None,
             requests: vec![],
+            replaced: vec![],
         }
     }
 
@@ -492,10 +435,20 @@ impl<'a> Graph<'a> {
         if let Some((_, r)) = self.requests.iter().find(|(n, r)| *n == name && r.key == key) {
             return Ok(P::from_handles(&mut r.handles.iter().copied()));
         }
+        let mut stale = None;
         let kept = self.retained.as_mut().and_then(|st| match st.products.remove(name) {
             Some(p) if p.key == key => Some(p.resources),
-            _ => None, // a product made under another key is stale: dropped now (no GPU work is pending)
+            // A product made under another key is stale: kept for this graph only (`replaced`), then
+            // freed with it (no GPU work is pending on it).
+            Some(p) => {
+                stale = Some(p.resources);
+                None
+            }
+            None => None,
         });
+        if let Some(resources) = stale {
+            self.replaced.push((name, resources));
+        }
         let p = match kept {
             Some(resources) => {
                 let handles: Vec<RawHandle> = resources.into_iter().map(|k| self.lend(name, k)).collect();
@@ -507,6 +460,16 @@ impl<'a> Graph<'a> {
         p.handles(&mut handles);
         self.requests.push((name, Request { key, handles }));
         Ok(p)
+    }
+
+    /// The product that `name` held before this graph asked for it under another key (last frame's VPLs
+    /// after a light moved), lent for this frame only; `None` when the key was the same or nothing was
+    /// kept. Ask after [`Graph::cached`] under `name`.
+    pub fn replaced<P: Products>(&mut self, name: &'static str) -> Option<P> {
+        let at = self.replaced.iter().position(|(n, _)| *n == name)?;
+        let (_, resources) = self.replaced.swap_remove(at);
+        let handles: Vec<RawHandle> = resources.into_iter().map(|k| self.lend(name, k)).collect();
+        Some(P::from_handles(&mut handles.iter().copied()))
     }
 
     fn lend(&mut self, name: &str, k: Kept) -> RawHandle {

@@ -25,7 +25,7 @@ use crate::passes::end_balls::EndBallImages;
 use crate::passes::gather::GatherInputs;
 use crate::passes::importance::{ImportanceKind, ImportanceParams};
 use crate::passes::reference::ReferenceIo;
-use crate::passes::ris::RisFrame;
+use crate::passes::ris::{LastFrame, RisFrame};
 use crate::passes::voxelize::VoxelGridSpec;
 use crate::passes::{FrameInputs, Passes};
 use crate::shader_types::{GatherPush, RisPush};
@@ -132,7 +132,9 @@ pub fn build_frame<'a>(
         let frame = ris_frame(s, i, push);
         // Temporal reuse follows each pixel's surface to where it was last frame.
         let motion = (frame.push.history_cap > 0.0).then(|| r.reproject.add(g, f, &gbuffer)).transpose()?;
-        let rays = Some(r.ris.add(g, f, &inputs, &mut out, push, frame, motion)?);
+        // Last frame's VPLs weigh the history: the maps this frame replaced when a light moved.
+        let last = motion.map(|motion| LastFrame { motion, vpls: g.replaced("vpls").unwrap_or(vpls) });
+        let rays = Some(r.ris.add(g, f, &inputs, &mut out, push, frame, last)?);
         let cdf = Some(cdf.cdf);
         if let (Method::Realtime, true, Some(m)) = (s.method, s.denoise, motion) {
             let denoised = r.denoise.add(g, f, &gbuffer, &m, out, combined)?;
@@ -251,7 +253,8 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
     let push = ris_push(s);
     let sampling = GatherPush { seed: 0, ..gather };
     let view = if s.method == Method::Realtime {
-        crate::graph::fingerprint(&(s.width, s.height))
+        // The light maps' size too: a reservoir's VPL is a texel index.
+        crate::graph::fingerprint(&(s.width, s.height, s.dprsm_res))
     } else {
         crate::graph::fingerprint(&(i.keys.gbuffer, i.keys.cdf))
     };

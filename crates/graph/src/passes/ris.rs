@@ -104,12 +104,13 @@
 //! The source needs p_v > 0 wherever p̂ > 0: the defensive share ε > 0 of the CDF sources, or `uniform`.
 //! The temporal input is last frame's final reservoir at the pixel's previous pixel q (`passes/
 //! reproject.rs`; the pixel itself for an unchanged view), weighted with p̂_1 evaluated at last frame's
-//! surface at q (kept by reproject), where the history was made. A VPL is a light-map texel: when a
-//! light moves, the history's VPL is re-evaluated where it now is, and p̂_1 takes this frame's VPL data.
-//! Every such target has the unshadowed support, so the weights still sum to 1 wherever the history can
-//! hold a VPL; the exception is a texel that was empty last frame and is lit now, which the history is
-//! weighted for without being able to hold it: a darkening where a moving light map's silhouette sweeps,
-//! measured in BENCHMARKS.md ("Real time under motion").
+//! surface at q (kept by reproject) with last frame's VPL maps ([`LastFrame`]), the target the history
+//! was made for. A VPL is a light-map texel: when a light moves, the history's VPL is re-evaluated where
+//! it now is in p̂_x, while p̂_1 keeps where it was, so m_1 vanishes exactly where the history could not
+//! hold a VPL (a texel empty last frame) and the weights sum to 1 everywhere else: the reuse stays
+//! unbiased under moving lights. (With this frame's maps in p̂_1, as first built, a VPL that moved
+//! towards the pixel was weighed as if drawn for its new place: fireflies, and a darkening where a map's
+//! silhouette swept; BENCHMARKS.md, "Real time under motion".)
 //!
 //! Loop bounds: the initial stage's candidates are split over dispatches ([`candidates_per_dispatch`]),
 //! its streaming state (y, Σw, p̂(y)) carried in the output; the shade's reservoirs too (the gather's
@@ -118,6 +119,7 @@
 //! history buffer (this frame's and last frame's version), the spatial passes ping-ponging with a
 //! transient one.
 
+use super::dprsm::DprsmOut;
 use super::gather::{GatherInputs, VisibilityVariants};
 use super::reproject::Motion;
 use super::FrameInputs;
@@ -303,6 +305,15 @@ pub fn candidates_per_dispatch(limit: Option<u32>, sections: u32, faces: u32, po
     (limit.saturating_sub(128) / (64 + draw)).max(1)
 }
 
+/// What the temporal stage reads of last frame besides its reservoirs.
+#[derive(Clone, Copy, Debug)]
+pub struct LastFrame {
+    /// Where each pixel's surface was, and that surface.
+    pub motion: Motion,
+    /// Last frame's VPL maps (this frame's when no light moved): the history's target.
+    pub vpls: DprsmOut,
+}
+
 impl Ris {
     pub fn new(gpu: &Gpu) -> Result<Self> {
         use shaders::*;
@@ -320,6 +331,9 @@ impl Ris {
             Binding::sampled_image(B_MOTION),
             Binding::sampled_image(B_PREV_POSITION),
             Binding::sampled_image(B_PREV_SURFACE),
+            Binding::sampled_image(B_PREV_VPL_POSITION),
+            Binding::sampled_image(B_PREV_VPL_NORMAL),
+            Binding::sampled_image(B_PREV_VPL_FLUX),
             Binding::uniform_texel_buffer(B_RIS_VIS),
         ]);
         let mut pooled = initial.clone();
@@ -361,7 +375,7 @@ impl Ris {
     }
 
     /// Record a ris frame into `out` (overwritten; the direct image added when `push.add_direct`):
-    /// initial (+ temporal, with `motion`), `spatial_passes` spatial passes, shade. `push` holds the
+    /// initial (+ temporal, with `last`), `spatial_passes` spatial passes, shade. `push` holds the
     /// gather's sampling fields (`samples` = R). Returns the shade's shadow-ray count (one uint).
     #[allow(clippy::too_many_arguments)]
     pub fn add<'a>(
@@ -372,14 +386,14 @@ impl Ris {
         out: &mut Handle<Image>,
         push: GatherPush,
         r: RisFrame,
-        motion: Option<Motion>,
+        last: Option<LastFrame>,
     ) -> Result<Handle<Buffer>> {
         let reservoirs = r.push.reservoirs;
         let desc = |name: &str| BufferDesc::storage(name, Self::layer_bytes(f.width, f.height) * reservoirs as u64);
         let history = g.history_buffer("ris.reservoirs", desc("ris.reservoirs"), &r.key);
         // Last frame's reservoirs, with where each pixel was (and last frame's surface), when both were kept.
-        let previous = match (history.previous, motion) {
-            (Some(p), Some(m)) if r.push.history_cap > 0.0 && m.history => Some((p, m)),
+        let previous = match (history.previous, last) {
+            (Some(p), Some(l)) if r.push.history_cap > 0.0 && l.motion.history => Some((p, l)),
             _ => None,
         };
         // Stage s (0: initial, 1..=P: spatial) writes the history's current buffer when P − s is even, so
@@ -415,8 +429,8 @@ impl Ris {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
             self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
-            if let Some((previous, motion)) = previous {
-                self.add_temporal(g, f, i, (previous, motion, vis), dst, push, r.push)?;
+            if let Some((previous, last)) = previous {
+                self.add_temporal(g, f, i, (previous, last, vis), dst, push, r.push)?;
             }
         }
         for pass in 0..r.spatial_passes {
@@ -605,7 +619,7 @@ impl Ris {
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        (previous, m, vis): (Handle<Buffer>, Motion, Handle<Buffer>),
+        (previous, LastFrame { motion: m, vpls }, vis): (Handle<Buffer>, LastFrame, Handle<Buffer>),
         dst: &mut Handle<Buffer>,
         push: GatherPush,
         ris: RisPush,
@@ -614,7 +628,7 @@ impl Ris {
         let pipeline = self.temporal.pipeline()?;
         let mut b = Self::reads(g.add_pass("ris_temporal"), &i).read(&previous, Access::ComputeRead);
         b = b.read(&vis, Access::ComputeRead);
-        for h in [m.motion, m.prev_position, m.prev_surface] {
+        for h in [m.motion, m.prev_position, m.prev_surface, vpls.position, vpls.normal, vpls.flux] {
             b = b.read(&h, Access::ComputeRead);
         }
         b.write(dst, Access::ComputeWrite).record(move |ctx| {
@@ -626,6 +640,9 @@ impl Ris {
                 .sampled_image(B_MOTION, ctx.image(&m.motion), s)
                 .sampled_image(B_PREV_POSITION, ctx.image(&m.prev_position), s)
                 .sampled_image(B_PREV_SURFACE, ctx.image(&m.prev_surface), s)
+                .sampled_image(B_PREV_VPL_POSITION, ctx.image(&vpls.position), s)
+                .sampled_image(B_PREV_VPL_NORMAL, ctx.image(&vpls.normal), s)
+                .sampled_image(B_PREV_VPL_FLUX, ctx.image(&vpls.flux), s)
                 .texel_view(B_RIS_VIS, ctx.buffer(&vis));
             let block = RisPushBlock { gather: push, ris };
             let size = [f.width, f.height, ris.reservoirs];
