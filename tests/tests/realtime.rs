@@ -1,11 +1,12 @@
 //! `--method realtime` (ris with two reservoirs per pixel, reused across frames through reprojection and
 //! across pixels, `passes/reproject.rs`, and denoised, `passes/denoise.rs`) against independent judges:
 //! each raw frame is unbiased with respect to `all` on a static view after frames of temporal and spatial
-//! reuse (with the reuse's control variate and the learned visibility in every target), and so is the first frame after a camera move, whose history
-//! is reprojected; the frame traces at most two shadow rays per pixel, counted by the shade, while the
-//! camera and a light move; the denoiser's output has a lower error than the raw estimate, and `--denoise
-//! off` shows the raw estimate; a light move stays within its stated bias; and a
-//! static view's progressive mean of realtime frames converges to the unbiased image.
+//! reuse (with the reuse's control variate and the learned visibility in every target), and so is the
+//! first frame after a camera move, whose history is reprojected, and after a light move; the frame
+//! traces at most two shadow rays per pixel, counted by the shade, while the camera and a light move;
+//! the denoiser's output has a lower error than the raw estimate, and `--denoise off` shows the raw
+//! estimate; a static view's progressive mean of realtime frames converges to the unbiased image; and
+//! `auto` learns visibility only where visibility blocks nearly everything.
 
 use crate::vpl::{converges_to, indirect_with};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
@@ -16,16 +17,44 @@ use glam::Vec3;
 const SIZE: (u32, u32, u32, u32) = (24, 24, 32, 32);
 
 /// A raw real-time frame at the unbiasedness tests' settings (the 1/d² clamp at 1 % of the diagonal on
-/// both sides, as `every_method_converges_to_all_at_the_monte_carlo_rate`).
+/// both sides, as `every_method_converges_to_all_at_the_monte_carlo_rate`), learning visibility (which
+/// `auto` leaves off on the Cornell box) so that every reuse weighs learned targets.
 fn realtime(seed: u64) -> FrameSettings {
-    FrameSettings {
+    let mut s = FrameSettings {
         method: Method::Realtime,
         seed,
         clamp: 0.01,
         denoise: false,
         component: Component::Indirect,
         ..FrameSettings::default()
-    }
+    };
+    (s.ris.learn_visibility, s.ris.learn_auto) = (bounce_graph::passes::ris::AUTO_LEARN_FLOOR, false);
+    s
+}
+
+/// Under `--learn-visibility auto` (the default) a real-time frame learns visibility where the view's
+/// blocked share is at least `REALTIME_LEARN_BLOCKED` (the two rooms: the light in the next room), and
+/// not on the Cornell box, whose frames are then those of `--learn-visibility off`, bit for bit.
+#[test]
+fn realtime_learns_visibility_only_where_visibility_blocks_nearly_everything() {
+    use bounce_graph::frame::REALTIME_LEARN_BLOCKED;
+    let gpu = TestGpu::new();
+    let (w, h, res, vox) = SIZE;
+    let frames = |scene: &Scene, auto: bool| {
+        let mut r = Renderer::new(&gpu, scene).unwrap();
+        let mut s = FrameSettings { clamp: 0.0, ..realtime(1) };
+        (s.ris.learn_visibility, s.ris.learn_auto) = (0.0, auto);
+        let b = r.blocked_share(w, h).unwrap().expect("the view is lit");
+        (b, (0..3).map(|_| indirect_with(&mut r, s.clone(), w, h, res, vox)).last().unwrap())
+    };
+    let cornell = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let ((b, auto), (_, off)) = (frames(&cornell, true), frames(&cornell, false));
+    assert!(b < REALTIME_LEARN_BLOCKED, "Cornell box: blocked share {b}");
+    assert_eq!(auto, off, "auto learned on the Cornell box");
+    let rooms = Scene::load(&bounce_tests::workspace().join("assets/two-rooms/scene.toml")).unwrap();
+    let ((b, auto), (_, off)) = (frames(&rooms, true), frames(&rooms, false));
+    assert!(b >= REALTIME_LEARN_BLOCKED, "two rooms: blocked share {b}");
+    assert_ne!(auto, off, "auto did not learn in the two rooms");
 }
 
 fn all(r: &mut Renderer) -> Vec<[f32; 3]> {

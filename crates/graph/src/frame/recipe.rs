@@ -252,16 +252,17 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
     let ris = &s.ris_settings();
     let push = ris_push(s);
     let sampling = GatherPush { seed: 0, ..gather };
-    let view = if s.method == Method::Realtime {
-        // The light maps' size too: a reservoir's VPL is a texel index.
-        crate::graph::fingerprint(&(s.width, s.height, s.dprsm_res))
+    let (view, keyed) = if s.method == Method::Realtime {
+        // The light maps' size too: a reservoir's VPL is a texel index. Whether the view learns
+        // visibility is decided per frame and changes no reservoir's meaning.
+        (crate::graph::fingerprint(&(s.width, s.height, s.dprsm_res)), RisPush { learned: 0.0, ..push })
     } else {
-        crate::graph::fingerprint(&(i.keys.gbuffer, i.keys.cdf))
+        (crate::graph::fingerprint(&(i.keys.gbuffer, i.keys.cdf)), push)
     };
     let key = crate::graph::fingerprint(&(
         view,
         bytemuck::bytes_of(&sampling),
-        bytemuck::bytes_of(&push),
+        bytemuck::bytes_of(&keyed),
         ris.spatial_passes,
     ));
     let candidates_per_dispatch =

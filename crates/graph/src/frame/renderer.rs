@@ -262,7 +262,14 @@ impl Renderer {
     fn effective(&mut self, s: &FrameSettings) -> Result<Option<FrameSettings>> {
         if s.method == Method::Realtime {
             let seed = s.seed.wrapping_add(self.state.frames.wrapping_mul(0x9E37_79B9));
-            return Ok(Some(FrameSettings { seed, ..s.clone() }));
+            let mut ris = s.ris;
+            if ris.learn_auto && ris.learn_visibility == 0.0 {
+                let blocked = self.blocked_share(s.width, s.height)?;
+                if blocked.is_some_and(|b| b >= super::settings::REALTIME_LEARN_BLOCKED) {
+                    ris.learn_visibility = crate::passes::ris::AUTO_LEARN_FLOOR;
+                }
+            }
+            return Ok(Some(FrameSettings { seed, ris, ..s.clone() }));
         }
         self.auto_learn(s)
     }

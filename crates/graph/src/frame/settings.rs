@@ -74,6 +74,14 @@ pub enum Method {
 /// (Sibenik and the two rooms, camera and light; measured there only).
 pub const REALTIME_RESERVOIRS: u32 = 2;
 
+/// The blocked share ([`crate::passes::ris::blocked_share`]) from which a real-time frame under
+/// `--learn-visibility auto` learns. Under motion a count goes stale as its screen tile and light-map
+/// cell move on, so learning pays only where visibility blocks nearly everything (measured at 64²,
+/// 16 frames, light and camera orbits: learning cost 1.0–2.1× the raw error at blocked shares 0.43–0.55,
+/// the doorway and the generated rooms lit from the next room, 1.2–1.3× on Sibenik at 0.16, and saved
+/// 4–5× in the two rooms at 0.99; BENCHMARKS.md, "Real time under motion"). The threshold sits between.
+pub const REALTIME_LEARN_BLOCKED: f32 = 0.75;
+
 /// The source distribution of `Method::Ris`'s candidates: one of the CDF methods' mixtures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum RisSource {
@@ -156,20 +164,19 @@ impl RisSettings {
     /// `Method::Realtime`'s ris: [`REALTIME_RESERVOIRS`] reservoirs of 32 candidates (8 from the near
     /// window) from the pool, last frame's reservoirs combined in through reprojection with their
     /// confidence capped at M (the history counts as much as this frame's candidates), one spatial pass
-    /// of 4 neighbours within 16 pixels, the control variate over the spatial pass's inputs, and the
-    /// learned visibility always (δ_L = `AUTO_LEARN_FLOOR`: its counts carry over camera and light moves,
-    /// and a per-view decision would drop the history whenever it flipped). The cap was chosen over four
-    /// runs of motion (0 / ¼ / ½ / 1 / 2 / 8; BENCHMARKS.md, "Real time under motion"): against 8, 1
-    /// lowered the raw error in all four (0.65–0.98×) and the denoised error too (0.31–0.97×: a long
-    /// history correlates the frames the denoiser's accumulation averages); below 1 the raw error grew.
+    /// of 4 neighbours within 16 pixels and the control variate over the spatial pass's inputs. The
+    /// cap was chosen over four runs of motion (0 / ¼ / ½ / 1 / 2 / 8; BENCHMARKS.md, "Real time under
+    /// motion"): against 8, 1 lowered the raw error in all four (0.65–0.98×) and the denoised error too
+    /// (0.31–0.97×: a long history correlates the frames the denoiser's accumulation averages); below 1
+    /// the raw error grew. The learned visibility is `FrameSettings::ris`'s: under `auto` (the default)
+    /// the renderer turns it on for a view whose blocked share is at least [`REALTIME_LEARN_BLOCKED`],
+    /// frame by frame, without dropping the history (the reuse's weights take any positive target).
     pub fn realtime() -> Self {
         RisSettings {
             temporal_cap: 1.0,
             spatial_passes: 1,
             spatial_neighbors: 4,
             spatial_radius: 16.0,
-            learn_visibility: crate::passes::ris::AUTO_LEARN_FLOOR,
-            learn_auto: false,
             control_variate: true,
             picks: 1,
             ..RisSettings::default()
@@ -509,10 +516,11 @@ impl FrameSettings {
     }
 
     /// The ris settings the frame runs: `ris` for `Method::Ris`, [`RisSettings::realtime`] for
-    /// `Method::Realtime`.
+    /// `Method::Realtime` with `ris`'s learned visibility (decided per view under `auto`).
     pub fn ris_settings(&self) -> RisSettings {
         if self.method == Method::Realtime {
-            RisSettings::realtime()
+            let (learn_visibility, learn_auto) = (self.ris.learn_visibility, self.ris.learn_auto);
+            RisSettings { learn_visibility, learn_auto, ..RisSettings::realtime() }
         } else {
             self.ris
         }

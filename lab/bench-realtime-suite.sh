@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# The real-time frame on the generated suite: for every scene folder under SCENES (scripts/make-scenes.py),
+# a light orbit and, separately, a camera orbit, FRAMES frames at SIZE², realtime against per-frame ris at
+# 4 reservoirs (about twice realtime's shadow rays), each frame against its own path-traced ground truth
+# (cached in the output folders; REFS=dir copies them from an earlier run of the same size and frames).
+# Prints one Markdown row per scene and motion, then the aggregate over all runs: the geometric mean and
+# the worst case of realtime's raw relMSE, raw efficiency 1 / (relMSE × GPU ms) and denoised relMSE over
+# ris at 4's raw ones, and of its raw and denoised flicker over ris's.
+# Usage: lab/bench-realtime-suite.sh SCENES OUT   (BOUNCE=path/to/bounce measures that build; SIZE=64,
+# FRAMES=16 by default; ONLY=realtime runs realtime alone and reads ris's rows from REFS's run)
+set -euo pipefail
+here="$(cd "$(dirname "$0")/.." && pwd)"
+scenes="$1"
+out="$2"
+size="${SIZE:-64}"
+frames="${FRAMES:-16}"
+if [ -z "${BOUNCE:-}" ]; then (cd "$here" && cargo build -q -p bounce); fi
+bin="${BOUNCE:-${CARGO_TARGET_DIR:-$here/target}/debug/bounce}"
+methods=ris,realtime
+[ "${ONLY:-}" = realtime ] && methods=realtime
+# The `mean` row of bench.csv: method,temporal,mean,gpu_ms,rays,rel_mse,flicker,denoised_rel_mse,denoised_flicker
+mean_row() { awk -F, -v m="$1" '$1 == m && $3 == "mean"' "$2"; }
+rows="$out/rows.csv"
+mkdir -p "$out"
+: >"$rows"
+for scene_dir in "$scenes"/*/; do
+  scene="$(basename "$scene_dir")"
+  for motion in light camera; do
+    case "$motion" in
+      light) move=(--animate orbit) ;;
+      camera) move=(--animate none --camera-path orbit) ;;
+    esac
+    dir="$out/$scene-$motion"
+    mkdir -p "$dir"
+    if [ -n "${REFS:-}" ]; then cp -n "$REFS/$scene-$motion"/reference-*.exr "$dir/" 2>/dev/null || true; fi
+    "$bin" bench "$scene_dir/scene.toml" "${move[@]}" --frames "$frames" --width "$size" --height "$size" \
+      --temporal coherent --methods "$methods" --vpls 4 --out "$dir" >/dev/null 2>"$dir/stderr" ||
+      { echo "error: $scene $motion failed (see $dir/stderr)" >&2; exit 1; }
+    ris_csv="$dir/bench.csv"
+    [ "${ONLY:-}" = realtime ] && ris_csv="$REFS/$scene-$motion/bench.csv"
+    ris="$(mean_row ris "$ris_csv")"
+    rt="$(mean_row realtime "$dir/bench.csv")"
+    echo "$scene,$motion,$ris,$rt" >>"$rows"
+  done
+done
+# rows.csv: scene,motion, then ris's and realtime's mean rows (9 fields each).
+echo "| scene | motion | ris 4 ms | ris 4 relMSE | realtime ms | relMSE | denoised | flicker ÷ ris | raw efficiency ÷ ris |"
+echo "|---|---|---:|---:|---:|---:|---:|---:|---:|"
+awk -F, '{printf "| %s | %s | %.1f | %.4f | %.1f | %.4f | %.4f | %.2f | %.2f |\n", $1, $2, $6, $8, $15, $17, $19,
+  $18 / $9, ($8 * $6) / ($17 * $15)}' "$rows"
+awk -F, '
+  function agg(name, v, n,   i, s, w) { s = 0; w = v[1]; for (i = 1; i <= n; i++) { s += log(v[i]); if (v[i] > w) w = v[i] }
+    printf "| %s | %.3f | %.3f |\n", name, exp(s / n), w }
+  { n++; raw[n] = $17 / $8; eff[n] = ($17 * $15) / ($8 * $6); den[n] = $19 / $8; fl[n] = $18 / $9; dfl[n] = $20 / $9 }
+  END {
+    print ""; print "| realtime over ris at 4, " n " runs | geometric mean | worst |"; print "|---|---:|---:|"
+    agg("raw relMSE", raw, n); agg("relMSE × GPU ms (1 / efficiency)", eff, n); agg("denoised relMSE", den, n)
+    agg("raw flicker", fl, n); agg("denoised flicker", dfl, n)
+  }' "$rows"
