@@ -29,12 +29,12 @@ use anyhow::{Context, Result};
 use bounce_device::sync::{self, Access, Target, Tracked};
 use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, ImageDesc, TimestampPool};
 use std::cell::Cell;
-
-mod products;
-pub use products::{Products, RawHandle};
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::marker::PhantomData;
+
+mod products;
+pub use products::{Products, RawHandle};
 
 /// A typed reference to a graph resource. Reads take `&Handle`, writes `&mut Handle`.
 pub struct Handle<T> {
