@@ -189,7 +189,7 @@ fn the_denoiser_lowers_the_error_and_off_shows_the_raw_estimate() {
 /// maps; passes/ris.rs), so it is unbiased however far the light moves: over 48 runs the image mean is
 /// within 4 standard errors of `all`'s after a step of 10 % of the scene diagonal (ten times the default
 /// orbit's step). Weighed with this frame's maps instead (as first built) the history is weighed for VPLs
-/// it could not hold (texels empty last frame, or then behind the pixel's surface): measured −5.1 ± 0.7 %
+/// it could not hold (texels empty last frame, or then behind the pixel's surface): measured −5.7 ± 0.5 %
 /// at this step, which this test fails.
 #[test]
 fn realtime_after_a_light_move_is_unbiased() {
