@@ -6,7 +6,7 @@
 
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
-layout(std430, set = 0, binding = B_RIS_IN) buffer RisIn { Reservoir res_in[]; };
+layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
 layout(std430, set = 0, binding = B_RIS_VIS) buffer RisVis { uint vis_counts[]; };
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) readonly buffer RisUnshadowed { vec4 unshadowed[]; };
 layout(std430, set = 0, binding = B_RIS_CV) buffer RisCv { uvec4 cv_counts[]; };
@@ -85,7 +85,6 @@ void main() {
                 }
 #endif
                 sum += c * r.weight;
-                if (ris.keep_visible != 0u && c == vec3(0.0)) res_in[idx].weight = 0.0;
                 if (ris.control != 0u) {
                     // The control variate: + β (U_g − g(y) W), g = f p̂ / luminance(f), whose g(y) W is the
                     // kept VPL's colour ratio f / luminance(f) times p̂(y) W = Σw / M. Given the candidates,

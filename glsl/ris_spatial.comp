@@ -9,7 +9,6 @@
 #include "shared/ris.glsl"
 
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
-layout(std430, set = 0, binding = B_RIS_NEIGHBORS) readonly buffer RisNeighbors { Reservoir res_neighbors[]; };
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 // (A stand-in of one vec4 is bound when the pass writes no U_g.)
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) writeonly buffer RisUnshadowed { vec4 unshadowed[]; };
@@ -62,7 +61,7 @@ void main() {
     inputs[0] = canonical;
     float confidence = canonical.confidence;
     for (uint i = 1u; i < n; i++) {
-        inputs[i] = res_neighbors[res_index(q[i], layer)];
+        inputs[i] = res_in[res_index(q[i], layer)];
         confidence += inputs[i].confidence;
     }
     // Resample: input i's sample y_i weighs m_i(y_i) · p̂_x(y_i) · W_i.

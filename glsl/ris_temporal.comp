@@ -17,8 +17,7 @@
 #define RIS_LEARNED_READ
 #include "shared/ris.glsl"
 
-layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
-layout(std430, set = 0, binding = B_RIS_OUT) writeonly buffer RisOut { Reservoir res_out[]; };
+layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Reservoir res_history[]; };
 layout(set = 0, binding = B_MOTION) uniform sampler2D motion;
 layout(set = 0, binding = B_PREV_POSITION) uniform sampler2D prev_position;
@@ -38,20 +37,16 @@ void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     uint layer = gl_GlobalInvocationID.z;
     if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
-    uint idx = res_index(px, layer);
-    Reservoir r = res_in[idx];
     vec4 gp = texelFetch(g_position, px, 0);
+    if (gp.w == 0.0) return; // the initial stage left an empty reservoir, with no history to combine
     vec4 mv = texelFetch(motion, px, 0);
-    // No surface (the initial stage left an empty reservoir, with no history to combine) or disoccluded:
-    // the reservoir stays this frame's own.
-    if (gp.w == 0.0 || mv.z == 0.0) {
-        res_out[idx] = r;
-        return;
-    }
+    if (mv.z == 0.0) return; // disoccluded: the reservoir stays this frame's own
     ivec2 q = ivec2(mv.xy);
     vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
     uvec4 su = texelFetch(prev_surface, q, 0);
     vec3 xq = texelFetch(prev_position, q, 0).xyz, nq = uintBitsToFloat(su.xyz), aq = unpackUnorm4x8(su.w).rgb;
+    uint idx = res_index(px, layer);
+    Reservoir r = res_out[idx];
     float m = float(ris.candidates);
     Reservoir h = res_history[res_index(q, layer)];
     float ch = min(h.confidence, ris.history_cap * m);

@@ -187,9 +187,6 @@ const float END_BALL_MAX_RADIUS = 0.03;
 #define B_PREV_VPL_POSITION 65
 #define B_PREV_VPL_NORMAL 66
 #define B_PREV_VPL_FLUX 67
-// ris_spatial: the reservoirs its neighbours lend (the initial stage's, before the temporal stage, or the
-// canonical input's own buffer).
-#define B_RIS_NEIGHBORS 68
 
 // ---- reproject (passes/reproject.rs): motion from the G-buffer, and the surface kept for the next frame --
 // Written: each pixel's previous pixel (B_MOTION: xy, z = 1 where last frame saw the same surface there)

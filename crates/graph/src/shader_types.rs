@@ -109,10 +109,7 @@ pub struct RisPush {
     /// K: VPLs each reservoir's candidates keep, independently, each traced by its own shadow ray; the
     /// reservoirs (layers) are `reservoirs` / K candidate streams of K picks.
     pub picks: u32,
-    /// 1: the shade zeroes the contribution weight of a final reservoir whose shadow ray was occluded, so
-    /// the history carries visible samples only.
-    pub keep_visible: u32,
-    pub pad: u32,
+    pub pad: [u32; 2],
 }
 const _: () = assert!(size_of::<RisPush>() == 64);
 

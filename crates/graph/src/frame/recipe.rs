@@ -284,10 +284,9 @@ pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
         // Each candidate stream (--vpls of them; realtime: one) keeps `picks` VPLs, a layer of reservoirs each.
         reservoirs: s.ris_streams() * ris.picks,
         picks: ris.picks,
-        keep_visible: std::env::var("BOUNCE_KEEP").map_or(0, |v| v.parse().unwrap()),
         neighbors: ris.spatial_neighbors,
         radius: ris.spatial_radius,
-        history_cap: std::env::var("BOUNCE_CAP").map_or(ris.temporal_cap, |v| v.parse().unwrap()),
+        history_cap: ris.temporal_cap,
         pool_tiles: ris.pool_tiles,
         learned: ris.learn_visibility,
         vis_tile: crate::passes::ris::vis_tile(s.width, s.height, ris.learn_tile),

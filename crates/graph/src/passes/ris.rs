@@ -326,7 +326,6 @@ impl Ris {
         };
         let initial = with(&[Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_UNSHADOWED)]);
         let temporal = with(&[
-            Binding::storage_buffer(B_RIS_IN),
             Binding::storage_buffer(B_RIS_OUT),
             Binding::storage_buffer(B_RIS_HISTORY),
             Binding::sampled_image(B_MOTION),
@@ -343,7 +342,6 @@ impl Ris {
         learned.push(Binding::uniform_texel_buffer(B_RIS_VIS));
         let spatial = with(&[
             Binding::storage_buffer(B_RIS_IN),
-            Binding::storage_buffer(B_RIS_NEIGHBORS),
             Binding::storage_buffer(B_RIS_OUT),
             Binding::storage_buffer(B_RIS_UNSHADOWED),
             Binding::uniform_texel_buffer(B_RIS_VIS),
@@ -393,7 +391,6 @@ impl Ris {
         let reservoirs = r.push.reservoirs;
         let desc = |name: &str| BufferDesc::storage(name, Self::layer_bytes(f.width, f.height) * reservoirs as u64);
         let history = g.history_buffer("ris.reservoirs", desc("ris.reservoirs"), &r.key);
-        if std::env::var("BOUNCE_DBG").is_ok() { eprintln!("DBG prev {} last {:?} key {:x} push {:?}", history.previous.is_some(), last.map(|l| l.motion.history), r.key, push); }
         // Last frame's reservoirs, with where each pixel was (and last frame's surface), when both were kept.
         let previous = match (history.previous, last) {
             (Some(p), Some(l)) if r.push.history_cap > 0.0 && l.motion.history => Some((p, l)),
@@ -428,20 +425,14 @@ impl Ris {
         } else {
             g.create_buffer(BufferDesc::storage("ris.cv (off)", 16))
         };
-        let mut fresh = None;
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
+            self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
             if let Some((previous, last)) = previous {
-                let mut initial = g.create_buffer(desc("ris.initial"));
-                self.add_initial(g, f, i, &mut initial, &mut unshadowed, pool, learned, push, r)?;
-                self.add_temporal(g, f, i, (initial, previous, last, vis), dst, push, r.push)?;
-                fresh = Some(initial);
-            } else {
-                self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
+                self.add_temporal(g, f, i, (previous, last, vis), dst, push, r.push)?;
             }
         }
-        let fresh_mode = std::env::var("BOUNCE_FRESH").is_ok();
         for pass in 0..r.spatial_passes {
             let s = pass + 1;
             let (src, dst) = match (target(s), scratch.as_mut()) {
@@ -451,8 +442,7 @@ impl Ris {
             };
             // Only the last pass's inputs are the final choice's: it alone writes U_g (RIS_CONTROL_REUSE).
             let control = if s == r.spatial_passes { r.push.control } else { RIS_CONTROL_OFF };
-            let neighbors = match fresh { Some(h) if fresh_mode => h, _ => src };
-            self.add_spatial(g, f, i, (src, neighbors, vis), dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
+            self.add_spatial(g, f, i, (src, vis), dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
         }
         // The frame's shadow rays, counted by the shade.
         let mut rays = g.create_buffer(BufferDesc::storage("ris.rays", 4));
@@ -629,25 +619,22 @@ impl Ris {
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        (initial, previous, LastFrame { motion: m, vpls }, vis): (Handle<Buffer>, Handle<Buffer>, LastFrame, Handle<Buffer>),
+        (previous, LastFrame { motion: m, vpls }, vis): (Handle<Buffer>, LastFrame, Handle<Buffer>),
         dst: &mut Handle<Buffer>,
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
         let (i, o) = (*i, *dst);
         let pipeline = self.temporal.pipeline()?;
-        let mut b = Self::reads(g.add_pass("ris_temporal"), &i)
-            .read(&initial, Access::ComputeRead)
-            .read(&previous, Access::ComputeRead);
+        let mut b = Self::reads(g.add_pass("ris_temporal"), &i).read(&previous, Access::ComputeRead);
         b = b.read(&vis, Access::ComputeRead);
         for h in [m.motion, m.prev_position, m.prev_surface, vpls.position, vpls.normal, vpls.flux] {
             b = b.read(&h, Access::ComputeRead);
         }
-        b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
+        b.write(dst, Access::ComputeWrite).record(move |ctx| {
             let s = self.sampler.raw;
             let writes = self
                 .base_writes(f, ctx, &i)
-                .storage_buffer(B_RIS_IN, ctx.buffer(&initial))
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_HISTORY, ctx.buffer(&previous))
                 .sampled_image(B_MOTION, ctx.image(&m.motion), s)
@@ -670,7 +657,7 @@ impl Ris {
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        (src, neighbors, vis): (Handle<Buffer>, Handle<Buffer>, Handle<Buffer>),
+        (src, vis): (Handle<Buffer>, Handle<Buffer>),
         dst: &mut Handle<Buffer>,
         unshadowed: &mut Handle<Buffer>,
         push: GatherPush,
@@ -678,17 +665,14 @@ impl Ris {
     ) -> Result<()> {
         let (i, o, u) = (*i, *dst, *unshadowed);
         let pipeline = self.spatial.pipeline()?;
-        let b = Self::reads(g.add_pass("ris_spatial"), &i)
-            .read(&src, Access::ComputeRead)
-            .read(&neighbors, Access::ComputeRead)
-            .read(&vis, Access::ComputeRead);
+        let b =
+            Self::reads(g.add_pass("ris_spatial"), &i).read(&src, Access::ComputeRead).read(&vis, Access::ComputeRead);
         // U_g is written by the last pass only (declared by each: the stand-in or the buffer).
         let b = b.write(unshadowed, Access::ComputeWrite);
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
             let writes = self
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_IN, ctx.buffer(&src))
-                .storage_buffer(B_RIS_NEIGHBORS, ctx.buffer(&neighbors))
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u))
                 .texel_view(B_RIS_VIS, ctx.buffer(&vis));
@@ -708,11 +692,11 @@ impl Ris {
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
-        let (mut reservoirs, unshadowed) = (io.reservoirs, io.unshadowed);
+        let (reservoirs, unshadowed) = (io.reservoirs, io.unshadowed);
         let (i, o, hv, hc, hr) = (*i, *io.out, *io.vis, *io.cv, *io.rays);
         let pipeline = self.shade.pipeline(&f, false)?;
         let mut b = Self::reads(g.add_pass("ris_shade"), &i)
-            .write(&mut reservoirs, Access::ComputeWrite)
+            .read(&reservoirs, Access::ComputeRead)
             .read(&unshadowed, Access::ComputeRead);
         // The learned visibility's and the control's counts are added to (or, off, the stand-ins are never
         // touched), and so is the ray count.
