@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The real-time frame on the generated suite: for every scene folder under SCENES (scripts/make-scenes.py),
-# a light orbit and, separately, a camera orbit, FRAMES frames at SIZE², realtime against per-frame ris at
+# a light path (its light-path.toml, else an orbit) and, separately, a camera orbit, FRAMES frames at SIZE², realtime against per-frame ris at
 # 4 reservoirs (about twice realtime's shadow rays), each frame against its own path-traced ground truth
 # (cached in the output folders; REFS=dir copies them from an earlier run of the same size and frames).
 # Prints one Markdown row per scene and motion, then the aggregate over all runs: the geometric mean and
@@ -27,7 +27,9 @@ for scene_dir in "$scenes"/*/; do
   scene="$(basename "$scene_dir")"
   for motion in light camera; do
     case "$motion" in
-      light) move=(--animate orbit) ;;
+      # The scene's own light path where it has one (make-scenes.py writes one that keeps each light in
+      # its room and place: an orbit takes a light by a wall through it, and the run goes dark).
+      light) if [ -f "$scene_dir/light-path.toml" ]; then move=(--animate "$scene_dir/light-path.toml"); else move=(--animate orbit); fi ;;
       camera) move=(--animate none --camera-path orbit) ;;
     esac
     dir="$out/$scene-$motion"

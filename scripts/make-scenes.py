@@ -19,11 +19,16 @@ by a factor from millimetres to kilometres and, for every other scene, moved far
   other-room      two rooms joined by a doorway, the light in the one the camera is not in;
   multi-light     two to four lights of different colours and powers;
   textured        checkered walls and floor (map_Kd PNGs) with boxes.
+Each suite scene also gets light-path.toml, a loop of keyframes for `bench --animate` that moves every
+light and keeps it where its family put it: along its wall, along its corner's edge, under its table or
+behind its panel, in its part of the room or the far room (an orbit about its start, the bench's default
+motion, takes a light by a wall through the wall, and the rest of the run is dark).
 The suite is generated, not committed; `bounce suite DIR` runs it. The same seed writes the same files.
 Standard library only; the output is deterministic (rerun it and `git diff` shows nothing).
 Usage: python3 scripts/make-scenes.py [assets-dir]
        python3 scripts/make-scenes.py --suite DIR [--per-family N] [--seed S] [--size PIXELS]
 """
+import math
 import os
 import random
 import struct
@@ -267,7 +272,8 @@ def table(m, x, z, w, d, h, mat="wood", leg=0.05):
 
 
 def suite_scene(rng, family, scale, offset):
-    """(mesh, camera, lights) of one suite scene in room units (the mesh places it)."""
+    """(mesh, camera, lights, motions) of one suite scene in room units (the mesh places it); a motion per
+    light, (steps, lo, hi): how its path moves it (see light_keys) and the box it stays in."""
     m = SuiteMesh(scale, offset)
     W, H, D = rng.uniform(3, 8), rng.uniform(2.4, 4), rng.uniform(3, 8)
     lo, hi = (0.0, 0.0, 0.0), (W, H, D)
@@ -278,6 +284,12 @@ def suite_scene(rng, family, scale, offset):
     power = rng.uniform(4, 10)
     lights = [(light, (power, power, power))]
     walls = ("floor", "wall", "wall")
+    # Every light circles its start horizontally (radius a tenth of the room's diagonal) inside its room.
+    r = 0.1 * math.sqrt(W * W + H * H + D * D)
+    circle = ((r, 0, 0), (0, 0, r))
+    margin = 0.1
+    room = ((margin, margin, margin), (W - margin, H - margin, D - margin))
+    motions = None
     if family == "boxes":
         room_walls(m, lo, hi, *walls)
         random_boxes(rng, m, lo, hi, rng.randint(2, 10), [eye, light, target])
@@ -299,9 +311,14 @@ def suite_scene(rng, family, scale, offset):
             m.quad((px, py, pz), (px + 1.0, py, pz), (px + 1.0, py - 0.8, pz), (px, py - 0.8, pz))
     elif family == "thin-walls":
         room_walls(m, lo, hi, *walls)
-        for i in range(rng.randint(1, 2)):
-            wall_with_door(m, D * (0.45 + 0.25 * i), rng.uniform(0.1, 0.7) * W, W, H, "red")
-        lights = [((rng.uniform(0.2, 0.8) * W, H * 0.8, rng.uniform(0.1, 0.95) * D), (power, power, power))]
+        zs = [D * (0.45 + 0.25 * i) for i in range(rng.randint(1, 2))]
+        for z in zs:
+            wall_with_door(m, z, rng.uniform(0.1, 0.7) * W, W, H, "red")
+        p = (rng.uniform(0.2, 0.8) * W, H * 0.8, rng.uniform(0.1, 0.95) * D)
+        lights = [(p, (power, power, power))]
+        # In the light's part of the room, between the walls either side of it.
+        z0, z1 = max([0.0] + [z for z in zs if z < p[2]]), min([D] + [z for z in zs if z > p[2]])
+        motions = [(circle, (margin, margin, z0 + margin), (W - margin, H - margin, z1 - margin))]
     elif family == "light-wall":
         room_walls(m, lo, hi, *walls)
         gap = rng.uniform(0.01, 0.04)
@@ -314,12 +331,18 @@ def suite_scene(rng, family, scale, offset):
         else:
             p[1] = H - gap
         lights = [(tuple(p), (power, power, power))]
+        # Along the wall, at the same gap: a circle in the wall's plane.
+        plane = [(r, 0, 0), (0, r, 0), (0, 0, r)]
+        del plane[(0, 2, 1)[side]]
+        motions = [(tuple(plane), room[0], room[1])]
         random_boxes(rng, m, lo, hi, rng.randint(1, 4), [eye, p, target])
     elif family == "light-corner":
         room_walls(m, lo, hi, *walls)
         g = rng.uniform(0.02, 0.06)
         p = (g if rng.random() < 0.5 else W - g, H - g if rng.random() < 0.7 else g, D - g)
         lights = [(p, (power, power, power))]
+        # Along the corner's horizontal edge, at the same gaps from the other two walls.
+        motions = [(((r if p[0] < W / 2 else -r, 0, 0), "out"), room[0], room[1])]
         random_boxes(rng, m, lo, hi, rng.randint(1, 4), [eye, p, target])
     elif family == "light-occluded":
         room_walls(m, lo, hi, *walls)
@@ -328,12 +351,16 @@ def suite_scene(rng, family, scale, offset):
             # Under a wide table: the light shines down on the floor beneath it only, and up at the top.
             table(m, lx - 1.0, lz - 0.8, 2.0, 1.6, 1.0)
             lights = [((lx, 0.6, lz), (power, power, power))]
+            # Under the table's top, whatever the circle.
+            motions = [(circle, (lx - 0.8, 0.6, lz - 0.6), (lx + 0.8, 0.6, lz + 0.6))]
         else:
             # Behind a tall panel, facing the back wall.
             m.use("wall")
             m.quad((lx - 1.2, 0.2, lz - 0.3), (lx + 1.2, 0.2, lz - 0.3), (lx + 1.2, H - 0.2, lz - 0.3),
                    (lx - 1.2, H - 0.2, lz - 0.3))
             lights = [((lx, H * 0.6, min(lz + 0.2, D - 0.1)), (power, power, power))]
+            # Behind the panel: a circle in its plane, inside its outline.
+            motions = [(((r, 0, 0), (0, r, 0)), (lx - 1.0, 0.4, 0), (lx + 1.0, H - 0.4, D))]
         eye = (eye[0], eye[1], min(eye[2], max(0.2, lz - 1.2)))
     elif family == "other-room":
         # Two rooms along z joined by a doorway in the shared zero-thickness wall.
@@ -344,6 +371,8 @@ def suite_scene(rng, family, scale, offset):
         p = (rng.uniform(0.2, 0.8) * W, H * rng.uniform(0.5, 0.85), D + rng.uniform(0.3, 0.8) * D2)
         lights = [(p, (power, power, power))]
         target = (door + 0.45, 1.0, D)
+        # In the far room.
+        motions = [(circle, (margin, margin, D + margin), (W - margin, H - margin, D + D2 - margin))]
     elif family == "multi-light":
         room_walls(m, lo, hi, *walls)
         lights = []
@@ -358,10 +387,33 @@ def suite_scene(rng, family, scale, offset):
         random_boxes(rng, m, lo, hi, rng.randint(2, 6), [eye, light, target])
     else:
         raise ValueError(family)
-    return m, (eye, target, fov), lights
+    if motions is None:
+        motions = [(circle, room[0], room[1])] * len(lights)
+    return m, (eye, target, fov), lights, motions
 
 
-def write_suite_scene(d, name, m, camera, lights, scale, size, textured):
+# The light path's keyframes: every PATH_STEP frames of a loop of PATH_PERIOD (bench --animate FILE).
+PATH_PERIOD, PATH_STEP = 60, 5
+
+
+def light_keys(p, motion):
+    """Room-unit positions of a light at frames 0, PATH_STEP, ..., PATH_PERIOD: from its start p along a
+    circle p + (cos θ - 1) a + sin θ b (or, for ((a), "out"), p + (1 - cos θ) a / 2, out and back along
+    a), clamped per axis into the motion's box widened to hold p."""
+    steps, lo, hi = motion
+    keys = []
+    for k in range(0, PATH_PERIOD + 1, PATH_STEP):
+        t = 2 * math.pi * k / PATH_PERIOD
+        if steps[-1] == "out":
+            q = [p[i] + (1 - math.cos(t)) / 2 * steps[0][i] for i in range(3)]
+        else:
+            a, b = steps
+            q = [p[i] + (math.cos(t) - 1) * a[i] + math.sin(t) * b[i] for i in range(3)]
+        keys.append((k, tuple(min(max(q[i], min(lo[i], p[i])), max(hi[i], p[i])) for i in range(3))))
+    return keys
+
+
+def write_suite_scene(d, name, m, camera, lights, motions, scale, size, textured):
     os.makedirs(d, exist_ok=True)
     used = sorted({l.split()[1] for l in m.lines if l.startswith("usemtl")})
     with open(os.path.join(d, f"{name}.mtl"), "w") as f:
@@ -387,6 +439,14 @@ def write_suite_scene(d, name, m, camera, lights, scale, size, textured):
     s += ["[render]", f"width  = {size}", f"height = {size}"]
     with open(os.path.join(d, "scene.toml"), "w") as f:
         f.write("\n".join(s) + "\n")
+    # A light path that keeps each light in its room and its family's place (by a wall, in a corner,
+    # under a table, in the far room): `bench --animate light-path.toml`.
+    s = [f"# {name}: every light's path, a loop of {PATH_PERIOD} frames; generated by scripts/make-scenes.py --suite.", ""]
+    for i, ((p, _), motion) in enumerate(zip(lights, motions)):
+        for k, q in light_keys(p, motion):
+            s += ["[[key]]", f"frame = {k}", f"light = {i}", f"position = {vec(m.place(q))}", ""]
+    with open(os.path.join(d, "light-path.toml"), "w") as f:
+        f.write("\n".join(s))
 
 
 def suite(root, per_family, seed, size):
@@ -397,9 +457,10 @@ def suite(root, per_family, seed, size):
             scale = SCALES[(n + k) % len(SCALES)]
             far = n % 2 == 1
             offset = tuple(rng.uniform(2e3, 2e4) * scale * rng.choice((-1, 1)) for _ in range(3)) if far else (0.0, 0.0, 0.0)
-            m, camera, lights = suite_scene(rng, family, scale, offset)
+            m, camera, lights, motions = suite_scene(rng, family, scale, offset)
             name = f"{family}-{k}"
-            write_suite_scene(os.path.join(root, name), name, m, camera, lights, scale, size, family == "textured")
+            write_suite_scene(os.path.join(root, name), name, m, camera, lights, motions, scale, size,
+                              family == "textured")
             n += 1
     return n
 

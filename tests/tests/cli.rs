@@ -907,7 +907,8 @@ fn cli_reference_matches_the_help() {
 
 /// The generated suite (`scripts/make-scenes.py --suite`): at least forty scenes in nine families, every
 /// one loading under the scene contract, from millimetre to kilometre scales and far from the origin,
-/// each with its lights inside its bounds; the same seed writes the same files.
+/// each with its lights inside its bounds, and a light path (`light-path.toml`) that `bench --animate`
+/// accepts and that keeps every light inside the scene's bounds; the same seed writes the same files.
 #[test]
 fn the_generated_suite_has_forty_loadable_scenes_of_every_scale() {
     let d = scratch("suite-scenes");
@@ -937,6 +938,18 @@ fn the_generated_suite_has_forty_loadable_scenes_of_every_scale() {
         for l in &scene.lights {
             let p = glam::Vec3::from_slice(&l.position[..3]);
             assert!(p.cmpge(scene.bounds_min).all() && p.cmple(scene.bounds_max).all(), "{n}: a light outside");
+        }
+        // The path starts where the scene puts each light, and moves it (a keyframe outside the bounds is
+        // refused by the parser).
+        let keys = d.join("a").join(n).join("light-path.toml");
+        let path = bounce::light_path::LightPath::parse(keys.to_str().unwrap(), &scene)
+            .unwrap_or_else(|e| panic!("{n}: {e:#}"));
+        let (start, later) = (path.at(0), path.at(10));
+        for (i, l) in scene.lights.iter().enumerate() {
+            let p = glam::Vec3::from_slice(&l.position[..3]);
+            let size = (scene.bounds_max - scene.bounds_min).length();
+            assert!((start[i].position - p).length() <= 1e-5 * size, "{n}: light {i} starts elsewhere");
+            assert!((later[i].position - p).length() > 1e-3 * size, "{n}: light {i} does not move");
         }
         let again = std::fs::read(d.join("b").join(n).join(format!("{n}.obj"))).unwrap();
         assert!(again == std::fs::read(d.join("a").join(n).join(format!("{n}.obj"))).unwrap(), "{n} differs");
