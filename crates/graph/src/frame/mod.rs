@@ -14,5 +14,6 @@ pub use recipe::build_frame;
 pub use renderer::{FrameOutput, FrameState, RenderContext, Renderer};
 pub use settings::{
     Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, RisSettings, RisSource, SettingsError,
-    Visibility, VplKernel, REALTIME_LEARN_BLOCKED, REALTIME_RESERVOIRS,
+    Visibility, VplKernel, REALTIME_LEARN_BLOCKED, REALTIME_LEARN_EVERY, REALTIME_LEARN_HYSTERESIS,
+    REALTIME_RESERVOIRS,
 };

@@ -81,6 +81,10 @@ pub const REALTIME_RESERVOIRS: u32 = 2;
 /// the doorway and the generated rooms lit from the next room, 1.2–1.3× on Sibenik at 0.16, and saved
 /// 4–5× in the two rooms at 0.99; BENCHMARKS.md, "Real time under motion"). The threshold sits between.
 pub const REALTIME_LEARN_BLOCKED: f32 = 0.75;
+/// A real-time frame's learning decision is made again every this many frames (`Renderer`).
+pub const REALTIME_LEARN_EVERY: u64 = 16;
+/// Once on, learning stays on until the blocked share falls this far below [`REALTIME_LEARN_BLOCKED`].
+pub const REALTIME_LEARN_HYSTERESIS: f32 = 0.05;
 
 /// The source distribution of `Method::Ris`'s candidates: one of the CDF methods' mixtures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -175,7 +179,8 @@ impl RisSettings {
     /// (nearby pixels' reservoirs are alike and their errors correlate: blotches the denoiser keeps).
     /// The learned visibility is `FrameSettings::ris`'s: under `auto` (the default)
     /// the renderer turns it on for a view whose blocked share is at least [`REALTIME_LEARN_BLOCKED`],
-    /// frame by frame, without dropping the history (the reuse's weights take any positive target).
+    /// every [`REALTIME_LEARN_EVERY`] frames, without dropping the history (the reuse's weights take any
+    /// positive target).
     pub fn realtime() -> Self {
         RisSettings {
             temporal_cap: 1.0,
