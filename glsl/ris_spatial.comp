@@ -1,7 +1,12 @@
 #version 460
-// ris, spatial stage (dispatch W × H × R): the reservoir combined with k neighbours' of the same layer,
-// generalized balance weights m_i(y) = c_i p̂_i(y) / Σ_j c_j p̂_j(y). With ris.control ==
-// RIS_CONTROL_REUSE (the last pass) it also writes the control variate's U_g = Σ_i m_i(y_i) f_x(y_i) W_i,
+// ris, spatial stage (dispatch W × H × R): the reservoir (input 0, canonical) combined with k neighbours'
+// of the same layer by pairwise MIS weights (Bitterli 2022; Lin et al. 2022), each neighbour i paired with
+// the canonical input alone: with S = Σ_{i ≥ 1} c_i and a = c_0 / S,
+//   m_i(y) = (c_i / S) p̂_i(y) / (p̂_i(y) + a p̂_0(y)),  m_0(y) = Σ_{i ≥ 1} (c_i / S) a p̂_0(y) / (p̂_i(y) + a p̂_0(y)),
+// which sum to 1 wherever p̂_0 > 0 (unbiased as the generalized balance weights c_i p̂_i / Σ_j c_j p̂_j,
+// and equal to them, c_i / Σ c, where the targets agree), for 3k + 1 target evaluations instead of
+// (k + 1)². With ris.control == RIS_CONTROL_REUSE (the last pass) it also writes the control variate's
+// U_g = Σ_i m_i(y_i) f_x(y_i) W_i,
 // the mean of f_x(y) W over this resampling's choice given its inputs (passes/ris.rs). With the learned
 // visibility every target carries its factor at its own pixel's tile, and the control's g is f · s (s the
 // learned guess at this pixel's tile) as in the initial stage.
@@ -12,6 +17,11 @@ layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir re
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 // (A stand-in of one vec4 is bound when the pass writes no U_g.)
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) writeonly buffer RisUnshadowed { vec4 unshadowed[]; };
+
+// The target at a pixel's surface (x, n, albedo) for a VPL, times the learned factor there.
+float target_with(vec3 x, vec3 n, vec3 albedo, Vpl vpl, float learned) {
+    return vpl_unshadowed_luminance(x, n, vpl_luminance_albedo(albedo), vpl, pc.clamp_d2) * learned;
+}
 
 // Whether neighbour q may lend its reservoir to p: both see geometry, their normals within ~25° and their
 // distances from the eye within 10 % (a deterministic function of the two G-buffer texels).
@@ -64,28 +74,35 @@ void main() {
         inputs[i] = res_in[res_index(q[i], layer)];
         confidence += inputs[i].confidence;
     }
-    // Resample: input i's sample y_i weighs m_i(y_i) · p̂_x(y_i) · W_i.
+    // Resample: input i's sample y_i weighs m_i(y_i) · p̂_x(y_i) · W_i, m_i the pairwise weights (above).
     Reservoir r = empty_reservoir(confidence);
     float sum = 0.0;
     vec3 ug = vec3(0.0);
     // The kept VPL's s / (p̂ / luminance(f)) (the initial stage's u.w): 1 without the learned visibility.
     float ratio = 1.0;
+    // S, the neighbours' confidence, and a = c_0 / S, the canonical input's share in each pair.
+    float s_n = confidence - canonical.confidence, a = s_n > 0.0 ? canonical.confidence / s_n : 0.0;
     for (uint i = 0u; i < n; i++) {
         Reservoir in_i = inputs[i];
         if (in_i.vpl == RIS_NONE || !(in_i.weight > 0.0)) continue;
         Vpl vpl = vpl_fetch(in_i.vpl);
-        float num = 0.0, den = 0.0, here = 0.0;
-        vec2 learned_here = vec2(1.0);
-        for (uint j = 0u; j < n; j++) {
-            float t = vpl_unshadowed_luminance(xs[j], ns[j], vpl_luminance_albedo(albs[j]), vpl, pc.clamp_d2);
-            vec2 l = learned_at(q[j], in_i.vpl);
-            t *= l.x;
-            if (j == 0u) learned_here = l;
-            den += inputs[j].confidence * t;
-            if (j == i) num = inputs[j].confidence * t;
-            if (j == 0u) here = t;
+        vec2 learned_here = learned_at(px, in_i.vpl);
+        float here = target_with(xs[0], ns[0], albs[0], vpl, learned_here.x);
+        float m = 0.0;
+        if (n == 1u) {
+            m = 1.0;
+        } else if (i == 0u) {
+            // m_0(y) = Σ_j (c_j / S) · a p̂_0(y) / (p̂_j(y) + a p̂_0(y)).
+            for (uint j = 1u; j < n; j++) {
+                float d = target_with(xs[j], ns[j], albs[j], vpl, learned_at(q[j], in_i.vpl).x) + a * here;
+                m += d > 0.0 ? inputs[j].confidence / s_n * a * here / d : 0.0;
+            }
+        } else {
+            // m_i(y) = (c_i / S) · p̂_i(y) / (p̂_i(y) + a p̂_0(y)).
+            float own = target_with(xs[i], ns[i], albs[i], vpl, learned_at(q[i], in_i.vpl).x), d = own + a * here;
+            m = d > 0.0 ? in_i.confidence / s_n * own / d : 0.0;
         }
-        float w = den > 0.0 ? num / den * here * in_i.weight : 0.0;
+        float w = m * here * in_i.weight;
         if (!(w > 0.0)) continue;
         sum += w;
         // m_i g_x(y_i) W_i = w_i f_x(y_i) s(y_i) / p̂_x(y_i), p̂_x = luminance(f_x) · max(V̂, δ).

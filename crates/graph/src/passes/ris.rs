@@ -59,7 +59,9 @@
 //! - `ris_spatial` (P passes of W × H × R): each reservoir is combined with those of up to k neighbours
 //!   of the same layer within `radius` pixels, picked by a hash of (pixel, seed, pass, layer) and kept
 //!   only if their normal and eye distance are close (a deterministic function of the two G-buffer
-//!   texels).
+//!   texels), by pairwise MIS weights (each neighbour paired with the pixel's own reservoir: 3k + 1
+//!   target evaluations instead of the generalized balance weights' (k + 1)²; the spatial pass 20 %
+//!   cheaper in the two rooms at 128², 9.9 against 12.4 ms, the same error; BENCHMARKS.md).
 //! - `ris_shade` (W × H): L(x) = 1/R Σ_r f(y_r) V(y_r) W_r, f the unshadowed RGB contribution and V the
 //!   gather's visibility (`contribution()`: voxel march or exact shadow rays). Exact rays go
 //!   through the gather's queue (`glsl/shared/shadow_queue.glsl`): a block's rays are traced back to
@@ -93,10 +95,13 @@
 //! E[g(y_i) W_i] = Σ_v g(v) for every g vanishing outside {p̂_i > 0} (its target p̂_i, i.e. the pixel it
 //! was made at), picks y_i with probability ∝ w_i = m_i(y_i) p̂_x(y_i) W_i and sets W = Σ w / p̂_x(y), so
 //! E[g(y) W | inputs] = Σ_i m_i(y_i) g(y_i) W_i and, by linearity alone (the inputs may be correlated:
-//! neighbours share histories), E[g(y) W] = Σ_v g(v) Σ_i m_i(v). The generalized balance weights
-//! m_i(v) = c_i p̂_i(v) / Σ_j c_j p̂_j(v) are deterministic given the neighbour choice (confidences count
-//! candidates, never samples) and sum to 1 wherever p̂_x(v) > 0 (the pixel's own reservoir is an
-//! input); an input is only weighted where its own p̂_i > 0, which its sample covers. So W is an
+//! neighbours share histories), E[g(y) W] = Σ_v g(v) Σ_i m_i(v). The weights, the generalized balance
+//! weights m_i(v) = c_i p̂_i(v) / Σ_j c_j p̂_j(v) (temporal) or their pairwise form with the pixel's own
+//! reservoir as input 0, m_i = (c_i / S) p̂_i / (p̂_i + a p̂_0) and m_0 = Σ_i (c_i / S) a p̂_0 / (p̂_i +
+//! a p̂_0), S = Σ_{i ≥ 1} c_i, a = c_0 / S (spatial), are deterministic given the neighbour choice
+//! (confidences count candidates, never samples) and sum to 1 wherever p̂_x(v) = p̂_0(v) > 0 (the
+//! pixel's own reservoir is an input); an input is only weighted where its own p̂_i > 0, which its
+//! sample covers. So W is an
 //! unbiased contribution weight for the target support {p̂_x > 0} ⊇ {f_x ≠ 0}, and because the target
 //! has no visibility, the visibility tested at the receiving pixel in the shade is just part of the
 //! integrand: E[f(y) V(y) W] = Σ_v f(v) V(v), the `all` sum. (A target with visibility would need it
@@ -114,7 +119,7 @@
 //!
 //! Loop bounds: the initial stage's candidates are split over dispatches ([`candidates_per_dispatch`]),
 //! its streaming state (y, Σw, p̂(y)) carried in the output; the shade's reservoirs too (the gather's
-//! `vpls_per_dispatch`); a spatial pass loops over at most (k + 1)² target evaluations, k ≤
+//! `vpls_per_dispatch`); a spatial pass loops over at most 3k + 1 target evaluations, k ≤
 //! `RIS_MAX_NEIGHBORS`. Reservoirs: one `Reservoir` (16 bytes) per pixel and layer, the final ones in a
 //! history buffer (this frame's and last frame's version), the spatial passes ping-ponging with a
 //! transient one.
