@@ -231,6 +231,8 @@ fn bench_animate_writes_relmse_and_flicker_per_frame() {
                 .collect()
         };
         let mean_row = rows.iter().find(|r| r[1] == mode && r[2] == "mean").expect("a mean row per mode");
+        // Without a denoiser the raw estimate's GPU time is the frame's.
+        assert!(rows.iter().filter(|r| r[1] == mode).all(|r| r[9] == r[3]), "raw_gpu_ms differs:\n{csv}");
         for (col, from) in [(5, 0), (6, 1)] {
             let v = of(col, from);
             let want = v.iter().sum::<f64>() / v.len() as f64;

@@ -160,7 +160,9 @@ fn realtime_traces_at_most_two_shadow_rays_per_pixel() {
 
 /// The denoiser (`--denoise on`, the default) lowers the error of the displayed frame: after six
 /// frames of a static view its output is closer to `all` than the raw estimate (read beside it); with
-/// `--denoise off` the frame is the raw estimate and nothing is read beside it.
+/// `--denoise off` the frame is the raw estimate and nothing is read beside it. The raw estimate's GPU
+/// time (`FrameOutput::raw_gpu_ms`) is the frame's less the denoiser's passes, and with `--denoise off`
+/// the frame's (when the device has timestamps).
 #[test]
 fn the_denoiser_lowers_the_error_and_off_shows_the_raw_estimate() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
@@ -173,6 +175,10 @@ fn the_denoiser_lowers_the_error_and_off_shows_the_raw_estimate() {
     let (mut raw, mut denoised) = (0.0, 0.0);
     for _ in 0..6 {
         let f = r.render(&s(true)).unwrap();
+        if let (Some(all_ms), Some(raw_ms)) = (f.gpu_ms(), f.raw_gpu_ms()) {
+            let filter: f64 = f.timings.iter().filter(|t| t.name.starts_with("denoise_")).filter_map(|t| t.ms).sum();
+            assert!(filter > 0.0 && (all_ms - filter - raw_ms).abs() <= 1e-9 * all_ms, "{all_ms} {raw_ms} {filter}");
+        }
         raw = bounce_tests::rel_mse(&rgb(f.raw.as_ref().expect("the raw estimate beside")), &all);
         denoised = bounce_tests::rel_mse(&rgb(&f.radiance), &all);
     }
@@ -180,6 +186,7 @@ fn the_denoiser_lowers_the_error_and_off_shows_the_raw_estimate() {
     assert!(denoised < 0.5 * raw, "the denoiser does not help: raw {raw}, denoised {denoised}");
     let f = r.render(&s(false)).unwrap();
     assert!(f.raw.is_none(), "--denoise off reads a raw image beside the frame");
+    assert_eq!(f.raw_gpu_ms(), f.gpu_ms(), "--denoise off still runs denoiser passes");
     let e = bounce_tests::rel_mse(&rgb(&f.radiance), &all);
     assert!(e > 2.0 * denoised, "--denoise off still denoises: {e} vs {denoised}");
 }

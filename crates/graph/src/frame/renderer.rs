@@ -103,6 +103,12 @@ impl FrameOutput {
     pub fn gpu_ms(&self) -> Option<f64> {
         self.timings.iter().map(|t| t.ms).sum()
     }
+
+    /// The frame's GPU time less the display filter's passes (`passes/denoise.rs`): what its raw
+    /// estimate costs (`--denoise off`).
+    pub fn raw_gpu_ms(&self) -> Option<f64> {
+        self.timings.iter().filter(|t| !t.name.starts_with("denoise_")).map(|t| t.ms).sum()
+    }
 }
 
 impl Renderer {

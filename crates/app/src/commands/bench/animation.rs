@@ -76,6 +76,8 @@ struct FrameSample {
     temporal: Temporal,
     frame: u32,
     gpu_ms: f64,
+    /// The raw estimate's share of it (the denoiser's passes aside).
+    raw_ms: f64,
     /// Shadow rays per pixel the frame traced (NaN where the method does not count them).
     rays: f64,
     /// Of the raw estimate.
@@ -143,6 +145,7 @@ pub(super) fn run(
                     temporal,
                     frame: k,
                     gpu_ms: f.gpu_ms().unwrap_or(f64::NAN),
+                    raw_ms: f.raw_gpu_ms().unwrap_or(f64::NAN),
                     rays: f.rays_per_pixel.unwrap_or(f64::NAN),
                     rel_mse,
                     flicker: flick,
@@ -203,8 +206,9 @@ fn references(
 /// One row per method, mode and frame, then per method and mode a row with frame `mean`: the means
 /// bench.md reports (GPU ms and flicker over frames 1.., relMSE over all frames).
 fn csv(samples: &[FrameSample]) -> String {
-    let mut csv =
-        String::from("method,temporal,frame,gpu_ms,rays_per_pixel,rel_mse,flicker,denoised_rel_mse,denoised_flicker\n");
+    let mut csv = String::from(
+        "method,temporal,frame,gpu_ms,rays_per_pixel,rel_mse,flicker,denoised_rel_mse,denoised_flicker,raw_gpu_ms\n",
+    );
     let mut modes: Vec<(&str, &str)> = vec![];
     for s in samples {
         let mode = (s.method.name(), s.temporal.name());
@@ -216,7 +220,7 @@ fn csv(samples: &[FrameSample]) -> String {
     for s in samples {
         let (dr, df) = s.denoised.map_or((None, None), |(r, f)| (Some(r), f));
         csv.push_str(&format!(
-            "{},{},{},{:.4},{:.4},{:.6e},{},{},{}\n",
+            "{},{},{},{:.4},{:.4},{:.6e},{},{},{},{:.4}\n",
             s.method.name(),
             s.temporal.name(),
             s.frame,
@@ -226,6 +230,7 @@ fn csv(samples: &[FrameSample]) -> String {
             e(s.flicker),
             e(dr),
             e(df),
+            s.raw_ms,
         ));
     }
     for (m, t) in modes {
@@ -233,13 +238,14 @@ fn csv(samples: &[FrameSample]) -> String {
         let later = || of().filter(|s| s.frame > 0);
         let finite = |x: f64| x.is_finite().then_some(x);
         csv.push_str(&format!(
-            "{m},{t},mean,{:.4},{:.4},{:.6e},{:.6e},{},{}\n",
+            "{m},{t},mean,{:.4},{:.4},{:.6e},{:.6e},{},{},{:.4}\n",
             mean(later().map(|s| s.gpu_ms)),
             mean(of().map(|s| s.rays)),
             mean(of().map(|s| s.rel_mse)),
             mean(later().filter_map(|s| s.flicker)),
             e(finite(mean(of().filter_map(|s| s.denoised.map(|d| d.0))))),
             e(finite(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))))),
+            mean(later().map(|s| s.raw_ms)),
         ));
     }
     csv
@@ -266,11 +272,11 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
          {} VPLs per pixel per frame, {} frames of `{arg}`. Ground truth: `--method reference` at {} spp per frame. \
          relMSE: mean over frames; flicker: mean over frames 1..{} of the relMSE of the frame-to-frame difference \
          against the ground truth's; GPU ms: mean over frames 1..{} (the light side and the gather; voxels and \
-         G-buffer kept); rays: shadow rays per pixel per frame, counted (– where a method does not count them). \
+         G-buffer kept), raw: less the denoiser's passes (what the raw estimate costs, `--denoise off`); rays: shadow rays per pixel per frame, counted (– where a method does not count them). \
          relMSE and flicker are of the raw estimate; `denoised`: of the displayed output where a method has a \
          denoiser (realtime). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
-         | method | temporal | GPU ms / frame | rays / px | relMSE | flicker | denoised relMSE | denoised flicker | median relMSE | median flicker |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+         | method | temporal | GPU ms / frame | raw GPU ms | rays / px | relMSE | flicker | denoised relMSE | denoised flicker | median relMSE | median flicker |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         b.width,
         b.height,
         b.dprsm_res,
@@ -286,10 +292,11 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
             let later = || of(samples, m, t).filter(|s| s.frame > 0);
             let num = |x: f64, digits: usize| if x.is_finite() { format!("{x:.digits$}") } else { "–".into() };
             md.push_str(&format!(
-                "| {} | {} | {:.2} | {} | {:.4} | {:.4} | {} | {} | {:.4} | {:.4} |\n",
+                "| {} | {} | {:.2} | {:.2} | {} | {:.4} | {:.4} | {} | {} | {:.4} | {:.4} |\n",
                 m.name(),
                 t.name(),
                 mean(later().map(|s| s.gpu_ms)),
+                mean(later().map(|s| s.raw_ms)),
                 num(mean(of(samples, m, t).map(|s| s.rays)), 2),
                 mean(of(samples, m, t).map(|s| s.rel_mse)),
                 mean(later().filter_map(|s| s.flicker)),
