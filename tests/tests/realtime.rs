@@ -117,6 +117,39 @@ fn realtime_frames_are_unbiased_with_reuse_and_after_a_camera_move() {
     });
 }
 
+/// A real-time frame whose camera moved traces its shadow rays without end balls (the pixels' balls are
+/// kept with the G-buffer, so a moving camera would rebuild them for two rays a pixel); the first frame
+/// of a view builds them, and a frame after a light move alone keeps the pixels' and rebuilds the VPLs'.
+#[test]
+fn realtime_skips_the_end_balls_while_the_camera_moves() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let s = FrameSettings {
+        width: w,
+        height: h,
+        dprsm_res: res,
+        voxels: vox,
+        visibility: bounce_graph::frame::Visibility::Exact,
+        ..realtime(5)
+    };
+    let balls =
+        |f: &bounce_graph::frame::FrameOutput| (f.ran.contains(&"end_balls.pixels"), f.ran.contains(&"end_balls.vpls"));
+    assert_eq!(balls(&r.render(&s).unwrap()), (true, true), "the first frame builds the balls");
+    let l = scene.lights[0];
+    r.set_light(
+        0,
+        glam::Vec3::from_slice(&l.position[..3]) + glam::Vec3::splat(0.01),
+        glam::Vec3::from_slice(&l.intensity[..3]),
+    );
+    assert_eq!(balls(&r.render(&s).unwrap()), (false, true), "a light move keeps the pixels' balls");
+    r.set_camera(moved(&scene));
+    let moving = r.render(&s).unwrap();
+    assert_eq!(balls(&moving), (false, false), "a camera move builds balls");
+    assert!(moving.ran.contains(&"ris_shade"), "{:?}", moving.ran);
+}
+
 /// At most two shadow rays per pixel per frame (the bound; realtime traces one for each of its
 /// two reservoirs' final samples), counted by the shade's counter, while the camera orbits and the light moves; and the counter
 /// counts: ris with four reservoirs traces more than three per lit pixel on the same frames.

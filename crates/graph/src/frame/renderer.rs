@@ -279,7 +279,13 @@ impl Renderer {
             if ris.learn_auto && ris.learn_visibility == 0.0 && self.realtime_learns(s)? {
                 ris.learn_visibility = crate::passes::ris::AUTO_LEARN_FLOOR;
             }
-            return Ok(Some(FrameSettings { seed, ris, ..s.clone() }));
+            // While the camera moves, the pixels' end balls (kept with the G-buffer) would be rebuilt
+            // for one frame's two rays a pixel: the shade's rays walk whole segments instead (the same
+            // answers; Sibenik's frame 0.91–0.94×, the suite's 0.98×; BENCHMARKS.md). Moving lights keep
+            // them (their VPLs' balls pay: the two rooms' frame is 1.42× without).
+            let moving = self.state.previous_camera.is_some_and(|c| c != self.state.camera);
+            let end_balls = s.end_balls && !moving;
+            return Ok(Some(FrameSettings { seed, ris, end_balls, ..s.clone() }));
         }
         self.auto_learn(s)
     }
