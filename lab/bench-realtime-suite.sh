@@ -19,7 +19,8 @@ bin="${BOUNCE:-${CARGO_TARGET_DIR:-$here/target}/debug/bounce}"
 methods=ris,realtime
 [ "${ONLY:-}" = realtime ] && methods=realtime
 # The `mean` row of bench.csv: method,temporal,mean,gpu_ms,rays,rel_mse,flicker,denoised_rel_mse,denoised_flicker,raw_gpu_ms
-mean_row() { awk -F, -v m="$1" '$1 == m && $3 == "mean"' "$2"; }
+# (its first ten fields: the rows below index them).
+mean_row() { awk -F, -v m="$1" '$1 == m && $3 == "mean"' "$2" | cut -d, -f1-10; }
 rows="$out/rows.csv"
 mkdir -p "$out"
 : >"$rows"

@@ -206,7 +206,7 @@ fn bench_writes_csv_markdown_and_a_plot() {
 
 /// Broken inputs: each gives exit code 2, exactly one `error:` line naming what is wrong, no output file,
 /// and no panic (a panic would not return through `bounce::run` as a code at all).
-/// `bench --animate`: one CSV row per method, mode and frame; per-frame relMSE and flicker recomputed
+/// `bench --animate`: one CSV row per method, mode and frame; per-frame relMSE, flicker and mean ratio recomputed
 /// from the frames `render --frames` makes with the same seeds and the cached per-frame ground truth
 /// (an independent path to the same numbers); the means in bench.md; the plot; the references cached.
 #[test]
@@ -265,8 +265,12 @@ fn bench_animate_writes_relmse_and_flicker_per_frame() {
     for k in 0..3usize {
         let row = rows.iter().find(|r| r[1] == "coherent" && r[2] == k.to_string()).unwrap();
         let rel: f64 = row[5].parse().unwrap();
-        let want = bounce::metrics::Metrics::of(&rendered[k], &truth[k]).rel_mse;
+        let metrics = bounce::metrics::Metrics::of(&rendered[k], &truth[k]);
+        let want = metrics.rel_mse;
         assert!((rel - want).abs() <= 1e-5 * want, "frame {k}: relMSE {rel} vs {want}");
+        let ratio: f64 = row[10].parse().unwrap();
+        assert!((ratio - metrics.mean_ratio).abs() <= 1e-5, "frame {k}: mean ratio {ratio} vs {}", metrics.mean_ratio);
+        assert!(row[11].is_empty(), "a denoised mean ratio without a denoiser");
         if k > 0 {
             let f: f64 = row[6].parse().unwrap();
             let want = bounce::metrics::flicker(&rendered[k], &rendered[k - 1], &truth[k], &truth[k - 1]);
@@ -275,6 +279,11 @@ fn bench_animate_writes_relmse_and_flicker_per_frame() {
             assert!(row[6].is_empty(), "frame 0 has no flicker");
         }
     }
+    // The mean row's mean ratio: Σ image means / Σ truth means over the frames.
+    let sum = |imgs: &[Vec<[f32; 3]>]| imgs.iter().flatten().flatten().map(|&c| c as f64).sum::<f64>();
+    let want = sum(&rendered) / sum(&truth);
+    let got: f64 = rows.iter().find(|r| r[1] == "coherent" && r[2] == "mean").unwrap()[10].parse().unwrap();
+    assert!((got - want).abs() <= 1e-4 * want, "mean ratio over the frames {got} vs {want}");
     let again = bounce(&args);
     assert_eq!(again.code, 0);
     assert!(!again.stderr.contains("reference: frame"), "the ground truth was rendered again: {}", again.stderr);

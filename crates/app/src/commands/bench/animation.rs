@@ -86,6 +86,13 @@ struct FrameSample {
     flicker: Option<f64>,
     /// Of the denoised output, where the method has one (`realtime`).
     denoised: Option<(f64, Option<f64>)>,
+    /// The image's mean over the ground truth's: the raw estimate's, the denoised output's (a filter
+    /// that drops a bright feature's light shows here, where relMSE barely does).
+    mean_ratio: f64,
+    denoised_mean_ratio: Option<f64>,
+    /// The ground truth's image mean: the weight of the frame's ratio in the mean row (a frame whose
+    /// truth is nearly dark has a ratio of noise over nothing).
+    truth_mean: f64,
 }
 
 /// The animated sweep: settings checked, references rendered or read, every method × mode rendered.
@@ -136,9 +143,10 @@ pub(super) fn run(
                 let (t, t_prev) = (&truth[k as usize].pixels, k.checked_sub(1).map(|j| &truth[j as usize].pixels));
                 let score = |now: &RgbImage, before: Option<&RgbImage>| {
                     let flick = before.zip(t_prev).map(|(p, tp)| flicker(&now.pixels, &p.pixels, t, tp));
-                    (Metrics::of(&now.pixels, t).rel_mse, flick)
+                    let m = Metrics::of(&now.pixels, t);
+                    (m.rel_mse, flick, m.mean_ratio)
                 };
-                let (rel_mse, flick) = score(&img, previous.as_ref().map(|p| &p.0));
+                let (rel_mse, flick, mean_ratio) = score(&img, previous.as_ref().map(|p| &p.0));
                 let denoised_score = denoised.as_ref().map(|d| score(d, previous.as_ref().and_then(|p| p.1.as_ref())));
                 samples.push(FrameSample {
                     method,
@@ -149,7 +157,11 @@ pub(super) fn run(
                     rays: f.rays_per_pixel.unwrap_or(f64::NAN),
                     rel_mse,
                     flicker: flick,
-                    denoised: denoised_score,
+                    denoised: denoised_score.map(|(r, f, _)| (r, f)),
+                    mean_ratio,
+                    denoised_mean_ratio: denoised_score.map(|d| d.2),
+                    truth_mean: t.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>()
+                        / (3 * t.len().max(1)) as f64,
                 });
                 previous = Some((img, denoised));
                 bar.inc(1);
@@ -207,7 +219,8 @@ fn references(
 /// bench.md reports (GPU ms and flicker over frames 1.., relMSE over all frames).
 fn csv(samples: &[FrameSample]) -> String {
     let mut csv = String::from(
-        "method,temporal,frame,gpu_ms,rays_per_pixel,rel_mse,flicker,denoised_rel_mse,denoised_flicker,raw_gpu_ms\n",
+        "method,temporal,frame,gpu_ms,rays_per_pixel,rel_mse,flicker,denoised_rel_mse,denoised_flicker,raw_gpu_ms,\
+         mean_ratio,denoised_mean_ratio\n",
     );
     let mut modes: Vec<(&str, &str)> = vec![];
     for s in samples {
@@ -220,7 +233,7 @@ fn csv(samples: &[FrameSample]) -> String {
     for s in samples {
         let (dr, df) = s.denoised.map_or((None, None), |(r, f)| (Some(r), f));
         csv.push_str(&format!(
-            "{},{},{},{:.4},{:.4},{:.6e},{},{},{},{:.4}\n",
+            "{},{},{},{:.4},{:.4},{:.6e},{},{},{},{:.4},{:.6},{}\n",
             s.method.name(),
             s.temporal.name(),
             s.frame,
@@ -231,6 +244,8 @@ fn csv(samples: &[FrameSample]) -> String {
             e(dr),
             e(df),
             s.raw_ms,
+            s.mean_ratio,
+            s.denoised_mean_ratio.map(|v| format!("{v:.6}")).unwrap_or_default(),
         ));
     }
     for (m, t) in modes {
@@ -238,7 +253,7 @@ fn csv(samples: &[FrameSample]) -> String {
         let later = || of().filter(|s| s.frame > 0);
         let finite = |x: f64| x.is_finite().then_some(x);
         csv.push_str(&format!(
-            "{m},{t},mean,{:.4},{:.4},{:.6e},{:.6e},{},{},{:.4}\n",
+            "{m},{t},mean,{:.4},{:.4},{:.6e},{:.6e},{},{},{:.4},{:.6},{}\n",
             mean(later().map(|s| s.gpu_ms)),
             mean(of().map(|s| s.rays)),
             mean(of().map(|s| s.rel_mse)),
@@ -246,9 +261,30 @@ fn csv(samples: &[FrameSample]) -> String {
             e(finite(mean(of().filter_map(|s| s.denoised.map(|d| d.0))))),
             e(finite(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))))),
             mean(later().map(|s| s.raw_ms)),
+            weighted_ratio(of().map(|s| (Some(s.mean_ratio), s.truth_mean))),
+            finite(weighted_ratio(of().map(|s| (s.denoised_mean_ratio, s.truth_mean))))
+                .map(|v| format!("{v:.6}"))
+                .unwrap_or_default(),
         ));
     }
     csv
+}
+
+/// Frames' image-mean ratios (where present) weighted by their truth's mean: Σ image means over Σ truth
+/// means.
+fn weighted_ratio(v: impl Iterator<Item = (Option<f64>, f64)>) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (ratio, truth) in v {
+        if let Some(r) = ratio.filter(|r| r.is_finite()) {
+            num += r * truth;
+            den += truth;
+        }
+    }
+    if den > 0.0 {
+        num / den
+    } else {
+        f64::NAN
+    }
 }
 
 /// Mean of the finite values.
@@ -274,9 +310,11 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
          against the ground truth's; GPU ms: mean over frames 1..{} (the light side and the gather; voxels and \
          G-buffer kept), raw: less the denoiser's passes (what the raw estimate costs, `--denoise off`); rays: shadow rays per pixel per frame, counted (– where a method does not count them). \
          relMSE and flicker are of the raw estimate; `denoised`: of the displayed output where a method has a \
-         denoiser (realtime). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
-         | method | temporal | GPU ms / frame | raw GPU ms | rays / px | relMSE | flicker | denoised relMSE | denoised flicker | median relMSE | median flicker |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+         denoiser (realtime); mean ratio: the image's mean over the ground truth's (raw, denoised; over the frames, \
+         Σ image means / Σ truth means). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
+         | method | temporal | GPU ms / frame | raw GPU ms | rays / px | relMSE | flicker | denoised relMSE | denoised flicker | \
+         mean ratio | denoised mean ratio | median relMSE | median flicker |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         b.width,
         b.height,
         b.dprsm_res,
@@ -292,7 +330,7 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
             let later = || of(samples, m, t).filter(|s| s.frame > 0);
             let num = |x: f64, digits: usize| if x.is_finite() { format!("{x:.digits$}") } else { "–".into() };
             md.push_str(&format!(
-                "| {} | {} | {:.2} | {:.2} | {} | {:.4} | {:.4} | {} | {} | {:.4} | {:.4} |\n",
+                "| {} | {} | {:.2} | {:.2} | {} | {:.4} | {:.4} | {} | {} | {:.3} | {} | {:.4} | {:.4} |\n",
                 m.name(),
                 t.name(),
                 mean(later().map(|s| s.gpu_ms)),
@@ -302,6 +340,8 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
                 mean(later().filter_map(|s| s.flicker)),
                 num(mean(of(samples, m, t).filter_map(|s| s.denoised.map(|d| d.0))), 4),
                 num(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))), 4),
+                weighted_ratio(of(samples, m, t).map(|s| (Some(s.mean_ratio), s.truth_mean))),
+                num(weighted_ratio(of(samples, m, t).map(|s| (s.denoised_mean_ratio, s.truth_mean))), 3),
                 super::median(of(samples, m, t).map(|s| s.rel_mse).collect()),
                 super::median(later().filter_map(|s| s.flicker).collect()),
             ));
