@@ -18,11 +18,6 @@ layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]
 // (A stand-in of one vec4 is bound when the pass writes no U_g.)
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) writeonly buffer RisUnshadowed { vec4 unshadowed[]; };
 
-// The target at a pixel's surface (x, n, albedo) for a VPL, times the learned factor there.
-float target_with(vec3 x, vec3 n, vec3 albedo, Vpl vpl, float learned) {
-    return vpl_unshadowed_luminance(x, n, vpl_luminance_albedo(albedo), vpl, pc.clamp_d2) * learned;
-}
-
 // Whether neighbour q may lend its reservoir to p: both see geometry, their normals within ~25° and their
 // distances from the eye within 10 % (a deterministic function of the two G-buffer texels).
 bool similar(vec4 gp, vec3 np, vec4 gq, vec3 nq) {
@@ -87,19 +82,19 @@ void main() {
         if (in_i.vpl == RIS_NONE || !(in_i.weight > 0.0)) continue;
         Vpl vpl = vpl_fetch(in_i.vpl);
         vec2 learned_here = learned_at(px, in_i.vpl);
-        float here = target_with(xs[0], ns[0], albs[0], vpl, learned_here.x);
+        float here = target_of(xs[0], ns[0], albs[0], vpl) * learned_here.x;
         float m = 0.0;
         if (n == 1u) {
             m = 1.0;
         } else if (i == 0u) {
             // m_0(y) = Σ_j (c_j / S) · a p̂_0(y) / (p̂_j(y) + a p̂_0(y)).
             for (uint j = 1u; j < n; j++) {
-                float d = target_with(xs[j], ns[j], albs[j], vpl, learned_at(q[j], in_i.vpl).x) + a * here;
+                float d = target_of(xs[j], ns[j], albs[j], vpl) * learned_at(q[j], in_i.vpl).x + a * here;
                 m += d > 0.0 ? inputs[j].confidence / s_n * a * here / d : 0.0;
             }
         } else {
             // m_i(y) = (c_i / S) · p̂_i(y) / (p̂_i(y) + a p̂_0(y)).
-            float own = target_with(xs[i], ns[i], albs[i], vpl, learned_at(q[i], in_i.vpl).x), d = own + a * here;
+            float own = target_of(xs[i], ns[i], albs[i], vpl) * learned_at(q[i], in_i.vpl).x, d = own + a * here;
             m = d > 0.0 ? in_i.confidence / s_n * own / d : 0.0;
         }
         float w = m * here * in_i.weight;

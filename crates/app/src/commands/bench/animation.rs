@@ -308,7 +308,8 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
          {} VPLs per pixel per frame, {} frames of `{arg}`. Ground truth: `--method reference` at {} spp per frame. \
          relMSE: mean over frames; flicker: mean over frames 1..{} of the relMSE of the frame-to-frame difference \
          against the ground truth's; GPU ms: mean over frames 1..{} (the light side and the gather; voxels and \
-         G-buffer kept), raw: less the denoiser's passes (what the raw estimate costs, `--denoise off`); rays: shadow rays per pixel per frame, counted (– where a method does not count them). \
+         G-buffer kept), raw: less the denoiser's passes (what the raw estimate costs, `--denoise off`); \
+         rays: shadow rays per pixel per frame, counted (– where a method does not count them). \
          relMSE and flicker are of the raw estimate; `denoised`: of the displayed output where a method has a \
          denoiser (realtime); mean ratio: the image's mean over the ground truth's (raw, denoised; over the frames, \
          Σ image means / Σ truth means). Medians too: one firefly that lasts a few frames moves a mean a lot.\n\n\
