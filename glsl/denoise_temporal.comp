@@ -1,8 +1,9 @@
 #version 460
 // denoise, temporal stage (dispatch W × H): the raw estimate's indirect illumination (radiance minus
 // the direct light, demodulated by the albedo) blended into last frame's accumulation at the pixel's
-// previous pixel (passes/reproject.rs), with its first two luminance moments; the blend's weight of the
-// new frame is max(α, 1 / history length), the history restarting where the surface was disoccluded.
+// previous pixel (passes/reproject.rs), and so is the estimate's variance (the raw image's alpha: ris's
+// shade measures it over the pixel's reservoirs); the blend's weight of the new frame is max(α, 1 /
+// history length), the history restarting where the surface was disoccluded.
 // The history is first clamped into this frame's neighbourhood (mean ± DENOISE_CLAMP_SIGMAS standard
 // deviations per channel): light that moved is not dragged along for 1 / α frames.
 #include "shared/denoise.glsl"
@@ -11,9 +12,9 @@ layout(set = 0, binding = B_DENOISE_IN) uniform sampler2D raw;
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_MOTION) uniform sampler2D motion;
 layout(set = 0, binding = B_DENOISE_PREV_COLOR) uniform sampler2D prev_color;
-layout(set = 0, binding = B_DENOISE_PREV_MOMENTS) uniform sampler2D prev_moments;
+layout(set = 0, binding = B_DENOISE_PREV_VARIANCE) uniform sampler2D prev_variance;
 layout(set = 0, binding = B_DENOISE_COLOR_OUT, rgba32f) uniform writeonly image2D color_out;
-layout(set = 0, binding = B_DENOISE_MOMENTS_OUT, rgba32f) uniform writeonly image2D moments_out;
+layout(set = 0, binding = B_DENOISE_VARIANCE_OUT, r32f) uniform writeonly image2D variance_out;
 
 // The longest history counted (the blend's weight stays at α beyond 1 / α frames anyway).
 const float MAX_HISTORY = 255.0;
@@ -45,8 +46,7 @@ void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
     vec3 illum = illumination(px);
-    float l = luminance(illum);
-    vec4 moments = vec4(l, l * l, 0.0, 0.0);
+    float variance = texelFetch(raw, px, 0).a;
     float len = 1.0;
     vec4 mv = texelFetch(motion, px, 0);
     if (pc.history != 0u && mv.z != 0.0) {
@@ -57,9 +57,9 @@ void main() {
             len = min(h.a + 1.0, MAX_HISTORY);
             float a = max(pc.alpha, 1.0 / len);
             illum = mix(h.rgb, illum, a);
-            moments = mix(texelFetch(prev_moments, q, 0), moments, a);
+            variance = mix(texelFetch(prev_variance, q, 0).r, variance, a);
         }
     }
     imageStore(color_out, px, vec4(illum, len));
-    imageStore(moments_out, px, moments);
+    imageStore(variance_out, px, vec4(variance));
 }

@@ -1,7 +1,11 @@
 #version 460
 // ris, shade stage (dispatch W × H): L = 1/R Σ_r f(y_r) V(y_r) W_r over the reservoirs [first, last),
 // visibility as the gather's (voxel, EXACT_VISIBILITY); with ris.control each term adds the unshadowed
-// control variate β (U_g − g(y_r) W_r), mean 0 given the reservoir's candidates (ris.rs).
+// control variate β (U_g − g(y_r) W_r), mean 0 given the reservoir's candidates (ris.rs). The alpha
+// channel holds the estimate's variance, from its R reservoirs' own estimates L_r (independent given the
+// frame's inputs): with l_r the luminance of L_r demodulated by the albedo (the denoiser's signal),
+// σ² = Σ_r (l_r − l̄)² / (R (R − 1)), the variance of their mean; 0 with one reservoir, or where one
+// dispatch does not hold all R (then nothing reads it).
 #include "shared/ris.glsl"
 
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
@@ -28,6 +32,8 @@ void main() {
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
     vec4 gp = texelFetch(g_position, px, 0);
     vec3 sum = vec3(0.0);
+    // Σ l_r and Σ l_r² over the reservoirs (the variance in alpha).
+    vec2 moments = vec2(0.0);
     if (gp.w != 0.0) {
         vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
         uint pixel = uint(px.y) * frame.size.x + uint(px.x);
@@ -71,6 +77,7 @@ void main() {
                 // An empty reservoir had no candidate with w > 0, so its U_g is 0 too: it adds nothing.
                 if (!(r.vpl != RIS_NONE && r.weight > 0.0)) continue;
                 Vpl vpl = vpl_fetch(r.vpl);
+                vec3 before = sum;
 #ifdef SHADE_QUEUE
                 // contribution_of's value: the unshadowed contribution, or 0 where the block's queued ray (the
                 // next one) was occluded.
@@ -99,6 +106,9 @@ void main() {
                     sum += beta * (ug.xyz - gw);
                     siblings += uvec2(c != vec3(0.0) ? 1u : 0u, 1u);
                 }
+                // (An empty reservoir's l_r is 0: it adds nothing to either sum.)
+                float l_r = luminance(demodulate(sum - before, ax));
+                moments += vec2(l_r, l_r * l_r);
                 if (ris.learned > 0.0) {
                     // A kept VPL has an unshadowed contribution (its target is positive): 0 means occluded.
                     uint vi = vis_tile_base(px) + 2u * vis_cell_of(r.vpl);
@@ -110,7 +120,11 @@ void main() {
         sum /= float(ris.reservoirs);
         if (ris.control != 0u) cv_counts[pixel] = uvec4(counts, siblings);
     }
+    float n = float(ris.reservoirs), variance = 0.0;
+    if (pc.first == 0u && pc.last == ris.reservoirs && ris.reservoirs > 1u) {
+        variance = max(moments.y - moments.x * moments.x / n, 0.0) / (n * (n - 1.0));
+    }
     if (pc.add_direct != 0u) sum += texelFetch(direct_radiance, px, 0).rgb;
     if (pc.accumulate != 0u) sum += imageLoad(out_radiance, px).rgb;
-    imageStore(out_radiance, px, vec4(sum, 1.0));
+    imageStore(out_radiance, px, vec4(sum, variance));
 }

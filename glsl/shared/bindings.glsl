@@ -201,15 +201,15 @@ const float END_BALL_MAX_RADIUS = 0.03;
 
 // ---- denoise (passes/denoise.rs): temporal accumulation, variance, à-trous (SVGF) ------------------------
 // Each stage reads B_DENOISE_IN (temporal: the raw estimate, the direct light at B_GATHER_DIRECT, last
-// frame's accumulation at B_DENOISE_PREV_*; variance: the accumulated illumination, its moments at
-// B_DENOISE_MOMENTS; à-trous: the last stage's output) and writes B_DENOISE_OUT (temporal: the
-// accumulation at B_DENOISE_COLOR_OUT and B_DENOISE_MOMENTS_OUT).
+// frame's accumulation at B_DENOISE_PREV_*; variance: the accumulated illumination, its accumulated
+// variance at B_DENOISE_VARIANCE; à-trous: the last stage's output) and writes B_DENOISE_OUT (temporal:
+// the accumulation at B_DENOISE_COLOR_OUT and B_DENOISE_VARIANCE_OUT).
 #define B_DENOISE_IN 58
 #define B_DENOISE_PREV_COLOR 59
-#define B_DENOISE_PREV_MOMENTS 60
+#define B_DENOISE_PREV_VARIANCE 60
 #define B_DENOISE_COLOR_OUT 61
-#define B_DENOISE_MOMENTS_OUT 62
-#define B_DENOISE_MOMENTS 63
+#define B_DENOISE_VARIANCE_OUT 62
+#define B_DENOISE_VARIANCE 63
 #define B_DENOISE_OUT 64
 // À-trous iterations (tap spacings 1, 2, 4, 8, 16: SVGF's five).
 #define DENOISE_ITERATIONS 5

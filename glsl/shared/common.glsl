@@ -76,6 +76,14 @@ float luminance(vec3 c) {
     return LUMINANCE_WEIGHTS.r * c.r + LUMINANCE_WEIGHTS.g * c.g + LUMINANCE_WEIGHTS.b * c.b;
 }
 
+// Illumination = radiance / albedo (per channel; a channel of albedo 0 reflects nothing, so its
+// radiance is 0 and its illumination is left 0): the denoiser filters it, so that it never blurs texture
+// detail, and ris's shade reports its estimate's variance in it.
+vec3 demodulate(vec3 c, vec3 albedo) {
+    return vec3(albedo.r > 0.0 ? c.r / albedo.r : 0.0, albedo.g > 0.0 ? c.g / albedo.g : 0.0,
+                albedo.b > 0.0 ? c.b / albedo.b : 0.0);
+}
+
 // a / b (b > 0) in f32 with one correction either way: llvmpipe divides integers lane by lane, floats
 // for the whole vector. Exact while a / b < 2^21 and a + b < 2^32: the f32 quotient's relative error is
 // a few ulps (the conversions' and GLSL's 2.5-ulp division), so it is within 1 of the true one.

@@ -1,5 +1,5 @@
 // The denoiser's shared part (glsl/denoise_<stage>.comp include it first; crates/graph/src/passes/
-// denoise.rs states the filter): the push constants, the G-buffer, demodulation and the edge stops.
+// denoise.rs states the filter): the push constants, the G-buffer and the edge stops.
 #ifndef BOUNCE_DENOISE_GLSL
 #define BOUNCE_DENOISE_GLSL
 #include "scene.glsl"
@@ -10,13 +10,6 @@ layout(push_constant) uniform Push { DenoisePush pc; };
 layout(set = 0, binding = B_GATHER_GPOSITION) uniform sampler2D g_position;
 layout(set = 0, binding = B_GATHER_GNORMAL) uniform sampler2D g_normal;
 layout(set = 0, binding = B_GATHER_GALBEDO) uniform sampler2D g_albedo;
-
-// Illumination = radiance / albedo (per channel; a channel of albedo 0 reflects nothing, so its
-// radiance is 0 and its illumination is left 0): the filter then never blurs texture detail.
-vec3 demodulate(vec3 c, vec3 albedo) {
-    return vec3(albedo.r > 0.0 ? c.r / albedo.r : 0.0, albedo.g > 0.0 ? c.g / albedo.g : 0.0,
-                albedo.b > 0.0 ? c.b / albedo.b : 0.0);
-}
 
 // A pixel's surface: point, normal, footprint (its width at that distance: θ_px · |x − eye|).
 struct Surface {

@@ -165,7 +165,7 @@ struct DenoisePush {
     uint step;        // à-trous: the kernel's tap spacing, pixels (1, 2, 4, ...)
     uint last;        // à-trous: 1 in the last iteration (remodulate, add the direct light)
     uint add_direct;  // 1: the raw estimate holds the direct light (subtracted, filtered apart, added back)
-    float alpha;      // the temporal blend's least weight of the new frame (illumination and moments)
+    float alpha;      // the temporal blend's least weight of the new frame (illumination and variance)
     float sigma_l;    // edge stop: luminance, in standard deviations
     float sigma_n;    // edge stop: the normals' cosine exponent
     float sigma_z;    // edge stop: distance off the pixel's plane, in pixel footprints per pixel of offset

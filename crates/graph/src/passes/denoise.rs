@@ -1,26 +1,38 @@
 //! denoise: the real-time frame's display filter, spatiotemporal variance-guided filtering (SVGF,
-//! Schied et al. 2017) on the indirect light. Three stages, one shader each over `glsl/shared/denoise.glsl`:
+//! Schied et al. 2017) on the indirect light, its luminance stop scaled by the estimate's measured noise.
+//! Three stages, one shader each over `glsl/shared/denoise.glsl`:
 //!
 //! - `denoise_temporal`: the raw estimate's indirect light, demodulated by the albedo, ĩ = (L − L_direct)
 //!   / ρ, is blended into last frame's accumulation at the pixel's previous pixel (`passes/reproject.rs`;
 //!   restarted where the surface was disoccluded): Ī ← (1 − a) clamp(Ī_prev) + a ĩ with a = max(α, 1 / n),
-//!   n the history's length, and so are the luminance moments (l, l²). The history is first clamped into
+//!   n the history's length, and so is the estimate's variance σ²_f (the raw image's alpha: ris's shade
+//!   measures it over the pixel's reservoirs, `glsl/ris_shade.comp`). The history is first clamped into
 //!   this frame's 5 × 5 neighbourhood, mean ± `DENOISE_CLAMP_SIGMAS` standard deviations per channel (as
-//!   temporal anti-aliasing clamps colours), so that light that moved is not dragged along. The accumulation (rgb, n) and moments
-//!   are kept for the next frame (`denoise.color`, `denoise.moments`, histories keyed by the size).
-//! - `denoise_variance`: σ² = E[l²] − E[l]² per pixel; where n < 4, illumination and moments come from
-//!   the 7 × 7 neighbourhood weighted by the geometric edge stops, σ² raised by 4 / n.
+//!   temporal anti-aliasing clamps colours), so that light that moved is not dragged along. The
+//!   accumulation (rgb, n) and the variance are kept for the next frame (`denoise.color`,
+//!   `denoise.variance`, histories keyed by the size).
+//! - `denoise_variance`: σ² = the accumulated σ²_f; where n < 4, pooled over the 7 × 7 neighbourhood
+//!   (weighted by the geometric edge stops), raised to the noise scale s = max(σ, σ² / m) (m the
+//!   neighbourhood's mean luminance: where the noise is sparse hits, one hit's size), and the illumination
+//!   filtered there once with the edge stops and the luminance stop at s.
 //! - `denoise_atrous` × `DENOISE_ITERATIONS` (tap spacing 1, 2, 4, 8, 16): the 5 × 5 B3-spline kernel
 //!   h(k) with edge stops w = h · max(0, n_p · n_q)^σ_n · exp(−|n_p · (x_q − x_p)| / (σ_z θ_px |x_p − eye|
 //!   · |Δ|)) · exp(−|l_p − l_q| / (σ_l √(G₃ₓ₃ ∗ σ²)_p)); the variance is filtered with w². The plane
 //!   distance in pixel footprints makes the depth stop scale-free. The last iteration writes ρ · Ī + L_direct.
 //!
-//! Inputs: the raw radiance (direct light included when `add_direct`), the direct light, the G-buffer,
-//! the frame's `Motion`. Output: the denoised radiance, RGBA32F. The raw estimate is untouched (what the
-//! error of the estimator is measured on); the filter is biased by design (it trades variance for blur and
-//! lag), so its output's error against the ground truth is reported beside the raw one (`bounce bench
-//! --animate`). The history fed back is the unfiltered accumulation (SVGF feeds back its first à-trous
-//! iteration's output, which blurs further with each frame).
+//! Why the measured variance and not SVGF's: SVGF's σ² = E[l²] − E[l]² over the frames (over the 7 × 7
+//! neighbourhood for a young history) counts the signal's own variation as noise, so next to a bright
+//! peak (a light in a corner) every pixel's stop accepts everything and the à-trous, a normalized
+//! gather, averages the peak into its dim plane: the light-corner scenes' denoised images held 0.33–0.49
+//! of the truth's mean. With the measured variance they hold 0.55–0.84, and the generated suite's
+//! denoised error fell by a quarter (BENCHMARKS.md, "Real time under motion").
+//!
+//! Inputs: the raw radiance (direct light included when `add_direct`; its alpha the estimate's variance),
+//! the direct light, the G-buffer, the frame's `Motion`. Output: the denoised radiance, RGBA32F. The raw
+//! estimate is untouched (what the error of the estimator is measured on); the filter is biased by design
+//! (it trades variance for blur and lag), so its output's error against the ground truth is reported
+//! beside the raw one (`bounce bench --animate`). The history fed back is the unfiltered accumulation
+//! (SVGF feeds back its first à-trous iteration's output, which blurs further with each frame).
 
 use super::reproject::Motion;
 use super::FrameInputs;
@@ -34,10 +46,12 @@ use anyhow::Result;
 use bounce_device::sync::Access;
 use bounce_device::{vk, Binding, Gpu, Image, ImageDesc, Sampler};
 
-/// The filter's constants (SVGF's published values: α = 0.2, σ_l = 4, σ_n = 128; σ_z = 1 footprint per
-/// pixel of offset).
+/// The filter's constants: SVGF's published α = 0.2 and σ_n = 128; σ_z = 1 footprint per pixel of offset;
+/// σ_l = 2 standard deviations of the measured noise (SVGF's 4 is for its variance, which holds signal
+/// too): chosen over the generated suite (σ_l 2 / 3 / 4: denoised relMSE over ris at 4's geomean 0.173 /
+/// 0.189 / 0.198, BENCHMARKS.md).
 pub const DEFAULTS: DenoisePush =
-    DenoisePush { history: 0, step: 1, last: 0, add_direct: 0, alpha: 0.2, sigma_l: 4.0, sigma_n: 128.0, sigma_z: 1.0 };
+    DenoisePush { history: 0, step: 1, last: 0, add_direct: 0, alpha: 0.2, sigma_l: 2.0, sigma_n: 128.0, sigma_z: 1.0 };
 
 pub struct Denoise {
     temporal: Lazy<1>,
@@ -61,11 +75,15 @@ fn stage<'g, 'a>(
 }
 
 fn image(name: &str, w: u32, h: u32) -> ImageDesc {
+    image_of(name, w, h, vk::Format::R32G32B32A32_SFLOAT)
+}
+
+fn image_of(name: &str, w: u32, h: u32, format: vk::Format) -> ImageDesc {
     ImageDesc::new(
         name,
         w,
         h,
-        vk::Format::R32G32B32A32_SFLOAT,
+        format,
         vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
     )
 }
@@ -85,12 +103,12 @@ impl Denoise {
             sampled(B_GATHER_DIRECT),
             sampled(B_MOTION),
             sampled(B_DENOISE_PREV_COLOR),
-            sampled(B_DENOISE_PREV_MOMENTS),
+            sampled(B_DENOISE_PREV_VARIANCE),
             Binding::storage_image(B_DENOISE_COLOR_OUT),
-            Binding::storage_image(B_DENOISE_MOMENTS_OUT),
+            Binding::storage_image(B_DENOISE_VARIANCE_OUT),
         ]);
         let variance =
-            with(&[sampled(B_DENOISE_IN), sampled(B_DENOISE_MOMENTS), Binding::storage_image(B_DENOISE_OUT)]);
+            with(&[sampled(B_DENOISE_IN), sampled(B_DENOISE_VARIANCE), Binding::storage_image(B_DENOISE_OUT)]);
         let atrous = with(&[sampled(B_DENOISE_IN), sampled(B_GATHER_DIRECT), Binding::storage_image(B_DENOISE_OUT)]);
         Ok(Denoise {
             temporal: Lazy::new(gpu, "denoise_temporal", shaders::DENOISE_TEMPORAL_COMP, &temporal, push),
@@ -114,14 +132,15 @@ impl Denoise {
         let (temporal, variance, atrous) =
             (self.temporal.pipeline()?, self.variance.pipeline()?, self.atrous.pipeline()?);
         let color = g.history_image("denoise.color", image("denoise.color", w, h), &(w, h));
-        let moments = g.history_image("denoise.moments", image("denoise.moments", w, h), &(w, h));
-        let history = color.previous.is_some() && moments.previous.is_some();
-        let (prev_color, prev_moments) = match (color.previous, moments.previous) {
-            (Some(c), Some(m)) => (c, m),
+        let variance_image = |name| image_of(name, w, h, vk::Format::R32_SFLOAT);
+        let noise = g.history_image("denoise.variance", variance_image("denoise.variance"), &(w, h));
+        let history = color.previous.is_some() && noise.previous.is_some();
+        let (prev_color, prev_variance) = match (color.previous, noise.previous) {
+            (Some(c), Some(v)) => (c, v),
             // Stand-ins the shader does not read (history = 0).
             _ => (
                 g.create_image(image("denoise.color (none)", 1, 1)),
-                g.create_image(image("denoise.moments (none)", 1, 1)),
+                g.create_image(image_of("denoise.variance (none)", 1, 1, vk::Format::R32_SFLOAT)),
             ),
         };
         // The direct light, or (never read) a stand-in.
@@ -134,29 +153,29 @@ impl Denoise {
             super::gbuffer_writes(f.scene.writes(f.uniforms), ctx, [&gb.position, &gb.normal, &gb.albedo], s)
         };
         let size = [w, h, 1];
-        let (mut acc, mut mom) = (color.current, moments.current);
-        let (ca, cm) = (acc, mom);
+        let (mut acc, mut var) = (color.current, noise.current);
+        let (ca, cv) = (acc, var);
         let push = DenoisePush { history: history as u32, ..base };
-        stage(g, "denoise_temporal", &gb, &[raw, direct_or, m.motion, prev_color, prev_moments])
+        stage(g, "denoise_temporal", &gb, &[raw, direct_or, m.motion, prev_color, prev_variance])
             .overwrite(&mut acc, Access::ComputeWrite)
-            .overwrite(&mut mom, Access::ComputeWrite)
+            .overwrite(&mut var, Access::ComputeWrite)
             .record(move |ctx| {
                 let writes = gbw(ctx)
                     .sampled_image(B_DENOISE_IN, ctx.image(&raw), s)
                     .sampled_image(B_GATHER_DIRECT, ctx.image(&direct_or), s)
                     .sampled_image(B_MOTION, ctx.image(&m.motion), s)
                     .sampled_image(B_DENOISE_PREV_COLOR, ctx.image(&prev_color), s)
-                    .sampled_image(B_DENOISE_PREV_MOMENTS, ctx.image(&prev_moments), s)
+                    .sampled_image(B_DENOISE_PREV_VARIANCE, ctx.image(&prev_variance), s)
                     .storage_image(B_DENOISE_COLOR_OUT, ctx.image(&ca))
-                    .storage_image(B_DENOISE_MOMENTS_OUT, ctx.image(&cm));
+                    .storage_image(B_DENOISE_VARIANCE_OUT, ctx.image(&cv));
                 temporal.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
             });
         let mut ping = g.create_image(image("denoise.ping", w, h));
         let p = ping;
-        stage(g, "denoise_variance", &gb, &[acc, mom]).overwrite(&mut ping, Access::ComputeWrite).record(move |ctx| {
+        stage(g, "denoise_variance", &gb, &[acc, var]).overwrite(&mut ping, Access::ComputeWrite).record(move |ctx| {
             let writes = gbw(ctx)
                 .sampled_image(B_DENOISE_IN, ctx.image(&acc), s)
-                .sampled_image(B_DENOISE_MOMENTS, ctx.image(&mom), s)
+                .sampled_image(B_DENOISE_VARIANCE, ctx.image(&var), s)
                 .storage_image(B_DENOISE_OUT, ctx.image(&p));
             variance.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&base), size, [WG_2D, WG_2D, 1]);
         });

@@ -65,7 +65,9 @@
 //! - `ris_shade` (W × H): L(x) = 1/R Σ_r f(y_r) V(y_r) W_r, f the unshadowed RGB contribution and V the
 //!   gather's visibility (`contribution()`: voxel march or exact shadow rays). Exact rays go
 //!   through the gather's queue (`glsl/shared/shadow_queue.glsl`): a block's rays are traced back to
-//!   back first, then its reservoirs are shaded in order with their answers (the same image).
+//!   back first, then its reservoirs are shaded in order with their answers (the same image). The
+//!   image's alpha is the estimate's variance from its R reservoirs' own estimates (of the luminance of
+//!   the albedo-demodulated indirect light, Σ_r (l_r − l̄)² / (R (R − 1))): the denoiser's noise scale.
 //! - With `--control-variate on` (the default; with M > 1 or reuse) each reservoir's
 //!   term is f(y) V(y) W + β (U_g − g(y) W), the **unshadowed control variate**. g = f · s for a guess s
 //!   at visibility fixed before the frame, U_g = 1/M Σ_i g(v_i) / p(v_i) over the reservoir's own
