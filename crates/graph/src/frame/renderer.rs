@@ -60,9 +60,11 @@ pub struct FrameState {
     pub retained: Retained,
     /// The camera of the last frame rendered (reprojection's `FrameUniforms::prev_view_proj`).
     pub previous_camera: Option<Camera>,
-    /// Frames rendered: `Method::Realtime` draws each frame's random numbers from it and the seed, so
-    /// the frames whose reservoirs it reuses are independent draws.
-    pub frames: u64,
+    /// `Method::Realtime` frames rendered since the renderer began or its frame cache was cleared: each
+    /// draws its random numbers from it and the seed, so the frames whose reservoirs it reuses are
+    /// independent draws. Only realtime frames count, so that a sequence's images do not depend on what
+    /// else the renderer drew before (`bench` renders the ground truth first, or reads it from disk).
+    pub realtime_frames: u64,
 }
 
 /// Renders frames of one scene. Derefs to its [`RenderContext`] (the read-only part).
@@ -130,7 +132,7 @@ impl Renderer {
             lights: scene.lights.clone(),
             retained: Retained::default(),
             previous_camera: None,
-            frames: 0,
+            realtime_frames: 0,
         };
         Ok(Renderer { ctx, state })
     }
@@ -161,6 +163,7 @@ impl Renderer {
     pub fn clear_frame_cache(&mut self) {
         self.state.retained.clear();
         self.state.previous_camera = None;
+        self.state.realtime_frames = 0;
         self.ctx.realtime_learns = None;
     }
 
@@ -270,11 +273,11 @@ impl Renderer {
     }
 
     /// `s` as this frame renders it (None: as it is): `--learn-visibility auto` decided for the current
-    /// view; a real-time frame's seed moved on by the frames rendered, so that each draws new random
-    /// numbers and its reuse combines independent frames.
+    /// view; a real-time frame's seed moved on by the real-time frames rendered, so that each draws new
+    /// random numbers and its reuse combines independent frames.
     fn effective(&mut self, s: &FrameSettings) -> Result<Option<FrameSettings>> {
         if s.method == Method::Realtime {
-            let seed = s.seed.wrapping_add(self.state.frames.wrapping_mul(0x9E37_79B9));
+            let seed = s.seed.wrapping_add(self.state.realtime_frames.wrapping_mul(0x9E37_79B9));
             let mut ris = s.ris;
             if ris.learn_auto && ris.learn_visibility == 0.0 && self.realtime_learns(s)? {
                 ris.learn_visibility = crate::passes::ris::AUTO_LEARN_FLOOR;
@@ -297,7 +300,7 @@ impl Renderer {
     /// (a view whose share sits at it does not switch back and forth). Either choice is unbiased: a stale
     /// decision costs efficiency only.
     fn realtime_learns(&mut self, s: &FrameSettings) -> Result<bool> {
-        let (last, now) = (self.ctx.realtime_learns, self.state.frames);
+        let (last, now) = (self.ctx.realtime_learns, self.state.realtime_frames);
         let decision = realtime_learning(last, now, || self.blocked_share(s.width, s.height))?;
         self.ctx.realtime_learns = Some(decision);
         Ok(decision.1)
@@ -372,7 +375,7 @@ impl Renderer {
         })?;
         state.retained.next_frame();
         state.previous_camera = Some(state.camera);
-        state.frames += 1;
+        state.realtime_frames += (s.method == Method::Realtime) as u64;
         let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
         if let Some(p) = &present {
             let k = p.params.frames.max(1) as f32;
