@@ -23,9 +23,9 @@
 //! Why the measured variance and not SVGF's: SVGF's σ² = E[l²] − E[l]² over the frames (over the 7 × 7
 //! neighbourhood for a young history) counts the signal's own variation as noise, so next to a bright
 //! peak (a light in a corner) every pixel's stop accepts everything and the à-trous, a normalized
-//! gather, averages the peak into its dim plane: the light-corner scenes' denoised images held 0.33–0.49
-//! of the truth's mean. With the measured variance they hold 0.55–0.84, and the generated suite's
-//! denoised error fell by a quarter (BENCHMARKS.md, "Real time under motion").
+//! gather, averages the peak into its dim plane: the light-corner scenes' denoised images held 0.33–0.48
+//! of the truth's mean. With the measured variance they hold 0.54–0.73, and the generated suite's
+//! denoised error fell by a fifth to a quarter (BENCHMARKS.md, "Real time under motion").
 //!
 //! Inputs: the raw radiance (direct light included when `add_direct`; its alpha the estimate's variance),
 //! the direct light, the G-buffer, the frame's `Motion`. Output: the denoised radiance, RGBA32F. The raw
@@ -48,8 +48,8 @@ use bounce_device::{vk, Binding, Gpu, Image, ImageDesc, Sampler};
 
 /// The filter's constants: SVGF's published α = 0.2 and σ_n = 128; σ_z = 1 footprint per pixel of offset;
 /// σ_l = 2 standard deviations of the measured noise (SVGF's 4 is for its variance, which holds signal
-/// too): chosen over the generated suite (σ_l 2 / 3 / 4: denoised relMSE over ris at 4's geomean 0.173 /
-/// 0.189 / 0.198, BENCHMARKS.md).
+/// too): chosen over the generated suite (σ_l 1.5 / 2 / 3 / 4: denoised relMSE over ris at 4's geomean
+/// 0.171 / 0.173 / 0.189 / 0.207, worst 0.995 / 0.936 / 0.98 / 1.12; BENCHMARKS.md).
 pub const DEFAULTS: DenoisePush =
     DenoisePush { history: 0, step: 1, last: 0, add_direct: 0, alpha: 0.2, sigma_l: 2.0, sigma_n: 128.0, sigma_z: 1.0 };
 
