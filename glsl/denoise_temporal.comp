@@ -5,7 +5,13 @@
 // shade measures it over the pixel's reservoirs); the blend's weight of the new frame is max(α, 1 /
 // history length), the history restarting where the surface was disoccluded.
 // The history is first clamped into this frame's neighbourhood (mean ± DENOISE_CLAMP_SIGMAS standard
-// deviations per channel): light that moved is not dragged along for 1 / α frames.
+// deviations per channel): light that moved is not dragged along for 1 / α frames. And where the
+// lighting changed by more than the noise can explain, the history counts less (a temporal gradient
+// test, after A-SVGF's): over 3 × 3 pixels, this frame's mean luminance against the history's at the
+// previous pixels, Δ, with the estimate's measured variance σ² (the raw image's alpha) giving the
+// difference's noise s = √(σ̄² / 9 · (1 + α)) (the history's own noise about α of a frame's); the new
+// frame's weight is raised to λ = max(0, (Δ − DENOISE_GRADIENT_SIGMAS · s) / Δ), the share of the change
+// beyond the noise.
 #include "shared/denoise.glsl"
 
 layout(set = 0, binding = B_DENOISE_IN) uniform sampler2D raw;
@@ -42,6 +48,22 @@ vec3 clamp_to_neighbourhood(ivec2 px, vec3 h) {
     return clamp(h, m1 - DENOISE_CLAMP_SIGMAS * sd, m1 + DENOISE_CLAMP_SIGMAS * sd);
 }
 
+// λ of the temporal gradient test (above) between this frame at px and the history at q.
+float gradient_weight(ivec2 px, ivec2 q) {
+    float now = 0.0, before = 0.0, variance = 0.0;
+    ivec2 hi = ivec2(frame.size.xy) - 1;
+    for (int dy = -1; dy <= 1; dy++) {
+        for (int dx = -1; dx <= 1; dx++) {
+            ivec2 a = clamp(px + ivec2(dx, dy), ivec2(0), hi), b = clamp(q + ivec2(dx, dy), ivec2(0), hi);
+            now += luminance(illumination(a));
+            variance += texelFetch(raw, a, 0).a;
+            before += luminance(texelFetch(prev_color, b, 0).rgb);
+        }
+    }
+    float change = abs(now - before) / 9.0, noise = sqrt(variance / 81.0 * (1.0 + pc.alpha));
+    return change > 0.0 ? clamp((change - DENOISE_GRADIENT_SIGMAS * noise) / change, 0.0, 1.0) : 0.0;
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
@@ -55,7 +77,7 @@ void main() {
         if (h.a > 0.0) {
             h.rgb = clamp_to_neighbourhood(px, h.rgb);
             len = min(h.a + 1.0, MAX_HISTORY);
-            float a = max(pc.alpha, 1.0 / len);
+            float a = max(max(pc.alpha, 1.0 / len), gradient_weight(px, q));
             illum = mix(h.rgb, illum, a);
             variance = mix(texelFetch(prev_variance, q, 0).r, variance, a);
         }

@@ -8,9 +8,12 @@
 //!   n the history's length, and so is the estimate's variance σ²_f (the raw image's alpha: ris's shade
 //!   measures it over the pixel's reservoirs, `glsl/ris_shade.comp`). The history is first clamped into
 //!   this frame's 5 × 5 neighbourhood, mean ± `DENOISE_CLAMP_SIGMAS` standard deviations per channel (as
-//!   temporal anti-aliasing clamps colours), so that light that moved is not dragged along. The
-//!   accumulation (rgb, n) and the variance are kept for the next frame (`denoise.color`,
-//!   `denoise.variance`, histories keyed by the size).
+//!   temporal anti-aliasing clamps colours), so that light that moved is not dragged along; and a
+//!   temporal gradient test (after A-SVGF, Schied et al. 2018) raises a to λ where the lighting changed:
+//!   Δ, the change of the 3 × 3 mean luminance from the history's, against its noise s from the measured
+//!   variance, λ = max(0, (Δ − `DENOISE_GRADIENT_SIGMAS` · s) / Δ). (A-SVGF re-shades last frame's
+//!   samples for a noise-free Δ; here the noise is known instead.) The accumulation (rgb, n) and the
+//!   variance are kept for the next frame (`denoise.color`, `denoise.variance`, histories keyed by the size).
 //! - `denoise_variance`: σ² = the accumulated σ²_f; where n < 4, pooled over the 7 × 7 neighbourhood
 //!   (weighted by the geometric edge stops), raised to the noise scale s = max(σ, σ² / m) (m the
 //!   neighbourhood's mean luminance: where the noise is sparse hits, one hit's size), and the illumination
