@@ -7,9 +7,9 @@
 // The history is first clamped into this frame's neighbourhood (mean ± DENOISE_CLAMP_SIGMAS standard
 // deviations per channel): light that moved is not dragged along for 1 / α frames. And where the
 // lighting changed by more than the noise can explain, the history counts less (a temporal gradient
-// test, after A-SVGF's): over 3 × 3 pixels, this frame's mean luminance against the history's at the
+// test, after A-SVGF's): over 5 × 5 pixels, this frame's mean luminance against the history's at the
 // previous pixels, Δ, with the estimate's measured variance σ² (the raw image's alpha) giving the
-// difference's noise s = √(σ̄² / 9 · (1 + α)) (the history's own noise about α of a frame's); the new
+// difference's noise s = √(σ̄² / 25 · (1 + α)) (the history's own noise about α of a frame's); the new
 // frame's weight is raised to λ = max(0, (Δ − DENOISE_GRADIENT_SIGMAS · s) / Δ), the share of the change
 // beyond the noise.
 #include "shared/denoise.glsl"
@@ -52,15 +52,15 @@ vec3 clamp_to_neighbourhood(ivec2 px, vec3 h) {
 float gradient_weight(ivec2 px, ivec2 q) {
     float now = 0.0, before = 0.0, variance = 0.0;
     ivec2 hi = ivec2(frame.size.xy) - 1;
-    for (int dy = -1; dy <= 1; dy++) {
-        for (int dx = -1; dx <= 1; dx++) {
+    for (int dy = -2; dy <= 2; dy++) {
+        for (int dx = -2; dx <= 2; dx++) {
             ivec2 a = clamp(px + ivec2(dx, dy), ivec2(0), hi), b = clamp(q + ivec2(dx, dy), ivec2(0), hi);
             now += luminance(illumination(a));
             variance += texelFetch(raw, a, 0).a;
             before += luminance(texelFetch(prev_color, b, 0).rgb);
         }
     }
-    float change = abs(now - before) / 9.0, noise = sqrt(variance / 81.0 * (1.0 + pc.alpha));
+    float change = abs(now - before) / 25.0, noise = sqrt(variance / 625.0 * (1.0 + pc.alpha));
     return change > 0.0 ? clamp((change - DENOISE_GRADIENT_SIGMAS * noise) / change, 0.0, 1.0) : 0.0;
 }
 

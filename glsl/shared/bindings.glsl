@@ -218,12 +218,12 @@ const float END_BALL_MAX_RADIUS = 0.03;
 // Measured (BENCHMARKS.md, "Real time under motion"): 2 and 3 both halved the denoised error on Sibenik
 // under a moving light; 3 had the better worst case.
 const float DENOISE_CLAMP_SIGMAS = 3.0;
-// The temporal stage's gradient test: a 3 × 3 mean's change beyond this many standard deviations of its
+// The temporal stage's gradient test: a 5 × 5 mean's change beyond this many standard deviations of its
 // noise counts as a change of the lighting, and the history gives way by its share. Measured
-// (BENCHMARKS.md, "Real time under motion"): 2 against 1 / 1.5 / 3 / 4 had the lowest denoised error
-// over the generated suite but for 1 and 1.5 (level, with more flicker), and halved it on Sibenik under
-// a moving light.
-const float DENOISE_GRADIENT_SIGMAS = 2.0;
+// (BENCHMARKS.md, "Real time under motion"): 3 cut the generated suite's denoised error by 28 % for 6 %
+// more flicker, 2 by 34 % for 19 % (means over 3 × 3: more flicker, over 7 × 7: more error), and 3
+// halved both on Sibenik under a moving light.
+const float DENOISE_GRADIENT_SIGMAS = 3.0;
 
 // ---- present: the viewer's running mean, tone mapping and sRGB encoding (passes/present.rs) -------------
 #define B_PRESENT_RADIANCE 40

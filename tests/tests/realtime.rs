@@ -427,11 +427,11 @@ fn a_realtime_sequence_does_not_depend_on_what_was_rendered_before() {
     assert_ne!(alone[1], alone[2], "the frames repeat");
 }
 
-/// The denoiser follows a change of the lighting at once: its temporal stage tests each 3 × 3 mean's
+/// The denoiser follows a change of the lighting at once: its temporal stage tests each 5 × 5 mean's
 /// change against the estimate's measured noise and lets the history give way by the share beyond it.
 /// After six frames of a static view the light's intensity doubles: the next denoised frame's mean is
-/// at least 0.75 of `all`'s at the new intensity (measured 0.81: the share of the change beyond twice
-/// its noise; the raw frame 1.005). The history's fixed weight alone kept 0.60, which this test fails.
+/// at least 0.75 of `all`'s at the new intensity (measured 0.81: the share of the change beyond three
+/// times its noise; the raw frame 1.005). The history's fixed weight alone kept 0.60, which this test fails.
 #[test]
 fn the_denoiser_follows_a_change_of_the_lighting() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();

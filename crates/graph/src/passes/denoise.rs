@@ -10,7 +10,7 @@
 //!   this frame's 5 × 5 neighbourhood, mean ± `DENOISE_CLAMP_SIGMAS` standard deviations per channel (as
 //!   temporal anti-aliasing clamps colours), so that light that moved is not dragged along; and a
 //!   temporal gradient test (after A-SVGF, Schied et al. 2018) raises a to λ where the lighting changed:
-//!   Δ, the change of the 3 × 3 mean luminance from the history's, against its noise s from the measured
+//!   Δ, the change of the 5 × 5 mean luminance from the history's, against its noise s from the measured
 //!   variance, λ = max(0, (Δ − `DENOISE_GRADIENT_SIGMAS` · s) / Δ). (A-SVGF re-shades last frame's
 //!   samples for a noise-free Δ; here the noise is known instead.) The accumulation (rgb, n) and the
 //!   variance are kept for the next frame (`denoise.color`, `denoise.variance`, histories keyed by the size).
