@@ -12,10 +12,6 @@ layout(set = 0, binding = B_DENOISE_OUT, rgba32f) uniform writeonly image2D out_
 
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
 
-bool inside(ivec2 q) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size.xy)));
-}
-
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;

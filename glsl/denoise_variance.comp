@@ -18,10 +18,6 @@ layout(set = 0, binding = B_DENOISE_OUT, rgba32f) uniform writeonly image2D out_
 // The history length below which the neighbourhood stands in for the pixel (SVGF's 4 frames).
 const float YOUNG = 4.0;
 
-bool inside(ivec2 q) {
-    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size.xy)));
-}
-
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;

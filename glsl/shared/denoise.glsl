@@ -11,6 +11,11 @@ layout(set = 0, binding = B_GATHER_GPOSITION) uniform sampler2D g_position;
 layout(set = 0, binding = B_GATHER_GNORMAL) uniform sampler2D g_normal;
 layout(set = 0, binding = B_GATHER_GALBEDO) uniform sampler2D g_albedo;
 
+// Whether pixel q is in the image (the stages' neighbourhoods stop at its edges).
+bool inside(ivec2 q) {
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size.xy)));
+}
+
 // A pixel's surface: point, normal, footprint (its width at that distance: θ_px · |x − eye|).
 struct Surface {
     vec3 x;

@@ -27,8 +27,8 @@
 //! neighbourhood for a young history) counts the signal's own variation as noise, so next to a bright
 //! peak (a light in a corner) every pixel's stop accepts everything and the à-trous, a normalized
 //! gather, averages the peak into its dim plane: the light-corner scenes' denoised images held 0.33–0.48
-//! of the truth's mean. With the measured variance they hold 0.54–0.73, and the generated suite's
-//! denoised error fell by a fifth to a quarter (BENCHMARKS.md, "Real time under motion").
+//! of the truth's mean. With the measured variance they hold 0.55–0.75, and the generated suite's
+//! denoised error fell by a fifth to a quarter (and by as much again with the gradient test) (BENCHMARKS.md, "Real time under motion").
 //!
 //! Inputs: the raw radiance (direct light included when `add_direct`; its alpha the estimate's variance),
 //! the direct light, the G-buffer, the frame's `Motion`. Output: the denoised radiance, RGBA32F. The raw
