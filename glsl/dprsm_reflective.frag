@@ -14,6 +14,9 @@
 // The map resolution per face: the shadow map and the reflective map share these shaders.
 layout(push_constant) uniform Push { ParaboloidPush pc; };
 
+// Never nearer than the box's own depth (dprsm.geom's lower bound), so the depth test may run early.
+layout(depth_greater) out float gl_FragDepth;
+
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;
 layout(location = 2) flat in vec3 i_c;
