@@ -2,9 +2,6 @@
 // gbuffer: pulls the flat triangle list from the vertex buffer; see crates/graph/src/passes/gbuffer.rs.
 #include "shared/scene.glsl"
 
-// The depth pre-pass and the shading draw must compute the same depth bit for bit (EQUAL test).
-invariant gl_Position;
-
 layout(location = 0) out vec3 o_position;
 layout(location = 1) out vec3 o_normal;
 layout(location = 2) out vec2 o_uv;

@@ -202,13 +202,11 @@ pub struct GraphicsPipelineDesc<'a> {
     pub name: &'a str,
     pub vertex: &'a [u32],
     pub geometry: Option<&'a [u32]>,
-    /// None: a depth-only pipeline (a depth pre-pass); its colour attachments are not written.
-    pub fragment: Option<&'a [u32]>,
+    pub fragment: &'a [u32],
     pub color_formats: &'a [vk::Format],
     pub depth_format: Option<vk::Format>,
-    /// Depth test when `depth_format` is set, with writes when `depth_write`.
+    /// Depth test (with writes) when `depth_format` is set.
     pub depth_compare: vk::CompareOp,
-    pub depth_write: bool,
     pub bindings: &'a [Binding],
     pub push_constant_size: u32,
     pub spec: &'a [(u32, u32)],
@@ -234,9 +232,7 @@ impl GraphicsPipeline {
         if let Some(g) = desc.geometry {
             modules.push((vk::ShaderStageFlags::GEOMETRY, shader_module(gpu, g)?));
         }
-        if let Some(f) = desc.fragment {
-            modules.push((vk::ShaderStageFlags::FRAGMENT, shader_module(gpu, f)?));
-        }
+        modules.push((vk::ShaderStageFlags::FRAGMENT, shader_module(gpu, desc.fragment)?));
         let (entries, data) = spec_entries(desc.spec);
         let si = spec_info(&entries, &data);
         let stages: Vec<_> = modules
@@ -256,19 +252,12 @@ impl GraphicsPipeline {
         let ms = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let ds = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth_format.is_some())
-            .depth_write_enable(desc.depth_format.is_some() && desc.depth_write)
+            .depth_write_enable(desc.depth_format.is_some())
             .depth_compare_op(desc.depth_compare);
         let blend: Vec<_> = desc
             .color_formats
             .iter()
-            .map(|_| {
-                let mask = if desc.fragment.is_some() {
-                    vk::ColorComponentFlags::RGBA
-                } else {
-                    vk::ColorComponentFlags::empty()
-                };
-                vk::PipelineColorBlendAttachmentState::default().color_write_mask(mask)
-            })
+            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
             .collect();
         let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
         let dyn_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];

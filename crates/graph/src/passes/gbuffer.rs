@@ -19,7 +19,6 @@ pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 pub struct GBuffer {
-    depth: GraphicsPipeline,
     pipeline: GraphicsPipeline,
 }
 
@@ -36,29 +35,25 @@ impl GBuffer {
     /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).
     pub fn new(gpu: &Gpu, textured: bool) -> Result<Self> {
         let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
-        let (vertex, bindings) = (crate::spirv(shaders::GBUFFER_VERT), scene_bindings());
-        let desc = |name, fragment, depth_compare, depth_write| GraphicsPipelineDesc {
-            name,
-            vertex: &vertex,
-            geometry: None,
-            fragment,
-            color_formats: &[GBUFFER_FORMAT; 3],
-            depth_format: Some(DEPTH_FORMAT),
-            depth_compare,
-            depth_write,
-            bindings: &bindings,
-            push_constant_size: 0,
-            spec: &spec,
-        };
-        // Reverse Z (1 at the near plane, 0 at the far one): float depth keeps its precision where the
-        // values are small, i.e. far away. Forward Z with a small near plane could not separate the
-        // Cornell box's light panel from the ceiling 1 cm above it. The pre-pass writes the nearest depth
-        // without shading; the shading draw then runs its fragment shader once per pixel (EQUAL, the
-        // vertex shader's position `invariant`), not once per covering triangle.
-        let depth = GraphicsPipeline::new(gpu, &desc("gbuffer.depth", None, vk::CompareOp::GREATER, true))?;
-        let spirv_frag = crate::spirv(shaders::GBUFFER_FRAG);
-        let pipeline = GraphicsPipeline::new(gpu, &desc("gbuffer", Some(&spirv_frag), vk::CompareOp::EQUAL, false))?;
-        Ok(GBuffer { depth, pipeline })
+        let pipeline = GraphicsPipeline::new(
+            gpu,
+            &GraphicsPipelineDesc {
+                name: "gbuffer",
+                vertex: &crate::spirv(shaders::GBUFFER_VERT),
+                geometry: None,
+                fragment: &crate::spirv(shaders::GBUFFER_FRAG),
+                color_formats: &[GBUFFER_FORMAT; 3],
+                depth_format: Some(DEPTH_FORMAT),
+                // Reverse Z (1 at the near plane, 0 at the far one): float depth keeps its precision
+                // where the values are small, i.e. far away. Forward Z with a small near plane could
+                // not separate the Cornell box's light panel from the ceiling 1 cm above it.
+                depth_compare: vk::CompareOp::GREATER,
+                bindings: &scene_bindings(),
+                push_constant_size: 0,
+                spec: &spec,
+            },
+        )?;
+        Ok(GBuffer { pipeline })
     }
 
     pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>) -> GBufferOut {
@@ -114,10 +109,7 @@ impl GBuffer {
                 unsafe {
                     d.cmd_begin_rendering(ctx.cmd, &info);
                     if f.scene.triangle_count > 0 {
-                        let writes = f.scene.writes(f.uniforms);
-                        self.depth.bind(ctx.cmd, extent, &writes, &[]);
-                        d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, 1, 0, 0);
-                        self.pipeline.bind(ctx.cmd, extent, &writes, &[]);
+                        self.pipeline.bind(ctx.cmd, extent, &f.scene.writes(f.uniforms), &[]);
                         d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, 1, 0, 0);
                     }
                     d.cmd_end_rendering(ctx.cmd);
