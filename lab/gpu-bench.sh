@@ -19,6 +19,11 @@
 #                                       # march beside them, and whether each build's image equals the
 #                                       # first's; AB_SCENES, AB_SIZES, AB_METHOD, AB_VPLS, AB_VISIBILITY
 #                                       # choose (defaults: 4 scenes, 512 and 1024, uniform, 256, exact)
+#   lab/gpu-bench.sh rt-ab OUT_DIR LABEL…  # there: each build's real-time frame at 1920×1080 under the
+#                                       # camera's path, the light's orbit and both, the raster passes'
+#                                       # GPU ms beside the rest's, and whether its frames equal the
+#                                       # first build's; RT_SCENES, RT_SIZE, RT_FRAMES, RT_DPRSM and
+#                                       # RT_SHADOW choose (sibenik conference, 1920x1080, 24, 512, 2048)
 #
 # `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
 # (0) the real-time frame (`--method realtime`) at 1920×1080 on Sibenik and Conference while the camera
@@ -48,10 +53,14 @@ stage_binary() {
   cp "$target/$dir/bounce" "$stage/bin/bounce.tmp"
   strip "$stage/bin/bounce.tmp" 2>/dev/null || true
   mv "$stage/bin/bounce.tmp" "$stage/bin/bounce"
-  # The loader, for a machine that has a GPU driver but no libvulkan.
-  local loader
-  loader="$(ldconfig -p | awk '/libvulkan\.so\.1 / && !n++ {print $NF}')"
-  [ -n "$loader" ] && cp -L "$loader" "$stage/lib/libvulkan.so.1"
+  # The loader, for a machine that has a GPU driver but no libvulkan; and glvnd's dispatch libraries,
+  # without which NVIDIA's driver (libGLX_nvidia) loads but hands the loader no vkCreateInstance
+  # ("incompatible driver": an H200 machine, 2026-12-04).
+  local lib path
+  for lib in libvulkan.so.1 libGLdispatch.so.0 libGLX.so.0 libEGL.so.1 libOpenGL.so.0; do
+    path="$(ldconfig -p | awk -v l="$lib" '$1 == l && !n++ {print $NF}')"
+    [ -n "$path" ] && cp -L "$path" "$stage/lib/$lib"
+  done
   echo "staged $(du -sh "$stage" | cut -f1) in $stage" >&2
 }
 
@@ -104,6 +113,76 @@ stage_experiments() {
   chmod +x "$stage/bin/bounce.tmp"
   mv "$stage/bin/bounce.tmp" "$stage/bin/bounce"
   echo "there: lab/gpu-bench.sh ab OUT_DIR (every staged build; AB_SIZES=1024 halves the time)" >&2
+}
+
+# $1 OUT_DIR, then the labels (default: every staged build): the real-time frame at RT_SIZE (default
+# 1920x1080) on RT_SCENES (default: sibenik conference) under each motion (the camera's path alone, the
+# light's orbit alone, both), RT_FRAMES frames (default 24), GPU ms (median over frames 1..) of the
+# raster passes, of the rest and in all, and whether the last frame equals the first build's.
+# Writes OUT_DIR/rt-ab.md.
+run_rt_ab() {
+  local out="$1"
+  shift
+  local labels=("$@")
+  [ "${#labels[@]}" -gt 0 ] || { echo "error: usage: lab/gpu-bench.sh rt-ab OUT_DIR LABEL…" >&2; exit 2; }
+  use_staged_loader
+  mkdir -p "$out/bin"
+  local l
+  for l in "${labels[@]}"; do
+    [ -f "$stage/ab/$l.gz" ] || { echo "error: no staged build '$l' in $stage/ab" >&2; exit 2; }
+    gunzip -c "$stage/ab/$l.gz" >"$out/bin/$l"
+    chmod +x "$out/bin/$l"
+  done
+  local size="${RT_SIZE:-1920x1080}" frames="${RT_FRAMES:-24}" scenes
+  read -ra scenes <<<"${RT_SCENES:-sibenik conference}"
+  local md="$out/rt-ab.md" first="${labels[0]}" last=frame_0002.exr
+  {
+    echo "# gpu-bench rt-ab: $(date -u +%Y-%m-%d), $("$out/bin/$first" info | sed -n '1s/, Vulkan.*//p')"
+    echo
+    echo "\`--method realtime\` at $size, DPRSM ${RT_DPRSM:-512}², shadow map ${RT_SHADOW:-2048}², $frames frames; GPU ms, median over"
+    echo "frames 1.., not written; 'rest': the sum of the other passes' medians; '=': frame 2 equals $first's."
+    echo
+    echo "| scene | motion | build | dprsm | dprsm_depth | gbuffer | rest | total | rays / px |"
+    echo "|---|---|---|---:|---:|---:|---:|---:|---:|"
+  } | tee "$md"
+  local scene motion
+  for scene in "${scenes[@]}"; do
+    local toml="$here/assets/$scene/scene.toml"
+    for motion in camera light both; do
+      local paths=()
+      local walk="$here/assets/$scene/camera-path.toml"
+      [ -f "$walk" ] || walk=orbit
+      [ "$motion" != light ] && paths+=(--camera-path "$walk")
+      [ "$motion" != camera ] && paths+=(--light-path orbit)
+      for l in "${labels[@]}"; do
+        rm -rf "$out/rt-$l"
+        local timings common=(--method realtime --width "${size%x*}" --height "${size#*x}" --dprsm-res "${RT_DPRSM:-512}"
+          --shadow-res "${RT_SHADOW:-2048}" "${paths[@]}")
+        # Timed unwritten (frames back to back: written frames idle the GPU and its clocks fall), then
+        # three frames written for the comparison.
+        timings="$("$out/bin/$l" render "$toml" "${common[@]}" --frames "$frames" --timings 2>/dev/null)" || timings=""
+        [ "${#labels[@]}" -gt 1 ] &&
+          { "$out/bin/$l" render "$toml" "${common[@]}" --frames 3 --out-dir "$out/rt-$l" >/dev/null 2>&1 || true; }
+        local same=""
+        if [ "$l" != "$first" ] && [ -f "$out/rt-$l/$last" ] && [ -f "$out/rt-$first/$last" ]; then
+          "$out/bin/$first" compare "$out/rt-$l/$last" "$out/rt-$first/$last" --json | grep -q '"rmse": 0,' && same=" ="
+        fi
+        echo "$timings" | awk -v s="$scene" -v m="$motion" -v l="$l" -v same="$same" '
+          $1 == "dprsm" || $1 == "dprsm_depth" || $1 == "gbuffer" {ms[$1] = $2; next}
+          $1 == "total" {total = $2; next}
+          NF == 2 && $2 ~ /^-?[0-9.]+$/ {rest += $2}
+          $1 == "shadow" {rays = $NF}
+          END {
+            if (total == "") {printf "| %s | %s | %s | – | – | – | – | failed | – |\n", s, m, l; exit}
+            printf "| %s | %s | %s | %s | %s | %s | %.2f | %.2f%s | %s |\n", s, m, l,
+              ms["dprsm"] == "" ? "–" : ms["dprsm"], ms["dprsm_depth"] == "" ? "–" : ms["dprsm_depth"],
+              ms["gbuffer"] == "" ? "–" : ms["gbuffer"], rest, total, same, rays}' | tee -a "$md"
+      done
+      for l in "${labels[@]}"; do [ "$l" != "$first" ] && rm -rf "$out/rt-$l"; done
+    done
+    rm -rf "$out/rt-$first"
+  done
+  echo "wrote $md" >&2
 }
 
 # $1 OUT_DIR, then the labels (default: every staged build). Writes OUT_DIR/ab.md.
@@ -257,11 +336,9 @@ realtime_table() {
       echo
       echo '```text'
       "$bin" render "$toml" --method realtime --width "$w" --height "$h" --dprsm-res "$dprsm" --shadow-res "$shadow" \
-        --frames "$frames" --out-dir "$out/rt-$scene" \
-        --camera-path "$here/assets/$scene/camera-path.toml" --light-path orbit --timings 2>/dev/null
+        --frames "$frames" --camera-path "$here/assets/$scene/camera-path.toml" --light-path orbit --timings 2>/dev/null
       echo '```'
     } | tee -a "$md"
-    rm -rf "$out/rt-$scene"
   done
 }
 
@@ -354,6 +431,10 @@ case "$mode" in
     stage_ab "$2" release
     ;;
   stage-experiments) stage_experiments ;;
+  rt-ab)
+    [ $# -ge 3 ] || { echo "error: usage: lab/gpu-bench.sh rt-ab OUT_DIR LABEL…" >&2; exit 2; }
+    run_rt_ab "${@:2}"
+    ;;
   ab)
     [ $# -ge 2 ] || { echo "error: usage: lab/gpu-bench.sh ab OUT_DIR [LABEL…]" >&2; exit 2; }
     run_ab "${@:2}"
@@ -367,9 +448,11 @@ case "$mode" in
     stage_ab tiny-a dev
     stage_ab tiny-b dev
     AB_SCENES=cornell-box AB_SIZES=16 AB_VPLS=8 run_ab "${2:-$here/out/gpu-bench-tiny}/ab" tiny-a tiny-b
+    RT_SCENES=cornell-box RT_SIZE=32x18 RT_FRAMES=3 RT_DPRSM=16 RT_SHADOW=64 \
+      run_rt_ab "${2:-$here/out/gpu-bench-tiny}/rt-ab" tiny-a tiny-b
     ;;
   *)
-    echo "error: usage: lab/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR] | stage-ab LABEL | stage-experiments | ab OUT_DIR [LABEL…]" >&2
+    echo "error: usage: lab/gpu-bench.sh stage | run [OUT_DIR] | tiny [OUT_DIR] | stage-ab LABEL | stage-experiments | ab OUT_DIR [LABEL…] | rt-ab OUT_DIR LABEL…" >&2
     exit 2
     ;;
 esac

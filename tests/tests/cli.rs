@@ -655,6 +655,26 @@ fn bad_light_paths_are_exit_2() {
     expect_bad_input(&lone, "need --frames", &o);
 }
 
+/// `render --frames N --timings` without --out-dir times the frames back to back and writes nothing (no
+/// frame, no --out); without --timings it is the one-line error naming --out-dir.
+#[test]
+fn frames_without_an_out_dir_are_only_timed() {
+    let d = scratch("timed-frames");
+    let scene = bounce_tests::default_scene();
+    let o = d.join("o.exr");
+    let args =
+        ["render", scene.to_str().unwrap(), "--frames", "3", "--light-path", "orbit", "--out", o.to_str().unwrap()];
+    let mut timed = args.to_vec();
+    timed.extend(["--width", "8", "--height", "8", "--vpls", "2", "--validation", "--timings"]);
+    let r = bounce(&timed);
+    assert_eq!(r.code, 0, "stderr: {}", r.stderr);
+    assert!(r.stdout.contains("median over frames 1..3"), "{}", r.stdout);
+    assert!(r.stdout.lines().any(|l| l.starts_with("total")), "{}", r.stdout);
+    assert!(r.stderr.contains("not written"), "{}", r.stderr);
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0, "nothing may be written");
+    expect_bad_input(&args, "--out-dir", &o);
+}
+
 /// A moving camera (`--camera-path`): `render --frames 3 --camera-path orbit:8` starts at the scene's own
 /// view (frame 0 is `render`'s image without a path, bit for bit) and moves (frames 1 and 2 differ from
 /// it); a keyframe file holding the scene's view renders that view; `bench --animate none --camera-path`

@@ -505,7 +505,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "SECONDS")]
     pub time_limit: Option<f64>,
     /// Render an animation of this many frames (with --light-path) into --out-dir: frame_0000.exr and
-    /// .png, …
+    /// .png, … (with --timings and no --out-dir: time the frames, back to back, and write nothing)
     #[arg(long)]
     pub frames: Option<u32>,
     /// Where --frames writes its frames.
