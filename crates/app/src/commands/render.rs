@@ -207,7 +207,9 @@ fn frame_timings(out: &mut dyn Write, frames: &[FrameOutput], device: &str) -> R
     let cell = |m: Option<f64>| m.map(|m| format!("{m:10.3}")).unwrap_or_else(|| format!("{:>10}", "n/a"));
     writeln!(out, "{:<16} {:>10}   (median over frames 1..{} of {device})", "pass", "GPU ms", frames.len())?;
     for name in names {
-        let per_frame = later.iter().map(|f| f.timings.iter().filter(|t| t.name == name).filter_map(|t| t.ms).sum());
+        // `+ 0.0`: an empty f64 sum is −0.0, which printed as "-0.000" for a pass absent from most frames.
+        let per_frame =
+            later.iter().map(|f| f.timings.iter().filter(|t| t.name == name).filter_map(|t| t.ms).sum::<f64>() + 0.0);
         writeln!(out, "{name:<16} {}", cell(median(per_frame.collect())))?;
     }
     writeln!(out, "{:<16} {}", "total", cell(median(later.iter().filter_map(|f| f.gpu_ms()).collect())))?;
