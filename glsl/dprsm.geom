@@ -3,7 +3,7 @@
 // shader then intersects each texel's ray with the triangle. See crates/graph/src/passes/dprsm.rs.
 #include "shared/scene.glsl"
 
-// The shadow maps and the reflective map share these shaders; pc.light_map tells them apart.
+// The reflective map (faces per `--light-map`) and, as dprsm.psm.geom, psm's per-VPL maps share them.
 layout(push_constant) uniform Push { ParaboloidPush pc; };
 
 layout(triangles) in;
@@ -139,12 +139,12 @@ void main() {
     for (int k = 0; k < 3; k++) p[k] = psm_to_local(i_world[k] - view.position_v.xyz, view.normal_p.xyz);
     bool perspective = false;
 #else
-    bool perspective = pc.light_map != 0u && lm_kind() != LIGHT_MAP_DPRSM;
-    uint faces = pc.light_map != 0u ? lm_faces() : 2u;
+    bool perspective = lm_kind() != LIGHT_MAP_DPRSM;
+    uint faces = lm_faces();
     uint face = inst % faces, li = inst / faces;
     vec3 light = lights[li].position.xyz;
     for (int k = 0; k < 3; k++) {
-        p[k] = pc.light_map != 0u ? lm_to_local(i_world[k] - light, li, face) : to_face(i_world[k] - light, face);
+        p[k] = lm_to_local(i_world[k] - light, li, face);
     }
 #endif
     if (perspective) {

@@ -22,8 +22,8 @@
 #   lab/gpu-bench.sh rt-ab OUT_DIR LABEL…  # there: each build's real-time frame at 1920×1080 under the
 #                                       # camera's path, the light's orbit and both, the raster passes'
 #                                       # GPU ms beside the rest's, and whether its frames equal the
-#                                       # first build's; RT_SCENES, RT_SIZE, RT_FRAMES, RT_DPRSM and
-#                                       # RT_SHADOW choose (sibenik conference, 1920x1080, 24, 512, 2048)
+#                                       # first build's; RT_SCENES, RT_SIZE, RT_FRAMES and RT_DPRSM
+#                                       # choose (sibenik conference, 1920x1080, 24, 512)
 #
 # `run` prints, most important first, each part appended to OUT_DIR/gpu-bench.md as soon as it is done:
 # (0) the real-time frame (`--method realtime`) at 1920×1080 on Sibenik and Conference while the camera
@@ -140,11 +140,11 @@ run_rt_ab() {
   {
     echo "# gpu-bench rt-ab: $(date -u +%Y-%m-%d), $("$out/bin/$first" info | sed -n '1s/, Vulkan.*//p')"
     echo
-    echo "\`--method realtime\` at $size, DPRSM ${RT_DPRSM:-512}², shadow map ${RT_SHADOW:-2048}², $frames frames; GPU ms, median over"
+    echo "\`--method realtime\` at $size, DPRSM ${RT_DPRSM:-512}², $frames frames; GPU ms, median over"
     echo "frames 1.., not written; 'rest': the sum of the other passes' medians; '=': frame 2 equals $first's."
     echo
-    echo "| scene | motion | build | dprsm | dprsm_depth | gbuffer | rest | total | rays / px |"
-    echo "|---|---|---|---:|---:|---:|---:|---:|---:|"
+    echo "| scene | motion | build | dprsm | gbuffer | rest | total | rays / px |"
+    echo "|---|---|---|---:|---:|---:|---:|---:|"
   } | tee "$md"
   local scene motion
   for scene in "${scenes[@]}"; do
@@ -158,7 +158,7 @@ run_rt_ab() {
       for l in "${labels[@]}"; do
         rm -rf "$out/rt-$l"
         local timings common=(--method realtime --width "${size%x*}" --height "${size#*x}" --dprsm-res "${RT_DPRSM:-512}"
-          --shadow-res "${RT_SHADOW:-2048}" "${paths[@]}")
+          "${paths[@]}")
         # Timed unwritten (frames back to back: written frames idle the GPU and its clocks fall), then
         # three frames written for the comparison.
         timings="$("$out/bin/$l" render "$toml" "${common[@]}" --frames "$frames" --timings 2>/dev/null)" || timings=""
@@ -169,14 +169,14 @@ run_rt_ab() {
           "$out/bin/$first" compare "$out/rt-$l/$last" "$out/rt-$first/$last" --json | grep -q '"rmse": 0,' && same=" ="
         fi
         echo "$timings" | awk -v s="$scene" -v m="$motion" -v l="$l" -v same="$same" '
-          $1 == "dprsm" || $1 == "dprsm_depth" || $1 == "gbuffer" {ms[$1] = $2; next}
+          $1 == "dprsm" || $1 == "gbuffer" {ms[$1] = $2; next}
           $1 == "total" {total = $2; next}
           NF == 2 && $2 ~ /^-?[0-9.]+$/ {rest += $2}
           $1 == "shadow" {rays = $NF}
           END {
-            if (total == "") {printf "| %s | %s | %s | – | – | – | – | failed | – |\n", s, m, l; exit}
-            printf "| %s | %s | %s | %s | %s | %s | %.2f | %.2f%s | %s |\n", s, m, l,
-              ms["dprsm"] == "" ? "–" : ms["dprsm"], ms["dprsm_depth"] == "" ? "–" : ms["dprsm_depth"],
+            if (total == "") {printf "| %s | %s | %s | – | – | – | failed | – |\n", s, m, l; exit}
+            printf "| %s | %s | %s | %s | %s | %.2f | %.2f%s | %s |\n", s, m, l,
+              ms["dprsm"] == "" ? "–" : ms["dprsm"],
               ms["gbuffer"] == "" ? "–" : ms["gbuffer"], rest, total, same, rays}' | tee -a "$md"
       done
       for l in "${labels[@]}"; do [ "$l" != "$first" ] && rm -rf "$out/rt-$l"; done
@@ -254,8 +254,8 @@ run_ab() {
 # The gather's GPU ms by visibility on each scene, `uniform` at $vpls VPLs per pixel, median of 3 frames
 # (the cost bound: the default visibility's gather no dearer than the voxel march's).
 vis_table() {
-  local out="$1" md="$2" size="$3" vpls="$4" dprsm="$5" shadow="$6"
-  shift 6
+  local out="$1" md="$2" size="$3" vpls="$4" dprsm="$5"
+  shift 5
   {
     echo
     echo "## Gather GPU ms by visibility (uniform, $vpls VPLs per pixel, ${size}², DPRSM ${dprsm}², median of 3 frames)"
@@ -272,11 +272,11 @@ vis_table() {
     for v in voxel exact; do
       local args=(--visibility "$v")
       ms[$v]="$(for k in 1 2 3; do "$bin" render "$toml" --width "$size" --height "$size" --component indirect \
-        --dprsm-res "$dprsm" --shadow-res "$shadow" --method uniform --vpls "$vpls" --seed "$k" \
+        --dprsm-res "$dprsm" --method uniform --vpls "$vpls" --seed "$k" \
         "${args[@]}" --timings --out "$out/vis-$scene-$v.exr" 2>/dev/null | awk '$1 == "gather" {print $2}'; done | median3)"
     done
     ms[balls]="$("$bin" render "$toml" --width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" \
-      --shadow-res "$shadow" --method uniform --vpls "$vpls" --visibility exact --timings --out "$out/vis-$scene-balls.exr" \
+      --method uniform --vpls "$vpls" --visibility exact --timings --out "$out/vis-$scene-balls.exr" \
       2>/dev/null | awk '$1 ~ /^end_balls/ {s += $2} END {if (NR) printf "%.2f", s}')"
     local ratio="–"
     [ -n "${ms[voxel]}" ] && [ -n "${ms[exact]}" ] && ratio="$(awk -v e="${ms[exact]}" -v x="${ms[voxel]}" 'BEGIN {printf "%.2f", e / x}')"
@@ -327,16 +327,16 @@ pass_tables() {
 # walks its path (assets/<scene>/camera-path.toml) and the light orbits: each pass's GPU ms, the median
 # over frames 1..$3 (frame 0 builds what the others keep), and the shadow rays per pixel.
 realtime_table() {
-  local out="$1" md="$2" w="$3" h="$4" frames="$5" dprsm="$6" shadow="$7"
+  local out="$1" md="$2" w="$3" h="$4" frames="$5" dprsm="$6"
   local scene
   for scene in "${scenes[@]}"; do
     local toml="$here/assets/$scene/scene.toml"
     {
       echo
-      echo "## $scene: the real-time frame at ${w}×${h}, DPRSM ${dprsm}², shadow map ${shadow}², camera path and light orbit ($frames frames, unwritten; GPU ms, median over frames 1..)"
+      echo "## $scene: the real-time frame at ${w}×${h}, DPRSM ${dprsm}², camera path and light orbit ($frames frames, unwritten; GPU ms, median over frames 1..)"
       echo
       echo '```text'
-      "$bin" render "$toml" --method realtime --width "$w" --height "$h" --dprsm-res "$dprsm" --shadow-res "$shadow" \
+      "$bin" render "$toml" --method realtime --width "$w" --height "$h" --dprsm-res "$dprsm" \
         --frames "$frames" --camera-path "$here/assets/$scene/camera-path.toml" --light-path orbit --timings 2>/dev/null
       echo '```'
     } | tee -a "$md"
@@ -378,12 +378,11 @@ equal_time() {
 }
 
 # $1 OUT_DIR; $2 size, $3 VPLs per pixel, $4 DPRSM resolution, $5 reference spp, $6 equal-time budget (s),
-# $7 direct-light shadow resolution, $8 the visibility tables' sizes (comma-separated), $9 the real-time
-# frame's WIDTHxHEIGHT; the rest: scenes of the thesis tables (the visibility tables take every scene of
+# $7 the visibility tables' sizes (comma-separated), $8 the real-time frame's WIDTHxHEIGHT; the rest: scenes of the thesis tables (the visibility tables take every scene of
 # the suite).
 run_bench() {
-  local out="$1" size="$2" vpls="$3" dprsm="$4" spp="$5" budget="$6" shadow="$7" vis_sizes="$8" rt_size="$9"
-  shift 9
+  local out="$1" size="$2" vpls="$3" dprsm="$4" spp="$5" budget="$6" vis_sizes="$7" rt_size="$8"
+  shift 8
   local scenes=("$@")
   bin="$stage/bin/bounce"
   [ -x "$bin" ] || { echo "error: $bin is missing: run 'lab/gpu-bench.sh stage' first" >&2; exit 2; }
@@ -393,7 +392,7 @@ run_bench() {
   local device
   device="$("$bin" info | sed -n '1s/, Vulkan.*//p')"
   [ -n "$device" ] || { echo "error: no Vulkan device found ('bounce info' printed nothing)" >&2; exit 1; }
-  common=(--width "$size" --height "$size" --component indirect --dprsm-res "$dprsm" --shadow-res "$shadow")
+  common=(--width "$size" --height "$size" --component indirect --dprsm-res "$dprsm")
   methods=(global local gbg mis ris)
   {
     echo "# gpu-bench: $(date -u +%Y-%m-%d), $device"
@@ -407,11 +406,11 @@ run_bench() {
   IFS=, read -ra vs <<<"$vis_sizes"
   SECONDS=0
   # The real-time frame first: the issue's 1080p goal.
-  realtime_table "$out" "$md" "${rt_size%x*}" "${rt_size#*x}" 24 "$dprsm" "$shadow"
-  # And at the viewer's map sizes (half of `render`'s each way), what an interactive user gets.
-  realtime_table "$out" "$md" "${rt_size%x*}" "${rt_size#*x}" 24 "$((dprsm / 2))" "$((shadow / 2))"
+  realtime_table "$out" "$md" "${rt_size%x*}" "${rt_size#*x}" 24 "$dprsm"
+  # And at the viewer's map size (half of `render`'s each way), what an interactive user gets.
+  realtime_table "$out" "$md" "${rt_size%x*}" "${rt_size#*x}" 24 "$((dprsm / 2))"
   echo "real-time frames: done at ${SECONDS} s" >&2
-  vis_table "$out" "$md" "${vs[0]}" "$vis_vpls" "$dprsm" "$shadow" "${suite[@]}"
+  vis_table "$out" "$md" "${vs[0]}" "$vis_vpls" "$dprsm" "${suite[@]}"
   echo "visibility table at ${vs[0]}²: done at ${SECONDS} s" >&2
   pass_tables "$out" "$md"
   echo "pass tables: done at ${SECONDS} s" >&2
@@ -419,7 +418,7 @@ run_bench() {
   echo "equal time: done at ${SECONDS} s" >&2
   local s
   for s in "${vs[@]:1}"; do
-    vis_table "$out" "$md" "$s" "$vis_vpls" 32 "$shadow" "${suite[@]}"
+    vis_table "$out" "$md" "$s" "$vis_vpls" 32 "${suite[@]}"
     echo "visibility table at $s²: done at ${SECONDS} s" >&2
   done
   echo >&2
@@ -428,7 +427,7 @@ run_bench() {
 
 case "$mode" in
   stage) stage_binary release ;;
-  run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 2048 512,64 1920x1080 sibenik conference ;;
+  run) run_bench "${2:-$here/out/gpu-bench-results}" 512 800 512 2048 2 512,64 1920x1080 sibenik conference ;;
   stage-ab)
     [ $# -eq 2 ] || { echo "error: usage: lab/gpu-bench.sh stage-ab LABEL" >&2; exit 2; }
     stage_ab "$2" release
@@ -446,12 +445,12 @@ case "$mode" in
     # A stage of its own, so that CI's debug build never replaces a staged release build.
     stage="$here/out/gpu-bench-tiny-stage"
     stage_binary dev
-    run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 256 16 32x18 sibenik conference
+    run_bench "${2:-$here/out/gpu-bench-tiny}" 24 8 16 32 0.3 16 32x18 sibenik conference
     # The A/B steps on one build staged under two labels (their images must match).
     stage_ab tiny-a dev
     stage_ab tiny-b dev
     AB_SCENES=cornell-box AB_SIZES=16 AB_VPLS=8 run_ab "${2:-$here/out/gpu-bench-tiny}/ab" tiny-a tiny-b
-    RT_SCENES=cornell-box RT_SIZE=32x18 RT_FRAMES=3 RT_DPRSM=16 RT_SHADOW=64 \
+    RT_SCENES=cornell-box RT_SIZE=32x18 RT_FRAMES=3 RT_DPRSM=16 \
       run_rt_ab "${2:-$here/out/gpu-bench-tiny}/rt-ab" tiny-a tiny-b
     ;;
   *)

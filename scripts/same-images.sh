@@ -34,7 +34,7 @@ new_bin="$work/new-bounce"
 old_bin="$work/old-bounce"
 same="$work/same-pixels"
 
-common=(--width 24 --height 24 --dprsm-res 16 --voxels 32 --vpls 8 --seed 3 --shadow-res 256 --psm-res 32)
+common=(--width 24 --height 24 --dprsm-res 16 --voxels 32 --vpls 8 --seed 3 --psm-res 32)
 cases=(
   "direct|--component direct"
   "combined-uniform|--component combined --method uniform"

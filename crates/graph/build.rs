@@ -41,8 +41,8 @@ const fn variant(name: &'static str, source: &'static str, defines: &'static [&'
 const SHADERS: &[Shader] = &[
     file("gbuffer.vert"),
     file("gbuffer.frag"),
-    // The paraboloid maps: the direct light's shadow maps (dprsm.frag), the reflective map that makes the
-    // VPLs (dprsm_reflective.frag), and psm's per-VPL shadow maps (dprsm.psm.geom: the VPL as viewpoint).
+    // The paraboloid maps: the reflective map that makes the VPLs (dprsm_reflective.frag), and psm's
+    // per-VPL shadow maps (dprsm.psm.geom: the VPL as viewpoint; dprsm.frag, depth only).
     file("dprsm.vert"),
     file("dprsm.geom"),
     file("dprsm.frag"),

@@ -48,12 +48,11 @@ const float LUMINANCE_B = 0.114;
 // its surface at grazing incidence gets at most 20× the area it would facing the light.
 const float VPL_MIN_COS = 0.05;
 
-// ---- direct: inputs and output -------------------------------------------------------------------------
+// ---- direct: inputs and output (and the BVH) ----------------------------------------------------------------------
 #define B_DIRECT_GPOSITION 7
 #define B_DIRECT_GNORMAL 8
 #define B_DIRECT_GALBEDO 9
-#define B_DIRECT_SHADOW 10
-#define B_DIRECT_OUT 11
+#define B_DIRECT_OUT 10
 
 // ---- voxelize, and the voxel march of shared/voxel.glsl (crates/graph/src/cpu_voxel.rs mirrors it) -------
 // The occupancy bits (bit c % 32 of word c / 32 for cell c = x + dims.x * (y + dims.y * z)).

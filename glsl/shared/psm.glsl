@@ -15,7 +15,7 @@ vec3 psm_to_local(vec3 d, vec3 n) {
 
 #ifdef PSM_LOOKUP
 // 1 when x (unit normal nx) is the first surface map k sees in x's direction, within the bias; 0
-// otherwise (or behind the VPL), with the direct light's bias (paraboloid_shadow_bias, scene.glsl).
+// otherwise (or behind the VPL), with paraboloid_shadow_bias's depth bias (scene.glsl).
 float psm_visible(uint k, vec3 x, vec3 nx) {
     PsmView w = psm_views[k];
     vec3 d = x - w.position_v.xyz;

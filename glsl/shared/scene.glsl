@@ -15,7 +15,7 @@ layout(std430, set = 0, binding = B_LIGHTS) readonly buffer Lights { Light light
 
 #include "lightmap.glsl"
 
-// The depth bias of a paraboloid shadow-map test (the direct light's maps and the per-VPL maps): at
+// The depth bias of a paraboloid shadow-map test (the per-VPL maps of `--visibility psm`): at
 // map coordinates uv of a res² face, a point at distance d whose normal makes cos θ with the map's
 // direction. The texel stores the depth along its centre direction, up to ~0.71 texel away from the
 // point's; on a surface tilted by θ that changes the depth by ≈ d · Δangle · tan θ, the slope term. A

@@ -135,8 +135,7 @@ struct VoxelizePush {
 // Push constants of the paraboloid maps' shaders (dprsm.vert/geom/frag, dprsm_reflective.frag; psm's maps).
 struct ParaboloidPush {
     uint map_res;     // the map resolution per face
-    uint light_map;   // 1: the reflective map, whose faces follow `--light-map` (shared/lightmap.glsl);
-                      // 0: the paraboloid shadow maps (the direct light's, and psm's per-VPL maps)
+    uint pad;
 };
 
 // present push constants.

@@ -49,15 +49,16 @@ fn render_writes_exr_png_and_timings() {
         "24",
         "--component",
         "direct",
-        "--shadow-res",
-        "256",
         "--validation",
         "--timings",
     ]);
     assert_eq!(r.code, 0, "stderr: {}", r.stderr);
-    for pass in ["gbuffer", "dprsm", "direct", "total"] {
+    for pass in ["gbuffer", "direct", "total"] {
         assert!(r.stdout.lines().any(|l| l.starts_with(pass)), "timings table lacks {pass}:\n{}", r.stdout);
     }
+    // The direct light traces its shadow rays: no light map is rendered for it.
+    let drawn = |l: &str| l.starts_with("dprsm") && !l.ends_with("skipped");
+    assert!(!r.stdout.lines().any(drawn), "a light map for direct light:\n{}", r.stdout);
     let (img, meta) = read_exr(&exr).unwrap();
     assert_eq!((img.width, img.height), (32, 24));
     assert!(img.pixels.iter().any(|p| p[0] > 0.0), "black image");
@@ -461,22 +462,8 @@ fn view(args: &[&str], display: bool) -> std::process::Output {
     cmd.arg("view").args(args).output().expect("run xvfb-run (package xvfb) and the bounce binary")
 }
 
-const VIEW_SETTINGS: [&str; 14] = [
-    "--width",
-    "32",
-    "--height",
-    "32",
-    "--vpls",
-    "4",
-    "--dprsm-res",
-    "32",
-    "--shadow-res",
-    "128",
-    "--voxels",
-    "32",
-    "--method",
-    "gbg",
-];
+const VIEW_SETTINGS: [&str; 12] =
+    ["--width", "32", "--height", "32", "--vpls", "4", "--dprsm-res", "32", "--voxels", "32", "--method", "gbg"];
 
 /// The viewer's progressive accumulation is exactly the mean of the frames `bounce render` makes with
 /// the same settings, seeds S, S+1, … and one CDF seed S: 3 frames of gbg, validation on, under Xvfb.
@@ -538,7 +525,7 @@ fn view_30_frames_under_xvfb_shows_the_scene() {
     let (v, _) = read_exr(&shot.with_extension("exr")).unwrap();
     let all_exr = d.join("all.exr");
     let mut a = vec!["render", scene.to_str().unwrap(), "--out", all_exr.to_str().unwrap()];
-    a.extend(VIEW_SETTINGS[..12].iter().copied());
+    a.extend(VIEW_SETTINGS[..10].iter().copied());
     a.extend(["--method", "all"]);
     let r = bounce(&a);
     assert_eq!(r.code, 0, "{}", r.stderr);
@@ -558,7 +545,7 @@ fn view_is_real_time_while_the_camera_moves() {
     let d = scratch("view-realtime");
     let scene = bounce_tests::default_scene();
     let shot = d.join("s.png");
-    let small = ["--width", "32", "--height", "32", "--dprsm-res", "32", "--shadow-res", "128", "--vpls", "2"];
+    let small = ["--width", "32", "--height", "32", "--dprsm-res", "32", "--vpls", "2"];
     for (path, want) in [
         (Some("orbit:8"), "1 frame in the mean, 4 in all, 3 real-time"),
         (None, "4 frames in the mean, 4 in all, 0 real-time"),
@@ -683,7 +670,7 @@ fn frames_without_an_out_dir_are_only_timed() {
 fn camera_paths_move_the_camera_frame_by_frame() {
     let d = scratch("camera-path");
     let scene = bounce_tests::default_scene();
-    let size = ["--width", "12", "--height", "12", "--dprsm-res", "16", "--shadow-res", "64"];
+    let size = ["--width", "12", "--height", "12", "--dprsm-res", "16"];
     let common = ["--component", "indirect", "--method", "uniform", "--vpls", "4", "--seed", "3"];
     let frames = d.join("frames");
     let mut a = vec!["render", scene.to_str().unwrap(), "--frames", "3", "--out-dir", frames.to_str().unwrap()];
@@ -806,8 +793,6 @@ fn a_textured_scene_renders_its_texture() {
         "16",
         "--height",
         "16",
-        "--shadow-res",
-        "128",
         "--validation",
     ]);
     assert_eq!(r.code, 0, "{}", r.stderr);
@@ -1018,8 +1003,6 @@ fn suite_runs_every_method_on_every_scene_and_aggregates() {
         "16",
         "--dprsm-res",
         "16",
-        "--shadow-res",
-        "64",
         "--validation",
     ]);
     assert_eq!(r.code, 0, "{}", r.stderr);

@@ -111,7 +111,6 @@ fn small_frame(method: bounce_graph::frame::Method) -> bounce_graph::frame::Fram
         method,
         vpls: 4,
         dprsm_res: 32,
-        shadow_res: 128,
         voxels: 32,
         visibility: bounce_graph::frame::Visibility::Voxel,
         ..bounce_graph::frame::FrameSettings::default()
@@ -131,7 +130,7 @@ fn an_unchanged_frame_records_only_the_gather() {
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let s = small_frame(Method::Uniform);
     let first = r.render(&s).unwrap();
-    for pass in ["gbuffer", "dprsm_depth", "direct", "dprsm", "voxelize", "importance", "cdf_reduce", "gather"] {
+    for pass in ["gbuffer", "direct", "dprsm", "voxelize", "importance", "cdf_reduce", "gather"] {
         assert!(first.ran.contains(&pass), "the first frame lacks {pass}: {:?}", first.ran);
     }
     let second = r.render(&s).unwrap();
@@ -151,9 +150,9 @@ fn an_unchanged_frame_records_only_the_gather() {
     assert!(gbg2.ran.contains(&"importance"), "gbg's importance depends on the seed: {:?}", gbg2.ran);
     let bigger = r.render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
     assert!(bigger.ran.contains(&"gbuffer"));
-    // A resize keeps the light side: the paraboloid maps depend on the lights and their resolutions,
+    // A resize keeps the light side: the paraboloid maps depend on the lights and their resolution,
     // and so does `uniform`'s importance and CDF (the VPLs' validity): no importance pass, no scan.
-    for pass in ["dprsm", "dprsm_depth", "importance", "cdf_reduce"] {
+    for pass in ["dprsm", "importance", "cdf_reduce"] {
         assert!(!bigger.ran.contains(&pass), "a resize redid {pass}: {:?}", bigger.ran);
     }
     let fresh = Renderer::new(&gpu, &scene).unwrap().render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
@@ -200,7 +199,7 @@ fn a_warm_up_leaves_the_next_frame_as_a_first_frame() {
 }
 
 /// A camera move (the viewer's fly camera) re-records what the camera feeds (G-buffer, direct light,
-/// importance, CDF) and keeps the light side (reflective DPRSM, shadow map); the image equals a fresh
+/// importance, CDF) and keeps the light side (the reflective DPRSM) and the voxels; the image equals a fresh
 /// renderer's at the new camera, so nothing stale is reused.
 #[test]
 fn a_camera_move_keeps_the_light_side() {
@@ -218,15 +217,15 @@ fn a_camera_move_keeps_the_light_side() {
     for pass in ["gbuffer", "direct", "importance", "cdf_reduce", "gather"] {
         assert!(after.ran.contains(&pass), "a camera move must redo {pass}: {:?}", after.ran);
     }
-    for pass in ["dprsm", "dprsm_depth", "voxelize"] {
+    for pass in ["dprsm", "voxelize"] {
         assert!(!after.ran.contains(&pass), "a camera move must keep {pass}: {:?}", after.ran);
     }
     let mut fresh = Renderer::new(&gpu, &scene).unwrap();
     fresh.set_camera(moved);
     assert_eq!(fresh.render(&s).unwrap().radiance, after.radiance, "the kept light side changed the image");
     assert_eq!(r.render(&s).unwrap().ran, vec!["gather"]);
-    // The indirect component keeps the maps without the shadow map; a move then must still work (the
-    // direct pass and its shadow map are not needed and not recorded).
+    // The indirect component keeps the maps without the direct light; a move then must still work (the
+    // direct pass is not needed and not recorded).
     let indirect = FrameSettings { component: Component::Indirect, ..s.clone() };
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     r.render(&indirect).unwrap();
@@ -235,16 +234,15 @@ fn a_camera_move_keeps_the_light_side() {
     back.eye.z += 0.1;
     r.set_camera(back);
     let after = r.render(&indirect).unwrap();
-    assert!(!after.ran.contains(&"dprsm") && !after.ran.contains(&"dprsm_depth"), "{:?}", after.ran);
-    // And a combined frame after it renders the shadow map it lacks.
+    assert!(!after.ran.contains(&"dprsm") && !after.ran.contains(&"direct"), "{:?}", after.ran);
+    // And a combined frame after it renders the direct light it lacks, on the kept maps.
     let combined = r.render(&s).unwrap();
-    assert!(combined.ran.contains(&"dprsm_depth"), "{:?}", combined.ran);
+    assert!(combined.ran.contains(&"direct") && !combined.ran.contains(&"dprsm"), "{:?}", combined.ran);
 }
 
-/// A light move re-records exactly the light-side passes (reflective maps, shadow map, direct light)
-/// and what depends on them (importance, CDF, gather), keeps the voxels and the G-buffer, and gives the
-/// image a fresh renderer whose scene has the light there renders; an intensity change alone keeps the
-/// shadow map; moving nothing records only the gather; moving the light back gives the first image's
+/// A light move re-records exactly the light-side passes (reflective maps, direct light) and what
+/// depends on them (importance, CDF, gather), keeps the voxels and the G-buffer, and gives the image a
+/// fresh renderer whose scene has the light there renders; an intensity change redoes both; moving nothing records only the gather; moving the light back gives the first image's
 /// bits (the light upload is exact).
 #[test]
 fn a_light_move_records_exactly_the_light_side() {
@@ -261,7 +259,7 @@ fn a_light_move_records_exactly_the_light_side() {
     let p1 = p0 + Vec3::new(0.15, -0.05, 0.1) * scene.diagonal();
     r.set_light(0, p1, i0);
     let moved = r.render(&s).unwrap();
-    let light_side = ["dprsm_depth", "direct", "dprsm", "importance", "cdf_reduce", "gather"];
+    let light_side = ["direct", "dprsm", "importance", "cdf_reduce", "gather"];
     let mut want: Vec<&str> = first.ran.iter().copied().filter(|p| light_side.contains(p)).collect();
     want.dedup();
     assert_eq!(moved.ran, want, "a light move must record exactly the light side");
@@ -276,7 +274,6 @@ fn a_light_move_records_exactly_the_light_side() {
     assert_eq!(r.render(&s).unwrap().ran, vec!["gather"], "moving nothing records only the gather");
     r.set_light(0, p1, i0 * 2.0);
     let brighter = r.render(&s).unwrap();
-    assert!(!brighter.ran.contains(&"dprsm_depth"), "the shadow map depends on positions: {:?}", brighter.ran);
     assert!(brighter.ran.contains(&"direct") && brighter.ran.contains(&"dprsm"), "{:?}", brighter.ran);
     r.set_light(0, p0, i0);
     assert_eq!(r.render(&s).unwrap().radiance, first.radiance, "moving the light back changed the bits");
@@ -486,7 +483,6 @@ fn a_time_limited_render_is_the_mean_of_its_frames() {
         vpls: 2,
         seed: 7,
         dprsm_res: 16,
-        shadow_res: 64,
         voxels: 16,
         ..FrameSettings::default()
     };

@@ -137,7 +137,6 @@ fn every_method_runs_on_every_light_map_and_psm() {
                     spp: 8,
                     dprsm_res: 16,
                     psm_res: 32,
-                    shadow_res: 64,
                     voxels: 16,
                     ..FrameSettings::default()
                 };

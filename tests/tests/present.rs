@@ -22,7 +22,6 @@ fn settings() -> FrameSettings {
         method: Method::Uniform,
         vpls: 4,
         dprsm_res: 16,
-        shadow_res: 64,
         voxels: 16,
         ..FrameSettings::default()
     }

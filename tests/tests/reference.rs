@@ -34,7 +34,6 @@ fn reference_with(r: &mut Renderer, base: FrameSettings, w: u32, h: u32) -> Vec<
         method: Method::Reference,
         dprsm_res: 32,
         voxels: 32,
-        shadow_res: 64,
         ..base
     };
     let f = r.render(&s).unwrap();

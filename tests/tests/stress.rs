@@ -61,7 +61,6 @@ fn agrees_with_all(name: &str, r: &mut Renderer) {
         seed,
         vpls: 8,
         dprsm_res: 16,
-        shadow_res: 64,
         voxels: 16,
         clamp: 0.01,
         defensive: 0.5,
@@ -111,7 +110,6 @@ fn render_methods_with(name: &str, r: &mut Renderer, tweak: impl Fn(&mut FrameSe
                 vpls: 8,
                 spp: 16,
                 dprsm_res: 16,
-                shadow_res: 64,
                 voxels: 16,
                 ..FrameSettings::default()
             };
@@ -308,7 +306,6 @@ fn a_1024_squared_dprsm_and_4096_vpls_per_pixel_agree_with_all() {
         seed,
         vpls: 4096,
         dprsm_res: 1024,
-        shadow_res: 64,
         voxels: 16,
         clamp: 0.01,
         defensive: 0.5,

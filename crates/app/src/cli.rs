@@ -76,7 +76,7 @@ impl<T: Clone + Send + Sync + 'static> TypedValueParser for Choices<T> {
 }
 
 pub const COMPONENTS: Choices<Component> = Choices(&[
-    ("direct", Component::Direct, "Direct light from the point lights (paraboloid shadow maps)"),
+    ("direct", Component::Direct, "Direct light from the point lights (one exact shadow ray per light)"),
     ("indirect", Component::Indirect, "One bounce of indirect light, gathered from the VPLs"),
     ("combined", Component::Combined, "Direct plus indirect"),
 ]);
@@ -280,9 +280,6 @@ pub struct FrameArgs {
     /// Reflective DPRSM resolution per face (VPLs: 2 × lights × res²).
     #[arg(long, default_value_t = d().dprsm_res)]
     pub dprsm_res: u32,
-    /// Resolution per face of the paraboloid depth map used for direct-light shadows.
-    #[arg(long, default_value_t = d().shadow_res)]
-    pub shadow_res: u32,
     /// Voxels along the longest side of the scene (cubic cells).
     #[arg(long, default_value_t = d().voxels)]
     pub voxels: u32,
@@ -448,7 +445,6 @@ impl FrameArgs {
             face: self.face,
             cdf_seed: self.cdf_seed,
             dprsm_res: self.dprsm_res,
-            shadow_res: self.shadow_res,
             voxels: self.voxels,
             vpl_kernel: self.vpl_kernel,
             denoise: self.denoise,
@@ -524,7 +520,6 @@ pub struct RenderArgs {
 #[command(mut_arg("method", |a| a.help("The sampling method (M cycles through the sampled ones)")))]
 #[command(mut_arg("seed", |a| a.help("Seed of the first frame; frame k uses seed + k")))]
 #[command(mut_arg("dprsm_res", |a| a.default_value("256")))]
-#[command(mut_arg("shadow_res", |a| a.default_value("1024")))]
 pub struct ViewArgs {
     /// The scene file (TOML).
     pub scene: PathBuf,

@@ -32,11 +32,11 @@ fn every_choice_parses_to_its_graph_value() {
 #[test]
 fn each_command_keeps_its_own_defaults() {
     let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
-    assert_eq!((r.picture.vpls, r.frame.dprsm_res, r.frame.shadow_res), (None, 512, 2048));
+    assert_eq!((r.picture.vpls, r.frame.dprsm_res), (None, 512));
     let Command::View(v) = parse(&["view", "s.toml"]) else { panic!() };
-    assert_eq!((v.picture.vpls, v.frame.dprsm_res, v.frame.shadow_res), (Some(16), 256, 1024));
+    assert_eq!((v.picture.vpls, v.frame.dprsm_res), (Some(16), 256));
     let Command::Bench(b) = parse(&["bench", "s.toml", "--out", "o"]) else { panic!() };
-    assert_eq!((b.width, b.height, b.frame.dprsm_res, b.frame.shadow_res), (128, 128, 128, 2048));
+    assert_eq!((b.width, b.height, b.frame.dprsm_res), (128, 128, 128));
 }
 
 /// Both schedules give the frames of an unchanged scene fresh seeds (so a static view's progressive

@@ -17,7 +17,9 @@ pub struct FrameUniforms {
     pub scene_min: [f32; 4],
     pub scene_max: [f32; 4],
     pub size: [u32; 4],
+    /// x unused, y the VPL slots (faces × lights × dprsm_res²), z `--psm-res`, w `--vpls`.
     pub maps: [u32; 4],
+    /// The per-VPL shadow maps' depth bias: x constant (world units), y slope (texels); zw unused.
     pub shadow: [f32; 4],
     pub voxel_origin: [f32; 4],
     pub voxel_dims: [u32; 4],
@@ -192,11 +194,10 @@ const _: () = assert!(offset_of!(VoxelizePush, first_triangle) == 4);
 pub struct ParaboloidPush {
     /// The map resolution per face.
     pub map_res: u32,
-    /// 1: the reflective map, whose faces follow `--light-map`; 0: the paraboloid shadow maps.
-    pub light_map: u32,
+    pub pad: u32,
 }
 const _: () = assert!(size_of::<ParaboloidPush>() == 8);
-const _: () = assert!(offset_of!(ParaboloidPush, light_map) == 4);
+const _: () = assert!(offset_of!(ParaboloidPush, pad) == 4);
 
 /// present push constants.
 #[repr(C)]

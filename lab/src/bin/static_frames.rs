@@ -15,10 +15,7 @@ fn main() -> anyhow::Result<()> {
     let vpls: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(64);
     let scene = Scene::load(&bounce_tests::default_scene())?;
     let gpu = Gpu::new(&GpuOptions::default())?;
-    println!(
-        "{} — default scene, {size}², combined, {vpls} VPLs, DPRSM 512², shadow map 2048², 128 voxels\n",
-        gpu.name
-    );
+    println!("{} — default scene, {size}², combined, {vpls} VPLs, DPRSM 512², 128 voxels\n", gpu.name);
     println!("| method | first frame GPU ms | unchanged next frame GPU ms | next / first | passes of the next frame | after a camera move GPU ms | moved / first | passes after the move |");
     println!("|---|---:|---:|---:|---|---:|---:|---|");
     for method in [Method::Uniform, Method::Global, Method::Stratified, Method::Local, Method::Gbg, Method::Mis] {

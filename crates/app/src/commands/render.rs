@@ -278,7 +278,6 @@ fn metadata(
         ("gpu_ms", frame.gpu_ms().map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())),
         ("dprsm_res", s.dprsm_res.to_string()),
         ("light_map", s.light_map.name().to_string()),
-        ("shadow_res", s.shadow_res.to_string()),
         ("non_finite_pixels", non_finite.to_string()),
     ]
 }

@@ -1,8 +1,8 @@
 //! Cache keys: for each product the recipe keeps across frames ([`crate::graph::Graph::cached`]), the
 //! settings it depends on. A product is reused exactly while its key is unchanged, so a key must name
 //! everything its passes read besides the scene (fixed for a `Renderer`): too little is a stale image,
-//! too much only a recomputation. The lights are frame state: the light-side products (VPLs, shadow
-//! map, direct light, and through the VPLs the CDF) name them; the voxels and the G-buffer do not. The `graph` tests check each key against the passes that
+//! too much only a recomputation. The lights are frame state: the light-side products (VPLs, direct
+//! light, and through the VPLs the CDF) name them; the voxels and the G-buffer do not. The `graph` tests check each key against the passes that
 //! a settings change must (and must not) redo.
 
 use super::settings::FrameSettings;
@@ -24,11 +24,9 @@ pub struct Keys {
     pub voxels: u64,
     /// The reflective maps (the VPLs): resolution, light map, and the lights.
     pub vpls: u64,
-    /// The direct light's paraboloid shadow map: its resolution and the lights' positions.
-    pub shadow: u64,
     /// The G-buffer: camera and image size.
     pub gbuffer: u64,
-    /// The direct light: the G-buffer, the shadow map, the biases and the lights' intensities.
+    /// The direct light (exact shadow rays): the G-buffer and the lights.
     pub direct: u64,
     /// Importance and CDF: the VPLs, the grid, the importance parameters, and for every kind that draws
     /// gather points the G-buffer and the seed (`uniform`'s validity depends on the maps alone), and for
@@ -53,7 +51,6 @@ impl Keys {
             &intensities,
         ));
         let voxels = fingerprint(&(bits(&spec.origin.to_array()), spec.cell.to_bits(), spec.dims.to_array()));
-        let shadow = fingerprint(&(s.shadow_res, &positions));
         let per_pixel = (p.kind != ImportanceKind::Uniform).then_some((gbuffer, p.seed));
         let params =
             (p.kind, p.samples, p.min_d2.to_bits(), p.fixed_scale.to_bits(), s.vpl_kernel.area_weight().to_bits());
@@ -62,12 +59,8 @@ impl Keys {
         Keys {
             voxels,
             vpls,
-            shadow,
             gbuffer,
-            direct: fingerprint(&(
-                (gbuffer, shadow, s.shadow_bias.to_bits(), s.shadow_slope_bias.to_bits()),
-                &intensities,
-            )),
+            direct: fingerprint(&(gbuffer, &positions, &intensities)),
             cdf: fingerprint(&(vpls, voxels, params, per_pixel, traced)),
         }
     }

@@ -2,9 +2,8 @@
 //!
 //! ```text
 //!   voxelize ──────────────────────────────┐ (kept per grid)
-//!   dprsm (VPLs) ─────────────┬────────────┤ (kept per map settings: the lights are fixed)
-//!   dprsm_depth ──┐           │            │ (kept per shadow resolution)
-//!   gbuffer ──────┴─ direct ──┤            │ (kept per camera and size)
+//!   dprsm (VPLs) ─────────────┬────────────┤ (kept per map settings and lights)
+//!   gbuffer ──────── direct ──┤            │ (kept per camera, size and lights; exact shadow rays)
 //!                             ├ importance → cdf_reduce (kept per CDF key; `uniform`'s in its own slot)
 //!                             ├ end_balls (per pixel, per VPL: kept with the G-buffer, the VPLs; exact gather)
 //!                             └ [psm_select → psm] → gather | mis | reference → radiance (temporal)
@@ -84,9 +83,8 @@ pub fn build_frame<'a>(
         .then(|| g.try_cached("voxels", &k.voxels, |g| r.voxelize.add(g, f, &i.grid)))
         .transpose()?;
     let vpls = g.cached("vpls", &k.vpls, |g| r.dprsm.add(g, f));
-    let shadow = g.cached("shadow", &k.shadow, |g| r.dprsm.add_depth(g, f));
     let gbuffer = g.cached("gbuffer", &k.gbuffer, |g| r.gbuffer.add(g, f));
-    let direct = g.cached("direct", &k.direct, |g| r.direct.add(g, f, &gbuffer, &shadow));
+    let direct = g.cached("direct", &k.direct, |g| r.direct.add(g, f, &gbuffer));
     let combined = (s.component == Component::Combined).then_some(direct);
     if s.component == Component::Direct {
         return Ok(FrameOut::default_for(direct));

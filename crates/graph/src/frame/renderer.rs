@@ -6,7 +6,7 @@
 //! ([`super::keys`]), so a frame whose camera and settings did not change records only the gather.
 //! The lights are frame state too ([`Renderer::set_light`]): written to the scene's light buffer before
 //! each frame, and named by the keys of the light-side products, so moving a light redoes the VPLs,
-//! shadow map, direct light and CDF and keeps the voxels and the G-buffer.
+//! direct light and CDF and keeps the voxels and the G-buffer.
 
 use super::chunks::{for_each_chunk, FrameLog};
 use super::keys::Keys;
@@ -186,7 +186,6 @@ impl Renderer {
             width: small(s.width, 8),
             height: small(s.height, 8),
             dprsm_res: small(s.dprsm_res, 32),
-            shadow_res: small(s.shadow_res, 32),
             psm_res: small(s.psm_res, 32),
             ..s.clone()
         };
@@ -628,7 +627,7 @@ impl RenderContext {
             scene_min: [lo.x, lo.y, lo.z, diag],
             scene_max: [hi.x, hi.y, hi.z, far_light],
             size: [s.width, s.height, self.scene.light_count, s.dprsm_res],
-            maps: [s.shadow_res, vpl_slots, s.psm_res, s.vpls],
+            maps: [0, vpl_slots, s.psm_res, s.vpls],
             light_map: [
                 match s.light_map {
                     LightMap::Dprsm => crate::bindings::LIGHT_MAP_DPRSM,
@@ -656,7 +655,6 @@ impl RenderContext {
             uniforms,
             width: s.width,
             height: s.height,
-            shadow_res: s.shadow_res,
             dprsm_res: s.dprsm_res,
             vpl_faces: s.light_map.faces(),
             vpls_per_dispatch: self.vpls_per_dispatch(s),
@@ -678,11 +676,6 @@ impl RenderContext {
         Ok(uniforms)
     }
 
-    /// Memory the paraboloid depth maps take: 2 faces × lights × res² × 4 bytes.
-    pub fn shadow_map_bytes(&self, s: &FrameSettings) -> u64 {
-        2 * self.scene.light_count as u64 * (s.shadow_res as u64).pow(2) * 4
-    }
-
     /// Memory the reflective DPRSM takes: 3 RGBA32F images + depth, plus importance and CDF.
     pub fn dprsm_bytes(&self, s: &FrameSettings) -> u64 {
         s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2) * (3 * 16 + 4 + 4 + 4)
@@ -692,18 +685,14 @@ impl RenderContext {
     pub fn check(&self, s: &FrameSettings) -> Result<(), SettingsError> {
         s.validate(&self.gpu)?;
         const MAX_MAP_BYTES: u64 = 2 << 30;
-        for (what, bytes, flag) in [
-            ("shadow maps", self.shadow_map_bytes(s), "--shadow-res"),
-            ("reflective DPRSM", self.dprsm_bytes(s), "--dprsm-res"),
-        ] {
-            if bytes > MAX_MAP_BYTES {
-                reject!(
-                    "the {what} would take {} MiB ({} lights); lower {flag} (limit {} MiB)",
-                    bytes >> 20,
-                    self.scene.light_count,
-                    MAX_MAP_BYTES >> 20
-                );
-            }
+        let bytes = self.dprsm_bytes(s);
+        if bytes > MAX_MAP_BYTES {
+            reject!(
+                "the reflective DPRSM would take {} MiB ({} lights); lower --dprsm-res (limit {} MiB)",
+                bytes >> 20,
+                self.scene.light_count,
+                MAX_MAP_BYTES >> 20
+            );
         }
         let max_range = self.gpu.limits().max_storage_buffer_range as u64;
         let cdf_bytes = 4

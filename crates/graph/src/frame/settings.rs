@@ -440,13 +440,10 @@ pub struct FrameSettings {
     /// (`passes/end_balls.rs`): the same images with fewer BVH records per ray. Not a command-line
     /// option; the tests turn it off to show that the images do not change.
     pub end_balls: bool,
-    /// Resolution per face of the paraboloid depth map used for direct-light visibility. It is separate
-    /// from the reflective map's (VPL) resolution: shadow outlines want fine texels, the VPL count
-    /// wants few. 2048 keeps outline errors below relMSE 1e-3 on the default scene at 64².
-    pub shadow_res: u32,
-    /// Constant shadow bias, as a fraction of the scene diagonal.
+    /// The per-VPL shadow maps' (`Visibility::Psm`) constant depth bias, as a fraction of the scene
+    /// diagonal (`paraboloid_shadow_bias`, glsl/shared/scene.glsl).
     pub shadow_bias: f32,
-    /// Slope shadow bias, in texels.
+    /// Their slope bias, in texels.
     pub shadow_slope_bias: f32,
     /// `Method::Ris`'s source, candidates and reuse.
     pub ris: RisSettings,
@@ -491,7 +488,6 @@ impl Default for FrameSettings {
             reference_chunk: None,
             visibility: Visibility::Exact,
             end_balls: true,
-            shadow_res: 2048,
             shadow_bias: 1e-5,
             shadow_slope_bias: 1.5,
             ris: RisSettings::default(),
@@ -631,12 +627,7 @@ impl FrameSettings {
     /// Reject impossible settings with a message naming the setting and the device limit.
     pub fn validate(&self, gpu: &Gpu) -> Result<(), SettingsError> {
         let max = gpu.limits().max_image_dimension2_d;
-        for (what, v) in [
-            ("width", self.width),
-            ("height", self.height),
-            ("shadow map resolution", self.shadow_res),
-            ("DPRSM resolution", self.dprsm_res),
-        ] {
+        for (what, v) in [("width", self.width), ("height", self.height), ("DPRSM resolution", self.dprsm_res)] {
             if v == 0 {
                 reject!("{what} must be at least 1");
             }

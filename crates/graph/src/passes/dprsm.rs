@@ -1,13 +1,13 @@
-//! dprsm: the dual paraboloid maps at each point light. Two products from the same shaders:
-//! - `dprsm_depth` (pass `add_depth`): the depth map that shadows direct light, `shadow_res`² per face.
-//! - `dprsm` (pass `add`): the reflective DPRSM, `dprsm_res`² per face, whose texels are the VPLs.
+//! dprsm: the reflective dual paraboloid map at each point light (pass `dprsm`), `dprsm_res`² per face,
+//! whose texels are the VPLs. (`--light-map rsm|cube` swaps the faces for perspective ones:
+//! glsl/shared/lightmap.glsl.) psm's per-VPL shadow maps reuse its geometry shader and `dprsm.frag`.
 //!
-//! Both are array images of `2 × lights` layers; layer `2l + f` is face `f` (0: +z hemisphere, 1: −z)
+//! An array image of `2 × lights` layers; layer `2l + f` is face `f` (0: +z hemisphere, 1: −z)
 //! of light `l`. Texel (i, j) has paraboloid coordinates (u, v) = ((i + ½)/res · 2 − 1, (j + ½)/res · 2
 //! − 1) and stands for the direction d = (2u, 2v, 1 − u² − v²)/(1 + u² + v²) (z mirrored on face 1).
 //! The depth is the distance t to the nearest surface along d divided by `far`
-//! (`FrameUniforms.scene_max.w`), or 1 where nothing is hit or u² + v² > 1. The reflective map adds,
-//! per texel (RGBA32F each):
+//! (`FrameUniforms.scene_max.w`), or 1 where nothing is hit or u² + v² > 1 (kept inside the pass). Per
+//! texel (RGBA32F each):
 //! - `position`: xyz of the hit, w = 1 (0: empty texel, never sampled);
 //! - `normal`: the interpolated shading normal flipped to face the light, w = t;
 //! - `flux`: the VPL's reflected flux Φ_v = albedo(v) · I · Δω_v, w = Δω_v, where
@@ -28,8 +28,9 @@
 //!    the triangle's nearest point to the light (a lower bound on every texel's hit distance),
 //! 3. the fragment shader intersects the ray through each texel centre with the original triangle and
 //!    writes the hit distance as depth (discarding misses). It declares `depth_greater`, so the depth
-//!    test rejects a box's texels behind what is already drawn before the shader runs (Sibenik's shadow
-//!    map 25 → 19 ms at 2048² on an H200, whose fragment shading is scarce; the same images).
+//!    test rejects a box's texels behind what is already drawn before the shader runs (Sibenik's former
+//!    2048² direct-light shadow map, the same geometry: 25 → 19 ms on an H200, whose fragment shading is
+//!    scarce; the same images).
 //!
 //! So every texel holds exactly what a ray cast from the light through its centre hits first: the
 //! `dprsm` test compares it with a CPU ray cast and finds only float rounding.
@@ -47,17 +48,8 @@ pub const DPRSM_DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const VPL_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 pub struct Dprsm {
-    depth_only: GraphicsPipeline,
     reflective: GraphicsPipeline,
 }
-
-/// The shadow depth map for direct light.
-#[derive(Clone, Copy, Debug)]
-pub struct DprsmDepth {
-    /// Distance / far per texel, `2 × lights` layers.
-    pub depth: Handle<Image>,
-}
-crate::products!(DprsmDepth { depth });
 
 /// The reflective DPRSM: one VPL per non-empty texel. (Its depth attachment stays inside the pass.)
 #[derive(Clone, Copy, Debug)]
@@ -72,27 +64,22 @@ impl Dprsm {
     /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).
     pub fn new(gpu: &Gpu, textured: bool) -> Result<Self> {
         let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
-        let desc = |name, fragment: &'static [u8], colors: &'static [vk::Format]| -> Result<GraphicsPipeline> {
-            Ok(GraphicsPipeline::new(
-                gpu,
-                &GraphicsPipelineDesc {
-                    name,
-                    vertex: &crate::spirv(shaders::DPRSM_VERT),
-                    geometry: Some(&crate::spirv(shaders::DPRSM_GEOM)),
-                    fragment: &crate::spirv(fragment),
-                    color_formats: colors,
-                    depth_format: Some(DPRSM_DEPTH_FORMAT),
-                    depth_compare: vk::CompareOp::LESS,
-                    bindings: &scene_bindings(),
-                    push_constant_size: std::mem::size_of::<ParaboloidPush>() as u32,
-                    spec: &spec,
-                },
-            )?)
-        };
-        Ok(Dprsm {
-            depth_only: desc("dprsm_depth", shaders::DPRSM_FRAG, &[])?,
-            reflective: desc("dprsm", shaders::DPRSM_REFLECTIVE_FRAG, &[VPL_FORMAT; 3])?,
-        })
+        let reflective = GraphicsPipeline::new(
+            gpu,
+            &GraphicsPipelineDesc {
+                name: "dprsm",
+                vertex: &crate::spirv(shaders::DPRSM_VERT),
+                geometry: Some(&crate::spirv(shaders::DPRSM_GEOM)),
+                fragment: &crate::spirv(shaders::DPRSM_REFLECTIVE_FRAG),
+                color_formats: &[VPL_FORMAT; 3],
+                depth_format: Some(DPRSM_DEPTH_FORMAT),
+                depth_compare: vk::CompareOp::LESS,
+                bindings: &scene_bindings(),
+                push_constant_size: std::mem::size_of::<ParaboloidPush>() as u32,
+                spec: &spec,
+            },
+        )?;
+        Ok(Dprsm { reflective })
     }
 
     pub(crate) fn depth_image(g: &mut Graph, name: &str, res: u32, layers: u32) -> Handle<Image> {
@@ -108,27 +95,6 @@ impl Dprsm {
             )
             .layers(layers),
         )
-    }
-
-    /// The depth map that shadows direct light (`shadow_res` per face).
-    pub fn add_depth<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>) -> DprsmDepth {
-        let layers = 2 * f.scene.light_count;
-        let mut out = DprsmDepth { depth: Self::depth_image(g, "dprsm_depth.depth", f.shadow_res, layers) };
-        let o = out;
-        g.add_pass("dprsm_depth").overwrite(&mut out.depth, Access::DepthAttachment).record(move |ctx| {
-            record_paraboloid(
-                ctx,
-                &self.depth_only,
-                f,
-                f.scene.writes(f.uniforms),
-                f.shadow_res,
-                layers,
-                false,
-                &[],
-                &o.depth,
-            )
-        });
-        out
     }
 
     /// The reflective DPRSM (`dprsm_res` per face).
@@ -164,7 +130,7 @@ impl Dprsm {
             .record(move |ctx| {
                 let colors = [o.position, o.normal, o.flux].map(|h| ctx.image(&h).view);
                 let writes = f.scene.writes(f.uniforms);
-                record_paraboloid(ctx, &self.reflective, f, writes, res, layers, true, &colors, &d)
+                record_paraboloid(ctx, &self.reflective, f, writes, res, layers, &colors, &d)
             });
         out
     }
@@ -172,8 +138,7 @@ impl Dprsm {
 
 /// Records one layered map rendering: `layers` instances of every scene triangle, instance k into
 /// layer k (the geometry shader picks the viewpoint: a light's face here, a VPL in `psm.rs`), cleared
-/// to far depth and zero colour first. `light_map`: the faces follow `--light-map` (the reflective
-/// map); otherwise they are paraboloid pairs (shadow maps).
+/// to far depth and zero colour first.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn record_paraboloid(
     ctx: &crate::graph::PassContext,
@@ -182,7 +147,6 @@ pub(crate) fn record_paraboloid(
     writes: bounce_device::DescriptorWrites,
     res: u32,
     layers: u32,
-    light_map: bool,
     colors: &[vk::ImageView],
     depth: &Handle<Image>,
 ) {
@@ -214,7 +178,7 @@ pub(crate) fn record_paraboloid(
     unsafe {
         d.cmd_begin_rendering(ctx.cmd, &info);
         if f.scene.triangle_count > 0 {
-            let push = ParaboloidPush { map_res: res, light_map: light_map as u32 };
+            let push = ParaboloidPush { map_res: res, pad: 0 };
             pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&push));
             d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
         }

@@ -75,8 +75,6 @@ pub struct FrameInputs<'a> {
     pub uniforms: &'a Buffer,
     pub width: u32,
     pub height: u32,
-    /// Resolution per face of the paraboloid depth map that shadows direct light.
-    pub shadow_res: u32,
     /// Resolution per face of the reflective DPRSM (the VPLs).
     pub dprsm_res: u32,
     /// Faces of each light's VPL map (`--light-map`: 2 dprsm, 1 rsm, 6 cube).

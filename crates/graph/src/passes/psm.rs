@@ -11,7 +11,7 @@
 //! unbiased for the VPL sum given V_psm, exactly as the per-pixel draws are (each pixel's N samples are
 //! the same N draws from the same mixture; the pixels' errors are correlated instead of independent:
 //! the structured noise of the thesis's Fig. 6.1). V_psm compares x's distance with the map's texel
-//! along x's direction, with the direct light's bias (`glsl/shared/psm.glsl`). Under `mis` the shared
+//! along x's direction, with a depth bias (`paraboloid_shadow_bias`, `glsl/shared/scene.glsl`). Under `mis` the shared
 //! set is its CDF strategy's samples, and its gathering rays march the voxel grid: `glsl/mis.comp` states what that blend
 //! estimates.
 //!
@@ -136,7 +136,7 @@ impl Psm {
         g.add_pass("psm").read(&views, Access::ShaderRead).overwrite(&mut depth, Access::DepthAttachment).record(
             move |ctx| {
                 let writes = f.scene.writes(f.uniforms).storage_buffer(B_PSM_VIEWS, ctx.buffer(&vh));
-                record_paraboloid(ctx, maps, f, writes, res, n, false, &[], &dh);
+                record_paraboloid(ctx, maps, f, writes, res, n, &[], &dh);
             },
         );
         Ok(PsmOut { views, depth })
