@@ -1,11 +1,12 @@
 #version 460
-// dprsm: exact per-texel depth. Each texel's centre direction is intersected with the (unclipped)
-// triangle; the stored depth is that distance over `far`, so the map holds exactly what a ray cast from
-// the light through the texel centre would hit.
+// dprsm (depth only; psm's per-VPL maps): exact per-texel depth. Each texel's centre direction is
+// intersected with the (unclipped) triangle; the stored depth is that distance over `far`, so the map
+// holds exactly what a ray cast from the viewpoint through the texel centre would hit.
 #include "shared/scene.glsl"
 #include "shared/watertight.glsl"
+#include "shared/map_depth.glsl"
 
-// The map resolution per face: the shadow map and the reflective map share these shaders.
+// The map resolution per face.
 layout(push_constant) uniform Push { ParaboloidPush pc; };
 
 // Never nearer than the box's own depth (dprsm.geom's lower bound), so the depth test may run early.
@@ -26,5 +27,5 @@ void main() {
     float t;
     vec2 bary;
     if (!wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, i_a, i_b, i_c, t, bary) || !(t > 0.0)) discard;
-    gl_FragDepth = min(t / frame.scene_max.w, 1.0);
+    gl_FragDepth = map_texel_depth(t, frame.scene_max.w, gl_FragCoord.z);
 }

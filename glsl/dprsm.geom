@@ -2,6 +2,7 @@
 // dprsm: bound the triangle's exact image on one paraboloid face and emit that box as a quad; the fragment
 // shader then intersects each texel's ray with the triangle. See crates/graph/src/passes/dprsm.rs.
 #include "shared/scene.glsl"
+#include "shared/map_depth.glsl"
 
 // The reflective map (faces per `--light-map`) and, as dprsm.psm.geom, psm's per-VPL maps share them.
 layout(push_constant) uniform Push { ParaboloidPush pc; };
@@ -59,35 +60,13 @@ void include_arc(vec3 a, vec3 b, inout vec2 lo, inout vec2 hi) {
     }
 }
 
-// The distance from the viewpoint (the origin) to the nearest point of triangle abc (Ericson, Real-Time
-// Collision Detection, 5.1.5): no texel ray hits the triangle nearer than this.
-float distance_to_triangle(vec3 a, vec3 b, vec3 c) {
-    vec3 ab = b - a, ac = c - a, ap = -a;
-    float d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) return length(a);
-    vec3 bp = -b;
-    float d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0.0 && d4 <= d3) return length(b);
-    float vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return length(a + ab * (d1 / (d1 - d3)));
-    vec3 cp = -c;
-    float d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0.0 && d5 <= d6) return length(c);
-    float vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return length(a + ac * (d2 / (d2 - d6)));
-    float va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) return length(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-    float denom = 1.0 / (va + vb + vc);
-    return length(a + ab * (vb * denom) + ac * (vc * denom));
-}
-
-// The box's depth is a lower bound on every depth the fragment shader writes for this triangle (which
-// declares depth_greater): the depth test can then reject a hidden box's fragments before they run the
-// texel ray, as it would a plain triangle's. Without it every texel of every box ran the fragment shader
-// (the DPRSM passes were fill-bound). The margin covers the two stages' different rounding.
+// The box's depth (shared/map_depth.glsl) is a lower bound on every depth the fragment shader writes for
+// this triangle (which declares depth_greater): the depth test can then reject a hidden box's fragments
+// before they run the texel ray, as it would a plain triangle's. Without it every texel of every box ran
+// the fragment shader (the DPRSM passes were fill-bound).
 void emit_box(vec3 p[3], uint inst, vec2 lo, vec2 hi) {
     vec2 corners[4] = vec2[4](vec2(lo.x, lo.y), vec2(hi.x, lo.y), vec2(lo.x, hi.y), vec2(hi.x, hi.y));
-    float z = clamp(distance_to_triangle(p[0], p[1], p[2]) / frame.scene_max.w * (1.0 - 1e-4) - 1e-7, 0.0, 1.0);
+    float z = map_box_depth(p[0], p[1], p[2], frame.scene_max.w);
     for (int k = 0; k < 4; k++) {
         o_a = p[0];
         o_b = p[1];

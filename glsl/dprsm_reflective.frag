@@ -10,8 +10,9 @@
 // patch kernel of shared/vpl.glsl.
 #include "shared/scene.glsl"
 #include "shared/watertight.glsl"
+#include "shared/map_depth.glsl"
 
-// The map resolution per face: the shadow map and the reflective map share these shaders.
+// The map resolution per face.
 layout(push_constant) uniform Push { ParaboloidPush pc; };
 
 // Never nearer than the box's own depth (dprsm.geom's lower bound), so the depth test may run early.
@@ -37,7 +38,7 @@ void main() {
     vec2 bary;
     if (!wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, i_a, i_b, i_c, t, bary) || !(t > 0.0)) discard;
     vec3 hit = vec3(t, bary);
-    gl_FragDepth = min(t / frame.scene_max.w, 1.0);
+    gl_FragDepth = map_texel_depth(t, frame.scene_max.w, gl_FragCoord.z);
 
     uint face = i_instance % lm_faces(), li = i_instance / lm_faces();
     Light light = lights[li];

@@ -90,6 +90,7 @@ const SHADERS: &[Shader] = &[
     file("test/cdf_sample.comp"),
     file("test/front_part.comp"),
     file("test/layout_echo.comp"),
+    file("test/map_depth.comp"),
     file("test/owen_sobol.comp"),
     file("test/region_weights.comp"),
     file("test/shadow_queue.comp"),

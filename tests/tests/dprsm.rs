@@ -247,3 +247,124 @@ pub fn sealed_light_scene() -> Scene {
     scene.rebase(DVec3::ZERO);
     scene
 }
+
+/// The closest point of triangle `t` to the origin in f64, by another route than the shader's (Ericson's
+/// Voronoi regions): the projection onto the plane when it lies inside, else the nearest of the three
+/// edges' closest points.
+fn closest_point_f64(t: [DVec3; 3]) -> DVec3 {
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    // The origin's foot on the plane: o − n (n·(o − a)) / |n|² with o = 0.
+    let on_plane = n * (n.dot(t[0]) / n.length_squared());
+    let inside = (0..3).all(|k| (t[(k + 1) % 3] - t[k]).cross(on_plane - t[k]).dot(n) >= 0.0);
+    if inside {
+        return on_plane;
+    }
+    (0..3)
+        .map(|k| {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let s = ((-a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+            a + (b - a) * s
+        })
+        .min_by(|p, q| p.length().total_cmp(&q.length()))
+        .unwrap()
+}
+
+/// The light maps' fragment shaders declare `depth_greater` under the box the geometry shader emits at
+/// `map_box_depth` (glsl/shared/map_depth.glsl), so a GPU may reject texels by that depth before they run.
+/// The fragment never writes below its box's depth (`map_texel_depth` lifts it), which is harmless only
+/// while the box lies below the triangle's true nearest distance: checked here against an f64 closest
+/// point, on triangles from 1 mm to 10 km (random ones, the light 1e-3 of their size off the interior of a
+/// huge one, next to an edge or a vertex, tiny ones far away, slivers), with the bound tight enough that
+/// early rejection still works. lavapipe tests depth after the shader, so no image shows a violation.
+/// The test kernel also casts the fragment shader's texel rays through 271 points of each triangle (its
+/// closest point among them) and reports how many hit nearer than the box (the texels the lift moves).
+#[test]
+fn the_light_maps_box_depth_is_below_every_texel_depth() {
+    let mut rng = bounce_tests::Rng(0x0DE9_7B0D);
+    let mut cases: Vec<[[f32; 4]; 4]> = vec![];
+    let mut tris: Vec<[DVec3; 3]> = vec![];
+    for k in 0..2400 {
+        let scale = 10f32.powf(rng.range(-3.0, 4.0));
+        let (n, u) = (rng.unit(), rng.unit());
+        let u = (u - n * u.dot(n)).normalize_or(n.any_orthonormal_vector());
+        let v = n.cross(u);
+        let in_plane = |x: f32, y: f32| u * x + v * y;
+        let t: [Vec3; 3] = match k % 6 {
+            // Anywhere.
+            0 => [0, 1, 2].map(|_| rng.vec(Vec3::splat(-scale), Vec3::splat(scale))),
+            // The light a thousandth of the size off a huge triangle's interior.
+            1 => {
+                let h = n * scale * 1e-3 * rng.range(0.1, 1.0);
+                [(-1.0, -1.0), (1.5, -0.5), (-0.3, 1.4)].map(|(x, y)| in_plane(x, y) * scale + h)
+            }
+            // Off an edge: the foot of the light just outside or on edge ab.
+            2 => {
+                let h = n * scale * 1e-3 * rng.range(0.0, 1.0);
+                let out = v * scale * 1e-4 * rng.range(-1.0, 1.0);
+                [(-1.0, 0.0), (1.0, 0.0), (0.2, 1.0)].map(|(x, y)| in_plane(x, y) * scale + h + out)
+            }
+            // Off a vertex.
+            3 => {
+                let h = n * scale * 1e-4 * rng.range(0.0, 1.0);
+                [(0.0, 0.0), (1.0, 0.1), (0.3, 1.0)].map(|(x, y)| in_plane(x, y) * scale + h)
+            }
+            // A tiny triangle far away.
+            4 => {
+                let c = rng.unit() * scale;
+                [0, 1, 2].map(|_| c + rng.unit() * scale * 1e-4)
+            }
+            // A sliver: c 1e-6 to 1e-2 of the size off segment ab.
+            _ => {
+                let (a, b) = (rng.unit() * scale, rng.unit() * scale);
+                let off = 10f32.powi(-2 - k / 6 % 5);
+                let c = a + (b - a) * rng.range(0.1, 0.9) + rng.unit() * scale * off;
+                [a, b, c]
+            }
+        };
+        let td = t.map(|p| p.as_dvec3());
+        if (td[1] - td[0]).cross(td[2] - td[0]).length() == 0.0 {
+            continue;
+        }
+        let q = closest_point_f64(td).as_vec3();
+        let far = 2.0 * t.iter().map(|p| p.length()).fold(0.0f32, f32::max);
+        let w = |p: Vec3, w: f32| [p.x, p.y, p.z, w];
+        cases.push([w(t[0], far), w(t[1], 0.0), w(t[2], 0.0), w(q, 0.0)]);
+        tris.push(td);
+    }
+    let gpu = TestGpu::new();
+    let shader = bounce_graph::shaders::MAP_DEPTH_COMP;
+    let got: Vec<[f32; 4]> = bounce_tests::run_test_kernel(&gpu, "map_depth", shader, &cases, cases.len());
+    let (mut bad, mut rays, mut hits, mut lifted, mut worst_short) = (vec![], 0usize, 0usize, 0usize, 0.0f64);
+    for (k, (o, t)) in got.iter().zip(&tris).enumerate() {
+        let far = cases[k][0][3] as f64;
+        let size = t.iter().map(|p| p.length()).fold(0.0, f64::max);
+        let exact = closest_point_f64(*t).length();
+        let (box_z, least, n_hits, dist) = (o[0] as f64, o[1] as f64, o[2] as usize, o[3] as f64);
+        rays += 271;
+        hits += n_hits;
+        if box_z > exact / far {
+            bad.push(format!("case {k} {t:?}: box depth {box_z} above the nearest point's {}", exact / far));
+        }
+        // Tight: f32 coordinates of magnitude `size` carry absolute errors of a few ulps of `size`.
+        if box_z < exact / far * (1.0 - 2e-4) - 1e-5 * size / far - 2e-7 {
+            bad.push(format!("case {k} {t:?}: box depth {box_z} loose below {}", exact / far));
+        }
+        // distance_to_triangle alone (Ericson's regions): exact but on slivers, whose face case divides by
+        // a vanishing area; the box takes the edges' distances too.
+        if (dist - exact).abs() > 1e-5 * size && k % 6 != 5 {
+            bad.push(format!("case {k} {t:?}: distance {dist}, f64 {exact}"));
+        }
+        if n_hits > 0 && least < box_z {
+            lifted += 1;
+            worst_short = worst_short.max(1.0 - least / box_z);
+        }
+    }
+    eprintln!(
+        "map depth: {} triangles, {hits} of {rays} rays hit; {lifted} triangles had a texel nearer than the box \
+         (lifted; worst {:.2} % short)",
+        tris.len(),
+        100.0 * worst_short
+    );
+    assert!(bad.is_empty(), "{} bad cases: {}", bad.len(), bad[..bad.len().min(6)].join("\n"));
+    assert!(hits * 10 > rays * 9, "only {hits} of {rays} rays hit their triangles: the rays are not aimed at them");
+}

@@ -25,12 +25,14 @@
 //!    face boundary are split between the faces exactly),
 //! 2. bounds its exact image: the projected vertices plus, per edge, the closed-form extreme points of
 //!    the edge's circular arc (see `include_arc` in `dprsm.geom`), and emits that box at the depth of
-//!    the triangle's nearest point to the light (a lower bound on every texel's hit distance),
+//!    the triangle's nearest point to the light (a lower bound on every texel's hit distance;
+//!    `glsl/shared/map_depth.glsl`),
 //! 3. the fragment shader intersects the ray through each texel centre with the original triangle and
-//!    writes the hit distance as depth (discarding misses). It declares `depth_greater`, so the depth
-//!    test rejects a box's texels behind what is already drawn before the shader runs (Sibenik's former
-//!    2048² direct-light shadow map, the same geometry: 25 → 19 ms on an H200, whose fragment shading is
-//!    scarce; the same images).
+//!    writes the hit distance as depth (discarding misses), never below the box's. It declares
+//!    `depth_greater`, so the depth test rejects a box's texels behind what is already drawn before the
+//!    shader runs (Sibenik's former 2048² direct-light shadow map, the same geometry: 25 → 19 ms on an
+//!    H200, whose fragment shading is scarce; the same images). The `dprsm` test
+//!    `the_light_maps_box_depth_is_below_every_texel_depth` checks the box against an f64 closest point.
 //!
 //! So every texel holds exactly what a ray cast from the light through its centre hits first: the
 //! `dprsm` test compares it with a CPU ray cast and finds only float rounding.
