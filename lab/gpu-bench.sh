@@ -172,7 +172,7 @@ run_rt_ab() {
           $1 == "dprsm" || $1 == "gbuffer" {ms[$1] = $2; next}
           $1 == "total" {total = $2; next}
           NF == 2 && $2 ~ /^-?[0-9.]+$/ {rest += $2}
-          $1 == "shadow" {rays = $NF}
+          $1 == "shadow" {rays = $5}
           END {
             if (total == "") {printf "| %s | %s | %s | – | – | – | failed | – |\n", s, m, l; exit}
             printf "| %s | %s | %s | %s | %s | %.2f | %.2f%s | %s |\n", s, m, l,

@@ -214,7 +214,8 @@ fn frame_timings(out: &mut dyn Write, frames: &[FrameOutput], device: &str) -> R
     }
     writeln!(out, "{:<16} {}", "total", cell(median(later.iter().filter_map(|f| f.gpu_ms()).collect())))?;
     if let Some(rays) = median(later.iter().filter_map(|f| f.rays_per_pixel).collect()) {
-        writeln!(out, "shadow rays per pixel {rays:.3}")?;
+        // The bounce's rays, counted by the shade; the direct light's (one per pixel and light) are not.
+        writeln!(out, "shadow rays per pixel {rays:.3} (the bounce's; the direct light adds one per light)")?;
     }
     Ok(())
 }
