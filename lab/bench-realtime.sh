@@ -7,9 +7,7 @@
 # and the raw estimate's efficiency 1 / (relMSE × raw GPU ms) over ris's at 64 (raw GPU ms: the frame less
 # the denoiser's passes, what `--denoise off` costs; ris has none).
 # Usage: lab/bench-realtime.sh [output dir]   (CARGO_TARGET_DIR is honoured; BOUNCE=path/to/bounce
-# measures that build instead of building this tree; RT_ARGS adds flags to the realtime runs, e.g. a `lab`
-# build's RT_ARGS="--temporal-cap 8"; the ground truths stay cached in the output folder, so a second
-# run with other RT_ARGS into a copy of it costs only the realtime frames)
+# measures that build instead of building this tree)
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$here"
@@ -33,10 +31,8 @@ for scene in sibenik two-rooms; do
       IFS=: read -r name method vpls <<<"$run"
       # One folder of ground truth for all three runs.
       cp -n "$dir"/ris64/reference-*.exr "$dir/$name/" 2>/dev/null || true
-      extra=()
-      [ "$name" = realtime ] && read -ra extra <<<"${RT_ARGS:-}"
       "$bin" bench "assets/$scene/scene.toml" "${move[@]}" "${common[@]}" --methods "$method" --vpls "$vpls" \
-        "${extra[@]}" --out "$dir/$name" >/dev/null 2>&1
+        --out "$dir/$name" >/dev/null 2>&1
       [ "$name" = ris64 ] && for d in ris4 realtime; do cp -n "$dir"/ris64/reference-*.exr "$dir/$d/"; done
     done
     base="$(mean_row ris "$dir/ris64/bench.csv")"
