@@ -274,7 +274,8 @@ fn closest_point_f64(t: [DVec3; 3]) -> DVec3 {
 /// The fragment never writes below its box's depth (`map_texel_depth` lifts it), which is harmless only
 /// while the box lies below the triangle's true nearest distance: checked here against an f64 closest
 /// point, on triangles from 1 mm to 10 km (random ones, the light 1e-3 of their size off the interior of a
-/// huge one, next to an edge or a vertex, tiny ones far away, slivers), with the bound tight enough that
+/// huge one, next to an edge or a vertex, tiny ones far away, slivers; then 1500 slivers at 1e-6 and 1e-7,
+/// where Ericson's face case alone put 12 boxes above the nearest point), with the bound tight enough that
 /// early rejection still works. lavapipe tests depth after the shader, so no image shows a violation.
 /// The test kernel also casts the fragment shader's texel rays through 271 points of each triangle (its
 /// closest point among them) and reports how many hit nearer than the box (the texels the lift moves).
@@ -283,13 +284,13 @@ fn the_light_maps_box_depth_is_below_every_texel_depth() {
     let mut rng = bounce_tests::Rng(0x0DE9_7B0D);
     let mut cases: Vec<[[f32; 4]; 4]> = vec![];
     let mut tris: Vec<[DVec3; 3]> = vec![];
-    for k in 0..2400 {
+    for k in 0..3900 {
         let scale = 10f32.powf(rng.range(-3.0, 4.0));
         let (n, u) = (rng.unit(), rng.unit());
         let u = (u - n * u.dot(n)).normalize_or(n.any_orthonormal_vector());
         let v = n.cross(u);
         let in_plane = |x: f32, y: f32| u * x + v * y;
-        let t: [Vec3; 3] = match k % 6 {
+        let t: [Vec3; 3] = match if k < 2400 { k % 6 } else { 5 } {
             // Anywhere.
             0 => [0, 1, 2].map(|_| rng.vec(Vec3::splat(-scale), Vec3::splat(scale))),
             // The light a thousandth of the size off a huge triangle's interior.
@@ -313,10 +314,11 @@ fn the_light_maps_box_depth_is_below_every_texel_depth() {
                 let c = rng.unit() * scale;
                 [0, 1, 2].map(|_| c + rng.unit() * scale * 1e-4)
             }
-            // A sliver: c 1e-6 to 1e-2 of the size off segment ab.
+            // A sliver: c 1e-2 to 1e-6 of the size off segment ab; then 1500 at 1e-6 and 1e-7, where the
+            // face case alone (Ericson's) put the box above the nearest point on 7 and 20 of 1500 each.
             _ => {
                 let (a, b) = (rng.unit() * scale, rng.unit() * scale);
-                let off = 10f32.powi(-2 - k / 6 % 5);
+                let off = if k < 2400 { 10f32.powi(-2 - k / 6 % 5) } else { 10f32.powi(-6 - k % 2) };
                 let c = a + (b - a) * rng.range(0.1, 0.9) + rng.unit() * scale * off;
                 [a, b, c]
             }
@@ -340,8 +342,11 @@ fn the_light_maps_box_depth_is_below_every_texel_depth() {
         let size = t.iter().map(|p| p.length()).fold(0.0, f64::max);
         let exact = closest_point_f64(*t).length();
         let (box_z, least, n_hits, dist) = (o[0] as f64, o[1] as f64, o[2] as usize, o[3] as f64);
-        rays += 271;
-        hits += n_hits;
+        // The aim check on the first 2400: the extreme slivers after them are too thin for most rays.
+        if k < 2400 {
+            rays += 271;
+            hits += n_hits;
+        }
         if box_z > exact / far {
             bad.push(format!("case {k} {t:?}: box depth {box_z} above the nearest point's {}", exact / far));
         }
@@ -351,7 +356,7 @@ fn the_light_maps_box_depth_is_below_every_texel_depth() {
         }
         // distance_to_triangle alone (Ericson's regions): exact but on slivers, whose face case divides by
         // a vanishing area; the box takes the edges' distances too.
-        if (dist - exact).abs() > 1e-5 * size && k % 6 != 5 {
+        if (dist - exact).abs() > 1e-5 * size && k < 2400 && k % 6 != 5 {
             bad.push(format!("case {k} {t:?}: distance {dist}, f64 {exact}"));
         }
         if n_hits > 0 && least < box_z {
@@ -360,7 +365,7 @@ fn the_light_maps_box_depth_is_below_every_texel_depth() {
         }
     }
     eprintln!(
-        "map depth: {} triangles, {hits} of {rays} rays hit; {lifted} triangles had a texel nearer than the box \
+        "map depth: {} triangles, {hits} of {rays} rays at the first 2400 hit; {lifted} triangles had a texel nearer than the box \
          (lifted; worst {:.2} % short)",
         tris.len(),
         100.0 * worst_short
