@@ -39,10 +39,13 @@ void main() {
     if (!wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, i_a, i_b, i_c, t, bary) || !(t > 0.0)) discard;
     vec3 hit = vec3(t, bary);
     gl_FragDepth = map_texel_depth(t, frame.scene_max.w, gl_FragCoord.z);
+    // On the triangle even where t came out short (slivers: shared/map_depth.glsl).
+    vec4 point = map_texel_point(dir, t, bary, i_a, i_b, i_c, frame.scene_max.w, gl_FragCoord.z);
+    t = point.w;
 
     uint face = i_instance % lm_faces(), li = i_instance / lm_faces();
     Light light = lights[li];
-    vec3 world = light.position.xyz + lm_from_local(dir * t, li, face);
+    vec3 world = light.position.xyz + lm_from_local(point.xyz, li, face);
     Vertex v0 = vertices[3u * i_tri], v1 = vertices[3u * i_tri + 1u], v2 = vertices[3u * i_tri + 2u];
     float w0 = 1.0 - hit.y - hit.z;
     vec3 n = normalize(w0 * v0.normal_v.xyz + hit.y * v1.normal_v.xyz + hit.z * v2.normal_v.xyz);

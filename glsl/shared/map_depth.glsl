@@ -54,10 +54,20 @@ float map_box_depth(vec3 a, vec3 b, vec3 c, float far) {
 // the max only lifts a texel whose t came out short, toward the truth. In the map_depth test it did on
 // 733 of 1900 slivers, where the plane's normal is ill-conditioned (the plane form of
 // wt_hit_triangle_plane_t came out short by up to 0.2 % with a vertex 1e-4 of the size off the opposite
-// edge, by up to 88 % at 1e-6 and 1e-7: such a texel's VPL sits that much nearer the light; Woop's sheared
-// t did no better), and once on a grazing ray next to a huge triangle's edge (0.28 %).
+// edge, by up to 88 % at 1e-6 and 1e-7; Woop's sheared t did no better), and once on a grazing ray next
+// to a huge triangle's edge (0.28 %). Such a texel's VPL is placed by map_texel_point.
 float map_texel_depth(float t, float far, float box) {
     return max(min(t / far, 1.0), box);
+}
+
+// A texel's hit point in the map's frame (the viewpoint at the origin; xyz) and its distance (w): dir · t,
+// unless t came out short of the box (the fragment's depth `box`: a sliver, above), then the barycentric
+// point of the watertight test's weights, a convex combination of the vertices, so on the triangle up to
+// rounding. The usual texel keeps dir · t, the more precise at grazing angles.
+vec4 map_texel_point(vec3 dir, float t, vec2 bary, vec3 a, vec3 b, vec3 c, float far, float box) {
+    if (min(t / far, 1.0) >= box) return vec4(dir * t, t);
+    vec3 p = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
+    return vec4(p, length(p));
 }
 
 #endif

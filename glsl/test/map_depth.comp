@@ -4,8 +4,9 @@
 // dprsm.geom would emit, the least texel depth t / far over rays from the origin through q, q's
 // neighbours, the vertices, the edge midpoints and a 16 × 16 grid of the triangle (as dprsm*.frag finds t,
 // before map_texel_depth lifts it to the box's), how many of those rays hit, and distance_to_triangle.
-// vec4 [k] = (box, least texel depth, hits, distance). tests/tests/dprsm.rs checks the box and the
-// distance against the f64 closest point, and counts the texels the lift moves.
+// vec4 [2k] = (box, least texel depth, hits, distance), [2k + 1].x the least distance of the hit points
+// map_texel_point places (the VPLs'), over far. tests/tests/dprsm.rs checks the box, the distance and the
+// placed points against the f64 closest point, and counts the texels the lift moves.
 #include "../shared/bindings.glsl"
 #include "../shared/watertight.glsl"
 #include "../shared/map_depth.glsl"
@@ -47,8 +48,9 @@ void main() {
     if (k >= uint(cases.length())) return;
     vec3 a = cases[k].a.xyz, b = cases[k].b.xyz, c = cases[k].c.xyz, q = cases[k].q.xyz;
     float far = cases[k].a.w;
-    float least = 2.0;
+    float least = 2.0, placed = 2.0;
     uint hits = 0u;
+    float box = map_box_depth(a, b, c, far);
     for (uint i = 0u; i < RAYS; i++) {
         vec3 dir = normalize(aim(i, a, b, c, q));
         float t;
@@ -57,7 +59,9 @@ void main() {
         if (wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, a, b, c, t, bary) && t > 0.0) {
             hits++;
             least = min(least, min(t / far, 1.0));
+            placed = min(placed, map_texel_point(dir, t, bary, a, b, c, far, box).w / far);
         }
     }
-    outputs[k] = vec4(map_box_depth(a, b, c, far), least, float(hits), distance_to_triangle(a, b, c));
+    outputs[2u * k] = vec4(box, least, float(hits), distance_to_triangle(a, b, c));
+    outputs[2u * k + 1u] = vec4(placed, 0.0, 0.0, 0.0);
 }
