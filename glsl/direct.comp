@@ -23,8 +23,7 @@ void main() {
     vec3 n = texelFetch(g_normal, px, 0).xyz;
     vec3 albedo = texelFetch(g_albedo, px, 0).rgb;
     vec3 radiance = vec3(0.0);
-    // Leave x's own triangle: a small offset along the normal (see surface_lift), as the reference does.
-    vec3 o = x + n * surface_lift(x, frame.scene_min.w);
+    vec3 o = lifted_origin(x, n);
     for (uint li = 0u; li < frame.size.z; li++) {
         vec3 to_light = lights[li].position.xyz - x;
         float d2 = dot(to_light, to_light);

@@ -47,7 +47,7 @@ layout(set = 0, binding = B_PSM_DEPTH) uniform sampler2DArray psm_depth;
 #define SHADOW_QUEUE_WINDOWS
 #define END_BALLS_READ
 #include "shared/end_balls.glsl"
-vec3 ray_origin;   // x lifted (shadow_origin)
+vec3 ray_origin;   // x lifted (lifted_origin)
 vec4 pixel_ball;   // x's ball (0: none)
 #include "shared/shadow_queue.glsl"
 vec3 queue_weight[SHADOW_QUEUE]; // c(x, v) / p_v, the unshadowed contribution
@@ -79,7 +79,7 @@ vec3 gather_queued(ivec2 px, bool inside) {
     uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed;
     mixture_at_pixel(px);
     near_at_pixel(x);
-    vec3 o = shadow_origin(x, nx);
+    vec3 o = lifted_origin(x, nx);
     vec4 ball = end_ball_of_pixel(at);
     ray_origin = o;
     pixel_ball = ball;

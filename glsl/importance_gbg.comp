@@ -40,7 +40,7 @@ layout(std430, set = 0, binding = B_GBG_COUNT) buffer Counts { uint counts[]; };
 bool first_hit(vec3 x, vec3 n, vec3 d, out vec3 hit) {
     uint tri;
     vec2 bary;
-    vec3 o = x + n * surface_lift(x, frame.scene_min.w);
+    vec3 o = lifted_origin(x, n);
     float t = FIRST_HIT_TRACE(o, d, 0.0, 1e30, false, tri, bary);
     hit = o + d * max(t, 0.0);
     return t > 0.0;

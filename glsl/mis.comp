@@ -137,9 +137,9 @@ bool gathering_first_hit(vec3 x, vec3 nx, vec3 d, out vec3 hit) {
 #ifdef EXACT_VISIBILITY
     uint tri;
     vec2 bary;
-    float lift = surface_lift(x, frame.scene_min.w);
-    float th = bvh_closest(x + nx * lift, d, 1e30, tri, bary);
-    hit = x + nx * lift + d * max(th, 0.0);
+    vec3 o = lifted_origin(x, nx);
+    float th = bvh_closest(o, d, 1e30, tri, bary);
+    hit = o + d * max(th, 0.0);
     return th > 0.0;
 #else
     return gathering_hit(x, nx, d, hit);

@@ -165,8 +165,7 @@ void main() {
         vec3 x = gp.xyz;
         vec3 n = texelFetch(g_normal, px, 0).xyz;
         vec3 ax = texelFetch(g_albedo, px, 0).rgb;
-        // Leave x's own triangle: a small offset along the normal (see surface_lift).
-        vec3 o = x + n * surface_lift(x, frame.scene_min.w);
+        vec3 o = lifted_origin(x, n);
         uint seed = pcg_hash(uint(px.x) + 65536u * uint(px.y)) ^ pc.seed ^ 0x2545F491u;
         float inv_n = 1.0 / float(pc.samples);
         float total = light_power();

@@ -47,7 +47,7 @@ void main() {
         // across dispatches and frames, so a dispatch may end inside a set.
         uvec2 counts = state.xy, siblings = state.zw;
 #ifdef SHADE_QUEUE
-        vec3 o = shadow_origin(x, nx);
+        vec3 o = lifted_origin(x, nx);
         vec4 pixel_ball = end_ball_of_pixel(px);
         for (uint base = pc.first; base < pc.last; base += SHADOW_QUEUE) {
             uint top = min(base + SHADOW_QUEUE, pc.last), n = 0u;

@@ -6,6 +6,14 @@
 #include "common.glsl"
 
 layout(set = 0, binding = B_FRAME) uniform FrameBlock { FrameUniforms frame; };
+
+// Where a ray leaving the surface at x (normal nx) starts: x lifted along its normal (surface_lift), off
+// its own triangle. Every traced ray from a pixel starts here: shadow rays to VPLs and lights, the
+// reference's paths and the gathering rays.
+vec3 lifted_origin(vec3 x, vec3 nx) {
+    return x + nx * surface_lift(x, frame.scene_min.w);
+}
+
 layout(std430, set = 0, binding = B_VERTICES) readonly buffer Vertices { Vertex vertices[]; };
 layout(std430, set = 0, binding = B_TRI_MATERIAL) readonly buffer TriMaterials { uint tri_material[]; };
 layout(std430, set = 0, binding = B_MATERIALS) readonly buffer Materials { Material materials[]; };
