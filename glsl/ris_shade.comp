@@ -5,14 +5,12 @@
 // channel holds the estimate's variance, from its R reservoirs' own estimates L_r (independent given the
 // frame's inputs): with l_r the luminance of L_r demodulated by the albedo (the denoiser's signal),
 // σ² = Σ_r (l_r − l̄)² / (R (R − 1)), the variance of their mean; 0 with one reservoir, or where one
-// dispatch does not hold all R (then nothing reads it). With a history it marks each reservoir whose
-// shadow ray was occluded (W → −W) for the next frame's temporal stage (passes/ris.rs, "Visibility reuse").
+// dispatch does not hold all R (then nothing reads it).
 #include "shared/ris.glsl"
 
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
 layout(set = 0, binding = B_GATHER_OUT, rgba32f) uniform image2D out_radiance;
-// Written only with a history (ris.history_cap > 0): an occluded reservoir's W is negated for the next frame.
-layout(std430, set = 0, binding = B_RIS_IN) buffer RisIn { Reservoir res_in[]; };
+layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
 layout(std430, set = 0, binding = B_RIS_VIS) buffer RisVis { uint vis_counts[]; };
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) readonly buffer RisUnshadowed { vec4 unshadowed[]; };
 layout(std430, set = 0, binding = B_RIS_CV) buffer RisCv { uvec4 cv_counts[]; };
@@ -84,21 +82,15 @@ void main() {
                 // contribution_of's value: the unshadowed contribution, or 0 where the block's queued ray (the
                 // next one) was occluded.
                 vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
-                bool occluded = c != vec3(0.0) && (visible & (1u << ray++)) == 0u;
-                if (occluded) c = vec3(0.0);
+                if (c != vec3(0.0) && (visible & (1u << ray++)) == 0u) c = vec3(0.0);
 #else
                 // contribution_of, with its visibility test counted.
                 vec3 c = vpl_unshadowed(x, nx, ax, vpl, pc.clamp_d2);
-                bool occluded = false;
                 if (c != vec3(0.0)) {
                     atomicAdd(rays_traced, 1u);
-                    occluded = !segment_open(x, nx, r.vpl, vpl);
-                    if (occluded) c = vec3(0.0);
+                    if (!segment_open(x, nx, r.vpl, vpl)) c = vec3(0.0);
                 }
 #endif
-                // Visibility reuse: the reservoir kept for the next frame marks an occluded sample (−W), which
-                // the next temporal stage drops while no light moved (ris_temporal.comp).
-                if (occluded && ris.history_cap > 0.0) res_in[idx].weight = -r.weight;
                 sum += c * r.weight;
                 if (ris.control != 0u) {
                     // The control variate: + β (U_g − g(y) W), g = f p̂ / luminance(f), whose g(y) W is the

@@ -14,10 +14,6 @@
 #include "shared/ris.glsl"
 
 layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
-// The neighbours' reservoirs: B_RIS_IN's, or with a history the temporal stage's combination that keeps the
-// history's occluded samples (a neighbour's dropped samples would darken this pixel where it sees what the
-// neighbour did not).
-layout(std430, set = 0, binding = B_RIS_NEIGHBORS) readonly buffer RisNeighbors { Reservoir res_neighbors[]; };
 layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 // (A stand-in of one vec4 is bound when the pass writes no U_g.)
 layout(std430, set = 0, binding = B_RIS_UNSHADOWED) writeonly buffer RisUnshadowed { vec4 unshadowed[]; };
@@ -70,7 +66,7 @@ void main() {
     inputs[0] = canonical;
     float confidence = canonical.confidence;
     for (uint i = 1u; i < n; i++) {
-        inputs[i] = res_neighbors[res_index(q[i], layer)];
+        inputs[i] = res_in[res_index(q[i], layer)];
         confidence += inputs[i].confidence;
     }
     // Resample: input i's sample y_i weighs m_i(y_i) · p̂_x(y_i) · W_i, m_i the pairwise weights (above).

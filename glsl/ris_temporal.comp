@@ -13,17 +13,11 @@
 // confidences'. With the learned visibility
 // both targets carry its factor, at this pixel's tile and at q's (this frame's counts: any positive
 // functions with the unshadowed support make weights that sum to 1 where the history can be, which is
-// all unbiasedness asks of them). Visibility reuse (passes/ris.rs): the history's samples that its shade
-// found occluded are dropped from the pixel's own combination (B_RIS_OUT) while ris.drop_occluded, never
-// from the neighbours' (B_RIS_NEIGHBORS).
+// all unbiasedness asks of them).
 #define RIS_LEARNED_READ
 #include "shared/ris.glsl"
 
-layout(std430, set = 0, binding = B_RIS_IN) readonly buffer RisIn { Reservoir res_in[]; };
-layout(std430, set = 0, binding = B_RIS_OUT) writeonly buffer RisOut { Reservoir res_out[]; };
-// The same combination with the history's samples taken as drawn (none dropped): the spatial stage's
-// neighbours, free of another pixel's visibility test.
-layout(std430, set = 0, binding = B_RIS_NEIGHBORS) writeonly buffer RisNeighbors { Reservoir res_neighbors[]; };
+layout(std430, set = 0, binding = B_RIS_OUT) buffer RisOut { Reservoir res_out[]; };
 layout(std430, set = 0, binding = B_RIS_HISTORY) readonly buffer RisHistory { Reservoir res_history[]; };
 layout(set = 0, binding = B_MOTION) uniform sampler2D motion;
 layout(set = 0, binding = B_PREV_POSITION) uniform sampler2D prev_position;
@@ -39,46 +33,22 @@ float prev_target_at(vec3 x, vec3 n, vec3 a, uint v) {
     return target_of(x, n, a, vpl_from(p, texelFetch(prev_vpl_normal, t, 0).xyz, texelFetch(prev_vpl_flux, t, 0).rgb));
 }
 
-// The combination of r (weight w0) and the history h (weight w1, target here t1), chosen by uniform u.
-Reservoir combined(Reservoir r, Reservoir h, float w0, float w1, float t1, float u, float confidence) {
-    float sum = w0 + w1;
-    if (w1 > 0.0 && u * sum < w1) {
-        r.vpl = h.vpl;
-        r.target = t1;
-    }
-    r.weight = r.target > 0.0 && sum > 0.0 ? sum / r.target : 0.0;
-    r.confidence = confidence;
-    if (!(r.weight > 0.0)) r = empty_reservoir(confidence);
-    return r;
-}
-
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     uint layer = gl_GlobalInvocationID.z;
     if (any(greaterThanEqual(px, ivec2(frame.size.xy))) || layer >= ris.reservoirs) return;
-    uint idx = res_index(px, layer);
-    Reservoir r = res_in[idx];
-    vec4 gp = texelFetch(g_position, px, 0), mv = texelFetch(motion, px, 0);
-    // Without a surface the initial stage left an empty reservoir, with no history to combine; where the
-    // surface was disoccluded the reservoir stays this frame's own.
-    if (gp.w == 0.0 || mv.z == 0.0) {
-        res_out[idx] = r;
-        res_neighbors[idx] = r;
-        return;
-    }
+    vec4 gp = texelFetch(g_position, px, 0);
+    if (gp.w == 0.0) return; // the initial stage left an empty reservoir, with no history to combine
+    vec4 mv = texelFetch(motion, px, 0);
+    if (mv.z == 0.0) return; // disoccluded: the reservoir stays this frame's own
     ivec2 q = ivec2(mv.xy);
     vec3 x = gp.xyz, nx = texelFetch(g_normal, px, 0).xyz, ax = texelFetch(g_albedo, px, 0).rgb;
     uvec4 su = texelFetch(prev_surface, q, 0);
     vec3 xq = texelFetch(prev_position, q, 0).xyz, nq = uintBitsToFloat(su.xyz), aq = unpackUnorm4x8(su.w).rgb;
+    uint idx = res_index(px, layer);
+    Reservoir r = res_out[idx];
     float m = float(ris.candidates);
     Reservoir h = res_history[res_index(q, layer)];
-    // Visibility reuse: last frame's shade marked an occluded sample with −W. While no light moved, its
-    // VPLs are where it tested them, and the sample is dropped (W = 0, its confidence kept): the history then
-    // holds only samples that q saw. Unbiased where this pixel's visibility is q's (a still view: the same
-    // point), since an occluded VPL adds nothing to f V there; under a moving camera q is the same surface
-    // point up to a pixel's footprint. After a light move the test is stale and the sample is taken as drawn.
-    bool drop = h.weight < 0.0 && ris.drop_occluded != 0u;
-    h.weight = abs(h.weight);
     float ch = min(h.confidence, ris.history_cap * m);
     bool has0 = r.vpl != RIS_NONE && r.weight > 0.0, has1 = h.vpl != RIS_NONE && h.weight > 0.0;
     // Each sample's target here and at q: (p̂_0, p̂_1).
@@ -89,9 +59,13 @@ void main() {
     float d0 = m * t0.x + ch * t0.y, d1 = m * t1.x + ch * t1.y;
     float w0 = d0 > 0.0 ? m * t0.x / d0 * t0.x * r.weight : 0.0;
     float w1 = d1 > 0.0 ? ch * t1.y / d1 * t1.x * h.weight : 0.0;
-    // Both combinations from one uniform (each is, on its own, the resampling above).
-    float u = ris_rand(px, 2u, layer);
-    Reservoir drawn = combined(r, h, w0, w1, t1.x, u, m + ch);
-    res_neighbors[idx] = drawn;
-    res_out[idx] = drop ? combined(r, h, w0, 0.0, t1.x, u, m + ch) : drawn;
+    float sum = w0 + w1;
+    if (w1 > 0.0 && ris_rand(px, 2u, layer) * sum < w1) {
+        r.vpl = h.vpl;
+        r.target = t1.x;
+    }
+    r.weight = r.target > 0.0 && sum > 0.0 ? sum / r.target : 0.0;
+    r.confidence = m + ch;
+    if (!(r.weight > 0.0)) r = empty_reservoir(r.confidence);
+    res_out[idx] = r;
 }

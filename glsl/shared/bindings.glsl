@@ -153,9 +153,6 @@ const float END_BALL_MAX_RADIUS = 0.03;
 #define B_RIS_IN 31
 #define B_RIS_OUT 32
 #define B_RIS_HISTORY 33
-// The spatial stage's neighbours' reservoirs: with a history, the temporal stage's combination that drops
-// none of the history's occluded samples (passes/ris.rs, "Visibility reuse").
-#define B_RIS_NEIGHBORS 68
 // The control variate (passes/ris.rs): per reservoir, the candidates' unshadowed estimate U_g (written by
 // the initial stage, read by the shade); per pixel, (visible, traced) counts of its earlier shadow rays,
 // the control's coefficient β, and the same counts of the candidate set in progress, not yet in β.

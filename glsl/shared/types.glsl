@@ -84,7 +84,7 @@ struct RisPush {
     uint near_radius; // the near window's half-width, texels (2r + 1 wide)
     uint control;     // 1: the shade adds β (U_g − g(y) W), the unshadowed control variate (no reuse only)
     uint picks;       // K: VPLs each reservoir's candidates keep, independently (layers: R = streams · K)
-    uint drop_occluded; // 1: the history's occluded samples are dropped (no light moved since they were tested)
+    uint pad0;
     uint pad1;
 };
 

@@ -120,58 +120,6 @@ fn realtime_frames_are_unbiased_with_reuse_and_after_a_camera_move() {
     });
 }
 
-/// Visibility reuse: while the camera moves and no light does, the history drops the samples its pixel's
-/// shadow ray found occluded (passes/ris.rs), so that it carries the VPLs the pixel sees. In the two rooms
-/// (the light in the next room: nearly every unshadowed candidate is occluded), with the camera stepping
-/// sideways and back by 0.5 % of the diagonal each frame, paired runs against the same runs with the light
-/// also stepping by 10⁻⁴ of the diagonal (which makes every history's test stale, so nothing is dropped,
-/// and leaves the image as it was): frames 2–5's relMSE against `all`, summed over 12 runs, is lower
-/// with the drop (measured 0.64×). A still view drops nothing: the drop's bias, which reaches a pixel
-/// through its neighbours' reservoirs in the spatial pass, would show in a still view's progressive mean
-/// (dropping there too, `realtime_progressive_frames_converge_to_the_unbiased_image` measured −0.34 ±
-/// 0.08 %, and fails).
-#[test]
-fn a_moving_cameras_history_drops_the_samples_its_pixel_did_not_see() {
-    let scene = Scene::load(&bounce_tests::workspace().join("assets/two-rooms/scene.toml")).unwrap();
-    let gpu = TestGpu::new();
-    let mut r = Renderer::new(&gpu, &scene).unwrap();
-    let (w, h, res, vox) = SIZE;
-    let c0 = scene.camera;
-    let side = (c0.target - c0.eye).cross(c0.up).normalize() * (0.005 * scene.diagonal());
-    let c1 = bounce_graph::camera::Camera { eye: c0.eye + side, target: c0.target + side, ..c0 };
-    let mut truth = vec![];
-    for c in [c0, c1] {
-        r.set_camera(c);
-        truth.push(all(&mut r));
-    }
-    let light = r.lights()[0];
-    let (p0, intensity) = (Vec3::from_slice(&light.position[..3]), Vec3::from_slice(&light.intensity[..3]));
-    let p1 = p0 + Vec3::new(1.0, 0.5, -0.5).normalize() * (1e-4 * scene.diagonal());
-    let mut errors = [0.0; 2];
-    for (stepping, error) in [false, true].into_iter().zip(&mut errors) {
-        for run in 0..12 {
-            r.clear_frame_cache();
-            r.set_light(0, p0, intensity);
-            for k in 0..6 {
-                r.set_camera([c0, c1][k % 2]);
-                if stepping {
-                    r.set_light(0, [p0, p1][k % 2], intensity);
-                }
-                let img = indirect_with(&mut r, realtime(run), w, h, res, vox);
-                if k >= 2 {
-                    *error += bounce_tests::rel_mse(&img, &truth[k % 2]);
-                }
-            }
-        }
-    }
-    let [dropping, stale] = errors;
-    eprintln!(
-        "visibility reuse: frames 2-5 relMSE summed, still light {dropping:.4}, stepping light {stale:.4} ({:.3})",
-        dropping / stale
-    );
-    assert!(dropping < 0.9 * stale, "the history's occluded samples are not dropped: {dropping} against {stale}");
-}
-
 /// A real-time frame whose camera moved traces its shadow rays without end balls (the pixels' balls are
 /// kept with the G-buffer, so a moving camera would rebuild them for two rays a pixel); the first frame
 /// of a view builds them, and a frame after a light move alone keeps the pixels' and rebuilds the VPLs'.

@@ -111,10 +111,7 @@ pub struct RisPush {
     /// K: VPLs each reservoir's candidates keep, independently, each traced by its own shadow ray; the
     /// reservoirs (layers) are `reservoirs` / K candidate streams of K picks.
     pub picks: u32,
-    /// 1: the temporal stage drops the history's samples that its shade found occluded (the shade marks
-    /// them with a negative W); 0 (a light moved since they were tested): it takes them as drawn.
-    pub drop_occluded: u32,
-    pub pad: u32,
+    pub pad: [u32; 2],
 }
 const _: () = assert!(size_of::<RisPush>() == 64);
 

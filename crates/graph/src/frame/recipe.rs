@@ -131,9 +131,7 @@ pub fn build_frame<'a>(
         // Temporal reuse follows each pixel's surface to where it was last frame.
         let motion = (frame.push.history_cap > 0.0).then(|| r.reproject.add(g, f, &gbuffer)).transpose()?;
         // Last frame's VPLs weigh the history: the maps this frame replaced when a light moved.
-        let replaced = motion.and_then(|_| g.replaced("vpls"));
-        let last =
-            motion.map(|motion| LastFrame { motion, vpls: replaced.unwrap_or(vpls), lights_moved: replaced.is_some() });
+        let last = motion.map(|motion| LastFrame { motion, vpls: g.replaced("vpls").unwrap_or(vpls) });
         let rays = Some(r.ris.add(g, f, &inputs, &mut out, push, frame, last)?);
         let cdf = Some(cdf.cdf);
         if let (Method::Realtime, true, Some(m)) = (s.method, s.denoise, motion) {
@@ -268,15 +266,7 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
     let candidates_per_dispatch =
         ris.candidates_chunk.map_or(i.ris_candidates_per_dispatch, |c| c.get().min(i.ris_candidates_per_dispatch));
     let uniform_source = ris_uniform_source(s);
-    let visibility_reuse = ris.visibility_reuse;
-    RisFrame {
-        push,
-        spatial_passes: ris.spatial_passes,
-        candidates_per_dispatch,
-        key,
-        uniform_source,
-        visibility_reuse,
-    }
+    RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key, uniform_source }
 }
 
 /// Whether ris's candidates take the uniform source's shortcut (`RisFrame::uniform_source`).

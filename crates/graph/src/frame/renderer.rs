@@ -287,9 +287,6 @@ impl Renderer {
             // them (their VPLs' balls pay: the two rooms' frame is 1.42× without).
             let moving = self.state.previous_camera.is_some_and(|c| c != self.state.camera);
             let end_balls = s.end_balls && !moving;
-            // Visibility reuse while the camera moves (passes/ris.rs): no mean of frames is taken then, and
-            // its bias, through the spatial pass's neighbours, stays under the noise (BENCHMARKS.md).
-            ris.visibility_reuse = moving;
             return Ok(Some(FrameSettings { seed, ris, end_balls, ..s.clone() }));
         }
         self.auto_learn(s)

@@ -124,10 +124,6 @@ pub struct RisSettings {
     /// Temporal reuse across frames of one view: the history's confidence is capped at this many times
     /// M (0: no temporal reuse).
     pub temporal_cap: f32,
-    /// With temporal reuse: the history drops the samples its pixel's shadow ray found occluded, unless a
-    /// light moved since (`passes/ris.rs`, "Visibility reuse"). Set by the renderer for a real-time frame
-    /// whose camera moved: a still view's frames stay unbiased, for the progressive mean they make.
-    pub visibility_reuse: bool,
     /// Candidates from a pool presampled once per frame: this many tiles of `RIS_POOL_TILE` source draws
     /// (RTXDI's light tiles), a candidate costing three texel fetches instead of a draw (0: each pixel
     /// draws its own, stratified).
@@ -214,7 +210,6 @@ impl Default for RisSettings {
             spatial_neighbors: 4,
             spatial_radius: 16.0,
             temporal_cap: 0.0,
-            visibility_reuse: false,
             pool_tiles: 16,
             learn_visibility: 0.0,
             learn_auto: true,
@@ -527,13 +522,11 @@ impl FrameSettings {
     }
 
     /// The ris settings the frame runs: `ris` for `Method::Ris`, [`RisSettings::realtime`] for
-    /// `Method::Realtime` with `ris`'s learned visibility (decided per view under `auto`) and visibility
-    /// reuse (decided per frame by the renderer: while the camera moves).
+    /// `Method::Realtime` with `ris`'s learned visibility (decided per view under `auto`).
     pub fn ris_settings(&self) -> RisSettings {
         if self.method == Method::Realtime {
             let (learn_visibility, learn_auto) = (self.ris.learn_visibility, self.ris.learn_auto);
-            let visibility_reuse = self.ris.visibility_reuse;
-            RisSettings { learn_visibility, learn_auto, visibility_reuse, ..RisSettings::realtime() }
+            RisSettings { learn_visibility, learn_auto, ..RisSettings::realtime() }
         } else {
             self.ris
         }

@@ -119,24 +119,6 @@
 //! towards the pixel was weighed as if drawn for its new place: fireflies, and a darkening where a map's
 //! silhouette swept; BENCHMARKS.md, "Real time under motion".)
 //!
-//! **Visibility reuse** (`RisSettings::visibility_reuse`: a real-time frame whose camera moved; ReSTIR's
-//! "visibility reuse", Bitterli et al. 2020, made unbiased where the mean is taken). The shade marks each
-//! final reservoir whose shadow ray was occluded (W → −W); they are next frame's history. The temporal
-//! stage then drops a marked sample (W = 0, its confidence kept) unless a light moved since (its VPLs are no
-//! longer where they were tested; it is then taken as drawn). With the history so thinned,
-//! E[f V W] = Σ_v f(v) V_x(v) (m_0(v) + m_1(v) V_q(v)), which is the `all` sum wherever the pixel's
-//! visibility V_x is q's V_q: an occluded VPL adds nothing to f V anyway. q is the same surface point up to
-//! a pixel's footprint, so only VPLs whose shadow edge falls inside the footprint are misweighed. The spatial
-//! passes must not see the drop: a neighbour's dropped sample would darken x where x sees what the
-//! neighbour did not (dropping in every frame, a still view's mean measured −1.05 ± 0.09 %; 24², the Cornell
-//! box). So the temporal stage writes two combinations from one uniform, the pixel's own (dropped) and the
-//! neighbours' (as drawn). Even so the drop reaches other pixels through the history, last frame's final
-//! reservoir at a neighbour having been resampled from that neighbour's dropped combination (−0.34 ±
-//! 0.08 % in the same still view). That bias stays under the noise while
-//! the camera moves (bench's mean ratio within ±1 % of the runs without it; BENCHMARKS.md), and a still
-//! view, whose frames a progressive mean averages, drops nothing. What it buys: the two rooms' camera
-//! walk 0.89×, Sibenik's 0.93× the raw error (a 24² test: 0.64×).
-//!
 //! Loop bounds: the initial stage's candidates are split over dispatches ([`candidates_per_dispatch`]),
 //! its streaming state (y, Σw, p̂(y)) carried in the output; the shade's reservoirs too (the gather's
 //! `vpls_per_dispatch`); a spatial pass loops over at most 3k + 1 target evaluations, k ≤
@@ -181,7 +163,7 @@ pub struct Ris {
 /// The shade's inputs and outputs: the final reservoirs and their U_g; the counts it adds to (learned
 /// visibility, control variate, rays); the radiance it writes.
 struct ShadeIo<'h> {
-    reservoirs: &'h mut Handle<Buffer>,
+    reservoirs: Handle<Buffer>,
     unshadowed: Handle<Buffer>,
     vis: &'h mut Handle<Buffer>,
     cv: &'h mut Handle<Buffer>,
@@ -201,8 +183,6 @@ pub struct RisFrame {
     /// The source is `uniform` with faces by Russian roulette: its mixture is the validity CDF alone, which
     /// the pool draws from directly.
     pub uniform_source: bool,
-    /// The temporal stage drops the history's occluded samples (`RisSettings::visibility_reuse`).
-    pub visibility_reuse: bool,
     /// What the history depends on (camera, CDF, every setting but the seed): reservoirs are carried to
     /// the next frame only while it is unchanged.
     pub key: u64,
@@ -339,8 +319,6 @@ pub struct LastFrame {
     pub motion: Motion,
     /// Last frame's VPL maps (this frame's when no light moved): the history's target.
     pub vpls: DprsmOut,
-    /// A light moved since last frame: the history's visibility tests are stale.
-    pub lights_moved: bool,
 }
 
 impl Ris {
@@ -355,9 +333,7 @@ impl Ris {
         };
         let initial = with(&[Binding::storage_buffer(B_RIS_OUT), Binding::storage_buffer(B_RIS_UNSHADOWED)]);
         let temporal = with(&[
-            Binding::storage_buffer(B_RIS_IN),
             Binding::storage_buffer(B_RIS_OUT),
-            Binding::storage_buffer(B_RIS_NEIGHBORS),
             Binding::storage_buffer(B_RIS_HISTORY),
             Binding::sampled_image(B_MOTION),
             Binding::sampled_image(B_PREV_POSITION),
@@ -373,7 +349,6 @@ impl Ris {
         learned.push(Binding::uniform_texel_buffer(B_RIS_VIS));
         let spatial = with(&[
             Binding::storage_buffer(B_RIS_IN),
-            Binding::storage_buffer(B_RIS_NEIGHBORS),
             Binding::storage_buffer(B_RIS_OUT),
             Binding::storage_buffer(B_RIS_UNSHADOWED),
             Binding::uniform_texel_buffer(B_RIS_VIS),
@@ -457,22 +432,12 @@ impl Ris {
         } else {
             g.create_buffer(BufferDesc::storage("ris.cv (off)", 16))
         };
-        // With a history the temporal stage writes two combinations: the pixel's own (its history's occluded
-        // samples dropped) and the neighbours' (taken as drawn), which the spatial passes read (ris_spatial.comp).
-        let mut neighbors = None;
         {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
+            self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
             if let Some((previous, last)) = previous {
-                let mut initial = g.create_buffer(desc("ris.initial"));
-                self.add_initial(g, f, i, &mut initial, &mut unshadowed, pool, learned, push, r)?;
-                let drop = r.visibility_reuse && !last.lights_moved;
-                let push_t = RisPush { drop_occluded: drop as u32, ..r.push };
-                let mut drawn = g.create_buffer(desc("ris.drawn"));
-                self.add_temporal(g, f, i, (initial, previous, last, vis), (dst, &mut drawn), push, push_t)?;
-                neighbors = Some(drawn);
-            } else {
-                self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
+                self.add_temporal(g, f, i, (previous, last, vis), dst, push, r.push)?;
             }
         }
         for pass in 0..r.spatial_passes {
@@ -484,13 +449,12 @@ impl Ris {
             };
             // Only the last pass's inputs are the final choice's: it alone writes U_g (RIS_CONTROL_REUSE).
             let control = if s == r.spatial_passes { r.push.control } else { RIS_CONTROL_OFF };
-            let inputs = (src, neighbors, vis);
-            self.add_spatial(g, f, i, inputs, dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
+            self.add_spatial(g, f, i, (src, vis), dst, &mut unshadowed, push, RisPush { pass, control, ..r.push })?;
         }
         // The frame's shadow rays, counted by the shade.
         let mut rays = g.create_buffer(BufferDesc::storage("ris.rays", 4));
         g.add_clear("ris_rays_clear", &mut [&mut rays]);
-        let shade = ShadeIo { reservoirs: &mut current, unshadowed, vis: &mut vis, cv: &mut cv, rays: &mut rays, out };
+        let shade = ShadeIo { reservoirs: current, unshadowed, vis: &mut vis, cv: &mut cv, rays: &mut rays, out };
         self.add_shade(g, f, i, shade, push, r.push)?;
         Ok(rays)
     }
@@ -654,42 +618,31 @@ impl Ris {
         Ok(())
     }
 
-    /// Last frame's final reservoirs (`previous`) combined with this frame's initial ones (`initial`), layer
-    /// by layer: into `dst` (the pixel's own, dropping the history's occluded samples under visibility
-    /// reuse) and `drawn` (the spatial passes' neighbours: none dropped).
+    /// Last frame's final reservoirs (`previous`) combined into this frame's initial ones (`dst`), layer by
+    /// layer.
     #[allow(clippy::too_many_arguments)]
     fn add_temporal<'a>(
         &'a self,
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        (initial, previous, LastFrame { motion: m, vpls, .. }, vis): (
-            Handle<Buffer>,
-            Handle<Buffer>,
-            LastFrame,
-            Handle<Buffer>,
-        ),
-        (dst, drawn): (&mut Handle<Buffer>, &mut Handle<Buffer>),
+        (previous, LastFrame { motion: m, vpls }, vis): (Handle<Buffer>, LastFrame, Handle<Buffer>),
+        dst: &mut Handle<Buffer>,
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
-        let (i, o, d) = (*i, *dst, *drawn);
+        let (i, o) = (*i, *dst);
         let pipeline = self.temporal.pipeline()?;
-        let mut b = Self::reads(g.add_pass("ris_temporal"), &i)
-            .read(&initial, Access::ComputeRead)
-            .read(&previous, Access::ComputeRead);
+        let mut b = Self::reads(g.add_pass("ris_temporal"), &i).read(&previous, Access::ComputeRead);
         b = b.read(&vis, Access::ComputeRead);
         for h in [m.motion, m.prev_position, m.prev_surface, vpls.position, vpls.normal, vpls.flux] {
             b = b.read(&h, Access::ComputeRead);
         }
-        b = b.overwrite(drawn, Access::ComputeWrite);
-        b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
+        b.write(dst, Access::ComputeWrite).record(move |ctx| {
             let s = self.sampler.raw;
             let writes = self
                 .base_writes(f, ctx, &i)
-                .storage_buffer(B_RIS_IN, ctx.buffer(&initial))
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
-                .storage_buffer(B_RIS_NEIGHBORS, ctx.buffer(&d))
                 .storage_buffer(B_RIS_HISTORY, ctx.buffer(&previous))
                 .sampled_image(B_MOTION, ctx.image(&m.motion), s)
                 .sampled_image(B_PREV_POSITION, ctx.image(&m.prev_position), s)
@@ -711,7 +664,7 @@ impl Ris {
         g: &mut Graph<'a>,
         f: FrameInputs<'a>,
         i: &GatherInputs,
-        (src, drawn, vis): (Handle<Buffer>, Option<Handle<Buffer>>, Handle<Buffer>),
+        (src, vis): (Handle<Buffer>, Handle<Buffer>),
         dst: &mut Handle<Buffer>,
         unshadowed: &mut Handle<Buffer>,
         push: GatherPush,
@@ -719,20 +672,14 @@ impl Ris {
     ) -> Result<()> {
         let (i, o, u) = (*i, *dst, *unshadowed);
         let pipeline = self.spatial.pipeline()?;
-        let mut b =
+        let b =
             Self::reads(g.add_pass("ris_spatial"), &i).read(&src, Access::ComputeRead).read(&vis, Access::ComputeRead);
-        // The neighbours' reservoirs: the temporal stage's drawn combination where there is one, else `src`.
-        if let Some(h) = &drawn {
-            b = b.read(h, Access::ComputeRead);
-        }
-        let neighbors = drawn.unwrap_or(src);
         // U_g is written by the last pass only (declared by each: the stand-in or the buffer).
         let b = b.write(unshadowed, Access::ComputeWrite);
         b.overwrite(dst, Access::ComputeWrite).record(move |ctx| {
             let writes = self
                 .base_writes(f, ctx, &i)
                 .storage_buffer(B_RIS_IN, ctx.buffer(&src))
-                .storage_buffer(B_RIS_NEIGHBORS, ctx.buffer(&neighbors))
                 .storage_buffer(B_RIS_OUT, ctx.buffer(&o))
                 .storage_buffer(B_RIS_UNSHADOWED, ctx.buffer(&u))
                 .texel_view(B_RIS_VIS, ctx.buffer(&vis));
@@ -752,16 +699,12 @@ impl Ris {
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
-        let (reservoirs, unshadowed) = (*io.reservoirs, io.unshadowed);
+        let (reservoirs, unshadowed) = (io.reservoirs, io.unshadowed);
         let (i, o, hv, hc, hr) = (*i, *io.out, *io.vis, *io.cv, *io.rays);
         let pipeline = self.shade.pipeline(&f, false)?;
-        let mut b = Self::reads(g.add_pass("ris_shade"), &i).read(&unshadowed, Access::ComputeRead);
-        // With a history the shade zeroes its occluded reservoirs' W for the next frame (visibility reuse).
-        b = if ris.history_cap > 0.0 {
-            b.write(io.reservoirs, Access::ComputeWrite)
-        } else {
-            b.read(&reservoirs, Access::ComputeRead)
-        };
+        let mut b = Self::reads(g.add_pass("ris_shade"), &i)
+            .read(&reservoirs, Access::ComputeRead)
+            .read(&unshadowed, Access::ComputeRead);
         // The learned visibility's and the control's counts are added to (or, off, the stand-ins are never
         // touched), and so is the ray count.
         b = b
