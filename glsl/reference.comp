@@ -76,7 +76,12 @@ vec3 light_side(Hit h, uint known, float inv_power, out float p_light) {
         float inv_d = inversesqrt(d2);
         float c = dot(h.ns, to) * inv_d;
         float p = light_weight(l) * inv_power / (4.0 * PI) * abs(dot(h.ng, to)) * inv_d / d2;
-        if ((c <= 0.0 && p <= 0.0) || (l != known && bvh_occluded(h.y, lp))) continue;
+        if (c <= 0.0 && p <= 0.0) continue;
+        // y lifted toward the light's side of its surface, as a VPL toward its light: with y on its surface
+        // the ray needs bvh_occluded's 1e-4 relative window, and a wall within it (a floor point at the foot
+        // of a wall between it and the light) did not count: light leaked under walls.
+        vec3 y_l = h.y + (dot(h.ng, to) >= 0.0 ? h.ng : -h.ng) * surface_lift(h.y, frame.scene_min.w);
+        if (l != known && bvh_occluded_lifted(y_l, lp)) continue;
         if (c > 0.0) l_sum += h.albedo / PI * lights[l].intensity.rgb * c / d2;
         p_light += p;
     }
