@@ -324,6 +324,14 @@ fn surface(scene: &Scene, bvh: &Bvh, hit: &Hit, eye: DVec3) -> Surface {
 /// Direct radiance toward the eye at `s`, and the bit mask of lights that reach it
 /// (front-facing and unoccluded).
 fn shade(scene: &Scene, bvh: &Bvh, s: &Surface) -> (Vec3, u32) {
+    shade_from(scene, bvh, s, false)
+}
+
+/// [`shade`], with `lifted`: each shadow ray starts from `s` lifted toward the light's side of its
+/// surface and counts every occluder but within 1e-9 of the segment's ends, as the path tracer's light
+/// side does (`glsl/reference.comp`). For bounce points: on the surface with the [`SHADOW_EPS`] window, a
+/// wall between a point at its foot and the light fell inside the window, and light leaked under it.
+fn shade_from(scene: &Scene, bvh: &Bvh, s: &Surface, lifted: bool) -> (Vec3, u32) {
     let mut sum = DVec3::ZERO;
     let mut lit = 0u32;
     let brdf = s.albedo.as_dvec3() / std::f64::consts::PI;
@@ -335,7 +343,16 @@ fn shade(scene: &Scene, bvh: &Bvh, s: &Surface) -> (Vec3, u32) {
             continue;
         }
         let cos = s.n.dot(to) / d2.sqrt();
-        if cos <= 0.0 || bvh.occluded(s.x, lp) {
+        let blocked = |bvh: &Bvh| {
+            if lifted {
+                let side = if s.ng.dot(to) >= 0.0 { s.ng } else { -s.ng };
+                let start = s.x + side * (1e-6 * (1.0 + s.x.abs().max_element()));
+                bvh.intersect_range(start, lp - start, 1e-9, 1.0 - 1e-9).is_some()
+            } else {
+                bvh.occluded(s.x, lp)
+            }
+        };
+        if cos <= 0.0 || blocked(bvh) {
             continue;
         }
         lit |= 1 << k.min(31);
@@ -533,7 +550,7 @@ pub fn indirect_at_pixel(
         let value = match bvh.intersect(origin, d) {
             Some(hy) => {
                 let y = surface(scene, bvh, &hy, s.x);
-                let (l, _) = shade(scene, bvh, &y);
+                let (l, _) = shade_from(scene, bvh, &y, true);
                 l.as_dvec3()
             }
             None => DVec3::ZERO,
