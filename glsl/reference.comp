@@ -77,11 +77,10 @@ vec3 light_side(Hit h, uint known, float inv_power, out float p_light) {
         float c = dot(h.ns, to) * inv_d;
         float p = light_weight(l) * inv_power / (4.0 * PI) * abs(dot(h.ng, to)) * inv_d / d2;
         if (c <= 0.0 && p <= 0.0) continue;
-        // y lifted toward the light's side of its surface, as a VPL toward its light: with y on its surface
-        // the ray needs bvh_occluded's 1e-4 relative window, and a wall within it (a floor point at the foot
-        // of a wall between it and the light) did not count: light leaked under walls.
-        vec3 y_l = h.y + (dot(h.ng, to) >= 0.0 ? h.ng : -h.ng) * surface_lift(h.y, frame.scene_min.w);
-        if (l != known && bvh_occluded_lifted(y_l, lp)) continue;
+        // From y lifted toward the light's side of its surface, as a VPL toward its light: with y on its
+        // surface the ray needs bvh_occluded's 1e-4 relative window, and a wall within it (a floor point at
+        // the foot of a wall between it and the light) did not count: light leaked under walls.
+        if (l != known && bvh_occluded_lifted(lifted_origin(h.y, dot(h.ng, to) >= 0.0 ? h.ng : -h.ng), lp)) continue;
         if (c > 0.0) l_sum += h.albedo / PI * lights[l].intensity.rgb * c / d2;
         p_light += p;
     }
@@ -132,7 +131,7 @@ vec3 light_sample(vec3 o, vec3 x, vec3 n, vec3 ax, uint k, uint seed, float tota
     float cos_x = dot(n, w), cos_y = abs(dot(h.ng, w));
     if (cos_x <= 0.0 || cos_y <= 0.0) return vec3(0.0);
     // x ↔ y, both ends off their surfaces (y lifted toward x), as the exact gather's shadow rays.
-    vec3 y_up = h.y + (dot(h.ng, w) < 0.0 ? h.ng : -h.ng) * surface_lift(h.y, frame.scene_min.w);
+    vec3 y_up = lifted_origin(h.y, dot(h.ng, w) < 0.0 ? h.ng : -h.ng);
     if (bvh_occluded_lifted(o, y_up)) return vec3(0.0);
     float p_light;
     vec3 ld = light_side(h, l, 1.0 / total, p_light);

@@ -467,6 +467,15 @@ def suite(root, per_family, seed, size):
 
 def main():
     args = sys.argv[1:]
+    if args[:1] in (["-h"], ["--help"]):
+        print(__doc__)
+        return
+    # An option where the assets folder goes would be taken for a folder name (`--help` once wrote the
+    # stress scenes into ./--help).
+    if args and args[0].startswith("-") and args[0] != "--suite":
+        sys.exit(f"error: unknown option {args[0]}: make-scenes.py [assets-dir] | --suite DIR [--per-family N] [--seed S] [--size PIXELS]")
+    if len(args) > 1 and args[0] != "--suite":
+        sys.exit(f"error: one assets folder expected, got {args}")
     if args[:1] == ["--suite"]:
         if len(args) < 2:
             sys.exit("error: --suite needs a folder: make-scenes.py --suite DIR [--per-family N] [--seed S] [--size PIXELS]")

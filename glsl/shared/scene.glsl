@@ -7,9 +7,9 @@
 
 layout(set = 0, binding = B_FRAME) uniform FrameBlock { FrameUniforms frame; };
 
-// Where a ray leaving the surface at x (normal nx) starts: x lifted along its normal (surface_lift), off
-// its own triangle. Every traced ray from a pixel starts here: shadow rays to VPLs and lights, the
-// reference's paths and the gathering rays.
+// Where a ray leaving the surface at x on the side of nx starts: x lifted along nx (surface_lift), off its
+// own triangle. Every traced ray from a surface point starts here: a pixel's shadow rays to VPLs and
+// lights, its paths and gathering rays, and the reference's rays from its bounce points.
 vec3 lifted_origin(vec3 x, vec3 nx) {
     return x + nx * surface_lift(x, frame.scene_min.w);
 }

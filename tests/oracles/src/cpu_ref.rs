@@ -321,6 +321,12 @@ fn surface(scene: &Scene, bvh: &Bvh, hit: &Hit, eye: DVec3) -> Surface {
     Surface { x, n, ng, albedo: albedo(scene, material, uv.as_vec2()) }
 }
 
+/// `x` moved off its surface along unit `n` by 1e-6 of its scale: a ray's start that its own triangle
+/// cannot block.
+fn lift_off(x: DVec3, n: DVec3) -> DVec3 {
+    x + n * (1e-6 * (1.0 + x.abs().max_element()))
+}
+
 /// Direct radiance toward the eye at `s`, and the bit mask of lights that reach it
 /// (front-facing and unoccluded).
 fn shade(scene: &Scene, bvh: &Bvh, s: &Surface) -> (Vec3, u32) {
@@ -343,16 +349,13 @@ fn shade_from(scene: &Scene, bvh: &Bvh, s: &Surface, lifted: bool) -> (Vec3, u32
             continue;
         }
         let cos = s.n.dot(to) / d2.sqrt();
-        let blocked = |bvh: &Bvh| {
-            if lifted {
-                let side = if s.ng.dot(to) >= 0.0 { s.ng } else { -s.ng };
-                let start = s.x + side * (1e-6 * (1.0 + s.x.abs().max_element()));
-                bvh.intersect_range(start, lp - start, 1e-9, 1.0 - 1e-9).is_some()
-            } else {
-                bvh.occluded(s.x, lp)
-            }
+        let blocked = if lifted {
+            let start = lift_off(s.x, if s.ng.dot(to) >= 0.0 { s.ng } else { -s.ng });
+            bvh.intersect_range(start, lp - start, 1e-9, 1.0 - 1e-9).is_some()
+        } else {
+            bvh.occluded(s.x, lp)
         };
-        if cos <= 0.0 || blocked(bvh) {
+        if cos <= 0.0 || blocked {
             continue;
         }
         lit |= 1 << k.min(31);
@@ -540,7 +543,7 @@ pub fn indirect_at_pixel(
     let b = n.cross(t);
     let mut rng = Pcg::new(i, j, seed);
     let (mut sum, mut sum2) = (DVec3::ZERO, DVec3::ZERO);
-    let origin = s.x + s.ng * (1e-6 * (1.0 + s.x.abs().max_element()));
+    let origin = lift_off(s.x, s.ng);
     for _ in 0..spp {
         // Cosine-distributed direction (Malley's method).
         let (u1, u2) = (rng.uniform(), rng.uniform());
