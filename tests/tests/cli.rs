@@ -974,14 +974,15 @@ fn the_generated_suite_has_forty_loadable_scenes_of_every_scale() {
     assert!(farthest > 100.0, "no scene far from the origin ({farthest} of its size)");
 }
 
-/// `bounce suite`, tiny: two scenes, two methods, two seeds at equal time. One row per scene, method and
+/// `bounce suite`, tiny: two scenes (a file and a folder), two methods, two seeds at equal time. One row per scene, method and
 /// seed; `uniform`'s ratios are 1; gbg's geometric mean in suite.md is the geometric mean over scenes of
 /// the median over seeds of its relMSE over `uniform`'s, recomputed here from suite.csv.
 #[test]
 fn suite_runs_every_method_on_every_scene_and_aggregates() {
     let d = scratch("suite");
     let ws = bounce_tests::workspace();
-    let (cornell, doorway) = (ws.join("assets/cornell-box/scene.toml"), ws.join("assets/doorway/scene.toml"));
+    // A scene file, and a scene's folder (its scene.toml).
+    let (cornell, doorway) = (ws.join("assets/cornell-box/scene.toml"), ws.join("assets/doorway"));
     let out = d.join("out");
     let r = bounce(&[
         "suite",

@@ -120,11 +120,11 @@ fn realtime_frames_are_unbiased_with_reuse_and_after_a_camera_move() {
     });
 }
 
-/// A real-time frame whose camera moved traces its shadow rays without end balls (the pixels' balls are
-/// kept with the G-buffer, so a moving camera would rebuild them for two rays a pixel); the first frame
-/// of a view builds them, and a frame after a light move alone keeps the pixels' and rebuilds the VPLs'.
+/// A real-time frame whose camera or light moved traces its shadow rays without end balls (they are kept
+/// with the G-buffer and the VPL maps, so a move would rebuild them for two rays a pixel); the first frame
+/// of a view builds them, and a still frame after a move builds what the move left without.
 #[test]
-fn realtime_skips_the_end_balls_while_the_camera_moves() {
+fn realtime_skips_the_end_balls_while_the_camera_or_a_light_moves() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
@@ -146,7 +146,10 @@ fn realtime_skips_the_end_balls_while_the_camera_moves() {
         glam::Vec3::from_slice(&l.position[..3]) + glam::Vec3::splat(0.01),
         glam::Vec3::from_slice(&l.intensity[..3]),
     );
-    assert_eq!(balls(&r.render(&s).unwrap()), (false, true), "a light move keeps the pixels' balls");
+    let light_moved = r.render(&s).unwrap();
+    assert_eq!(balls(&light_moved), (false, false), "a light move builds balls");
+    assert!(light_moved.ran.contains(&"ris_shade"), "{:?}", light_moved.ran);
+    assert_eq!(balls(&r.render(&s).unwrap()), (false, true), "a still frame builds the moved light's VPLs' balls");
     r.set_camera(moved(&scene));
     let moving = r.render(&s).unwrap();
     assert_eq!(balls(&moving), (false, false), "a camera move builds balls");

@@ -666,7 +666,7 @@ pub struct BenchArgs {
 #[derive(Args, Debug)]
 #[command(mut_arg("dprsm_res", |a| a.default_value("128")))]
 pub struct SuiteArgs {
-    /// Scene files, or folders whose `*/scene.toml` are the suite.
+    /// Scene files, a scene's folder (holding its `scene.toml`), or folders whose `*/scene.toml` are the suite.
     #[arg(required = true)]
     pub scenes: Vec<PathBuf>,
     /// Output folder (suite.csv, suite.md, suite.png, and each scene's cached ground truth).

@@ -60,6 +60,8 @@ pub struct FrameState {
     pub retained: Retained,
     /// The camera of the last frame rendered (reprojection's `FrameUniforms::prev_view_proj`).
     pub previous_camera: Option<Camera>,
+    /// The lights of the last frame rendered.
+    pub previous_lights: Option<Vec<Light>>,
     /// `Method::Realtime` frames rendered since the renderer began or its frame cache was cleared: each
     /// draws its random numbers from it and the seed, so the frames whose reservoirs it reuses are
     /// independent draws. Only realtime frames count, so that a sequence's images do not depend on what
@@ -132,6 +134,7 @@ impl Renderer {
             lights: scene.lights.clone(),
             retained: Retained::default(),
             previous_camera: None,
+            previous_lights: None,
             realtime_frames: 0,
         };
         Ok(Renderer { ctx, state })
@@ -163,6 +166,7 @@ impl Renderer {
     pub fn clear_frame_cache(&mut self) {
         self.state.retained.clear();
         self.state.previous_camera = None;
+        self.state.previous_lights = None;
         self.state.realtime_frames = 0;
         self.ctx.realtime_learns = None;
     }
@@ -281,12 +285,14 @@ impl Renderer {
             if ris.learn_auto && ris.learn_visibility == 0.0 && self.realtime_learns(s)? {
                 ris.learn_visibility = crate::passes::ris::AUTO_LEARN_FLOOR;
             }
-            // While the camera moves, the pixels' end balls (kept with the G-buffer) would be rebuilt
-            // for one frame's two rays a pixel: the shade's rays walk whole segments instead (the same
-            // answers; Sibenik's frame 0.91–0.94×, the suite's 0.98×; BENCHMARKS.md). Moving lights keep
-            // them (their VPLs' balls pay: the two rooms' frame is 1.42× without).
-            let moving = self.state.previous_camera.is_some_and(|c| c != self.state.camera);
-            let end_balls = s.end_balls && !moving;
+            // While the camera or a light moves, the end balls (the pixels' kept with the G-buffer, the
+            // VPLs' with the maps) would be rebuilt for one frame's two rays a pixel: a ball costs two
+            // BVH walks and saves part of one for each ray that ends in it, and a frame has about one ray
+            // per VPL. The shade's rays walk whole segments instead (the same answers; the frame 0.91–0.94×
+            // on Sibenik under the camera, 0.93× in the two rooms and Sibenik under a light; BENCHMARKS.md).
+            let camera_moved = self.state.previous_camera.is_some_and(|c| c != self.state.camera);
+            let lights_moved = self.state.previous_lights.as_ref().is_some_and(|l| *l != self.state.lights);
+            let end_balls = s.end_balls && !camera_moved && !lights_moved;
             return Ok(Some(FrameSettings { seed, ris, end_balls, ..s.clone() }));
         }
         self.auto_learn(s)
@@ -374,6 +380,7 @@ impl Renderer {
         })?;
         state.retained.next_frame();
         state.previous_camera = Some(state.camera);
+        state.previous_lights = Some(state.lights.clone());
         state.realtime_frames += (s.method == Method::Realtime) as u64;
         let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
         if let Some(p) = &present {

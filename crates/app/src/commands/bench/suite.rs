@@ -85,11 +85,15 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     Ok(())
 }
 
-/// The scene files: each argument that is a file, and every `*/scene.toml` of each folder (sorted).
+/// The scene files: each argument that is a file, a scene folder's `scene.toml`, and every `*/scene.toml` of
+/// each other folder (sorted).
 fn scene_files(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
     let mut files = vec![];
     for a in args {
-        if a.is_dir() {
+        if a.join("scene.toml").is_file() {
+            // One generated scene's own folder.
+            files.push(a.join("scene.toml"));
+        } else if a.is_dir() {
             let mut found: Vec<PathBuf> = std::fs::read_dir(a)
                 .with_context(|| format!("reading {}", a.display()))?
                 .filter_map(|e| e.ok().map(|e| e.path().join("scene.toml")))
@@ -138,8 +142,19 @@ fn ratios(rows: &[Row], method: Method) -> BTreeMap<String, f64> {
     let uniform = per_scene(rows, Method::Uniform, |s| s.metrics.rel_mse);
     per_scene(rows, method, |s| s.metrics.rel_mse)
         .into_iter()
-        .filter_map(|(k, v)| uniform.get(&k).map(|u| (k, v / u)))
+        .filter_map(|(k, v)| uniform.get(&k).map(|u| (k, ratio(v, *u))))
         .collect()
+}
+
+/// An error over `uniform`'s. Both exact (a view that no one-bounce light reaches, whose truth and
+/// estimates are all 0) is level, 1, not the undefined 0 / 0 that would rank as every method's worst
+/// scene; any error over an exact `uniform` is infinitely worse.
+fn ratio(v: f64, uniform: f64) -> f64 {
+    match (v == 0.0, uniform == 0.0) {
+        (true, true) => 1.0,
+        (false, true) => f64::INFINITY,
+        _ => v / uniform,
+    }
 }
 
 /// (mean, standard deviation) over seeds of the image mean over the truth's, for each scene.
@@ -215,7 +230,7 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         let (bs, bv) = worst(&bias);
         let spread = mm.values().map(|(_, s)| *s).fold(0.0, f64::max);
         let tail = per_scene(rows, m, |s| s.metrics.p999_abs);
-        let tail_ratio = median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).map(|u| v / u)).collect());
+        let tail_ratio = median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).map(|u| ratio(*v, *u))).collect());
         md += &format!(
             "| {} | {:.3} | {:.3} ({ws}) | {above} of {} | {:.2} % ({bs}) | {:.2} % | {:.3} |\n",
             m.name(),
@@ -298,5 +313,10 @@ mod tests {
         assert_eq!(worst(&m), ("b".to_string(), 3.0));
         assert_eq!(scene_name(Path::new("x/boxes-1/scene.toml")), "boxes-1");
         assert_eq!(scene_name(Path::new("x/room.toml")), "room");
+        // A dark view: every method exact, level with `uniform`; an error where `uniform` is exact is the worst.
+        assert_eq!(ratio(0.0, 0.0), 1.0);
+        assert_eq!(ratio(0.5, 0.0), f64::INFINITY);
+        assert_eq!(ratio(0.0, 0.5), 0.0);
+        assert_eq!(ratio(0.25, 0.5), 0.5);
     }
 }
