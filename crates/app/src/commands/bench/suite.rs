@@ -142,18 +142,19 @@ fn ratios(rows: &[Row], method: Method) -> BTreeMap<String, f64> {
     let uniform = per_scene(rows, Method::Uniform, |s| s.metrics.rel_mse);
     per_scene(rows, method, |s| s.metrics.rel_mse)
         .into_iter()
-        .filter_map(|(k, v)| uniform.get(&k).map(|u| (k, ratio(v, *u))))
+        .filter_map(|(k, v)| uniform.get(&k).and_then(|u| ratio(v, *u)).map(|r| (k, r)))
         .collect()
 }
 
-/// An error over `uniform`'s. Both exact (a view that no one-bounce light reaches, whose truth and
-/// estimates are all 0) is level, 1, not the undefined 0 / 0 that would rank as every method's worst
-/// scene; any error over an exact `uniform` is infinitely worse.
-fn ratio(v: f64, uniform: f64) -> f64 {
+/// An error over `uniform`'s. None where both are exact (a view that no one-bounce light reaches, whose
+/// truth and estimates are all 0): such a scene says nothing of the methods and is left out of the
+/// aggregates (0 / 0 would rank as every method's worst, 1 would pull each geometric mean toward 1).
+/// Any error over an exact `uniform` is infinitely worse.
+fn ratio(v: f64, uniform: f64) -> Option<f64> {
     match (v == 0.0, uniform == 0.0) {
-        (true, true) => 1.0,
-        (false, true) => f64::INFINITY,
-        _ => v / uniform,
+        (true, true) => None,
+        (false, true) => Some(f64::INFINITY),
+        _ => Some(v / uniform),
     }
 }
 
@@ -230,7 +231,8 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         let (bs, bv) = worst(&bias);
         let spread = mm.values().map(|(_, s)| *s).fold(0.0, f64::max);
         let tail = per_scene(rows, m, |s| s.metrics.p999_abs);
-        let tail_ratio = median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).map(|u| ratio(*v, *u))).collect());
+        let tail_ratio =
+            median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).and_then(|u| ratio(*v, *u))).collect());
         md += &format!(
             "| {} | {:.3} | {:.3} ({ws}) | {above} of {} | {:.2} % ({bs}) | {:.2} % | {:.3} |\n",
             m.name(),
@@ -240,6 +242,14 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
             100.0 * bv,
             100.0 * spread,
             tail_ratio
+        );
+    }
+    let dark: Vec<&str> =
+        scenes.iter().filter(|s| all.values().all(|r| !r.contains_key(*s))).map(|s| s.as_str()).collect();
+    if !dark.is_empty() {
+        md += &format!(
+            "\nLeft out of the ratios: {} (every method's error exactly 0: no one-bounce light in view).\n",
+            dark.join(", ")
         );
     }
     let families: Vec<String> = {
@@ -313,10 +323,10 @@ mod tests {
         assert_eq!(worst(&m), ("b".to_string(), 3.0));
         assert_eq!(scene_name(Path::new("x/boxes-1/scene.toml")), "boxes-1");
         assert_eq!(scene_name(Path::new("x/room.toml")), "room");
-        // A dark view: every method exact, level with `uniform`; an error where `uniform` is exact is the worst.
-        assert_eq!(ratio(0.0, 0.0), 1.0);
-        assert_eq!(ratio(0.5, 0.0), f64::INFINITY);
-        assert_eq!(ratio(0.0, 0.5), 0.0);
-        assert_eq!(ratio(0.25, 0.5), 0.5);
+        // A dark view: every method exact, left out; an error where `uniform` is exact is the worst.
+        assert_eq!(ratio(0.0, 0.0), None);
+        assert_eq!(ratio(0.5, 0.0), Some(f64::INFINITY));
+        assert_eq!(ratio(0.0, 0.5), Some(0.0));
+        assert_eq!(ratio(0.25, 0.5), Some(0.5));
     }
 }
