@@ -289,7 +289,7 @@ impl Renderer {
             // VPLs' with the maps) would be rebuilt for one frame's two rays a pixel: a ball costs two
             // BVH walks and saves part of one for each ray that ends in it, and a frame has about one ray
             // per VPL. The shade's rays walk whole segments instead (the same answers; the frame 0.91–0.94×
-            // on Sibenik under the camera, 0.93× in the two rooms and Sibenik under a light; BENCHMARKS.md).
+            // on Sibenik under the camera, 0.94× in the two rooms and 0.92× on Sibenik under a light; BENCHMARKS.md).
             let camera_moved = self.state.previous_camera.is_some_and(|c| c != self.state.camera);
             let lights_moved = self.state.previous_lights.as_ref().is_some_and(|l| *l != self.state.lights);
             let end_balls = s.end_balls && !camera_moved && !lights_moved;

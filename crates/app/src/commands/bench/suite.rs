@@ -158,6 +158,11 @@ fn ratio(v: f64, uniform: f64) -> Option<f64> {
     }
 }
 
+/// The scenes no method has a ratio on: every error there exactly 0 (see [`ratio`]).
+fn dark_scenes<'s>(scenes: &'s [String], ratios: &BTreeMap<&str, BTreeMap<String, f64>>) -> Vec<&'s str> {
+    scenes.iter().filter(|s| ratios.values().all(|r| !r.contains_key(*s))).map(|s| s.as_str()).collect()
+}
+
 /// (mean, standard deviation) over seeds of the image mean over the truth's, for each scene.
 fn means(rows: &[Row], method: Method) -> BTreeMap<String, (f64, f64)> {
     let mut by: BTreeMap<String, Vec<f64>> = BTreeMap::new();
@@ -244,8 +249,7 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
             tail_ratio
         );
     }
-    let dark: Vec<&str> =
-        scenes.iter().filter(|s| all.values().all(|r| !r.contains_key(*s))).map(|s| s.as_str()).collect();
+    let dark = dark_scenes(&scenes, &all);
     if !dark.is_empty() {
         md += &format!(
             "\nLeft out of the ratios: {} (every method's error exactly 0: no one-bounce light in view).\n",
@@ -328,5 +332,41 @@ mod tests {
         assert_eq!(ratio(0.5, 0.0), Some(f64::INFINITY));
         assert_eq!(ratio(0.0, 0.5), Some(0.0));
         assert_eq!(ratio(0.25, 0.5), Some(0.5));
+    }
+
+    /// A scene whose truth and estimates are all 0 is left out of every method's ratios and named as dark;
+    /// a lit scene's ratio is the relMSEs' quotient; a scene where only `uniform` is exact stays in (worst).
+    #[test]
+    fn a_dark_scene_is_left_out_of_the_ratios() {
+        let row = |scene: &str, method: Method, test: f32, truth: f32| Row {
+            scene: scene.into(),
+            family: family(scene),
+            sample: Sample {
+                method,
+                column: Column { vpls: 1, seconds: None },
+                seed: 1,
+                frames: 1,
+                gpu_ms: 0.0,
+                wall_ms: 0.0,
+                passes: BTreeMap::new(),
+                metrics: crate::metrics::Metrics::of(&[[test; 3]], &[[truth; 3]]),
+            },
+        };
+        let rows = [
+            row("dark", Method::Uniform, 0.0, 0.0),
+            row("dark", Method::Gbg, 0.0, 0.0),
+            row("lit", Method::Uniform, 1.2, 1.0),
+            row("lit", Method::Gbg, 1.1, 1.0),
+            row("odd", Method::Uniform, 0.0, 0.0),
+            row("odd", Method::Gbg, 0.5, 0.0),
+        ];
+        let gbg = ratios(&rows, Method::Gbg);
+        assert_eq!(gbg.keys().collect::<Vec<_>>(), ["lit", "odd"]);
+        assert!((gbg["lit"] - 0.25).abs() < 1e-9, "{gbg:?}");
+        assert_eq!(gbg["odd"], f64::INFINITY);
+        let all: BTreeMap<&str, BTreeMap<String, f64>> =
+            [("uniform", ratios(&rows, Method::Uniform)), ("gbg", gbg)].into();
+        let scenes = ["dark", "lit", "odd"].map(String::from);
+        assert_eq!(dark_scenes(&scenes, &all), ["dark"]);
     }
 }
