@@ -101,7 +101,7 @@ void emit_perspective(vec3 p[3], uint inst) {
         hi = vec2(1.0);
     } else {
         for (int k = 0; k < n; k++) include_uv(lm_project(poly[k]), lo, hi);
-        float margin = 1.0 / float(pc.map_res);
+        float margin = 2.0 / float(pc.map_res);  // as below: the texel rays pass anywhere in the texel
         lo = max(lo - margin, vec2(-1.0));
         hi = min(hi + margin, vec2(1.0));
     }
@@ -162,8 +162,14 @@ void main() {
             include_uv(a.xy / (1.0 + a.z), lo, hi);
             include_arc(a, b, lo, hi);
         }
-        // Half a texel of margin against rounding; the fragment test is exact anyway.
+        // Margin against rounding (the fragment test is exact anyway): half a texel, and in the reflective
+        // map another half, since its texel rays pass anywhere in the texel (dprsm_reflective.frag) while
+        // a fragment runs where the box covers the texel's centre.
+#ifdef PSM_VIEW
         float margin = 1.0 / float(pc.map_res);
+#else
+        float margin = 2.0 / float(pc.map_res);
+#endif
         lo = max(lo - margin, vec2(-1.0));
         hi = min(hi + margin, vec2(1.0));
     }

@@ -1,5 +1,6 @@
 #version 460
-// dprsm (reflective): like dprsm.frag, the exact hit of each texel's centre ray, plus the VPL it makes:
+// dprsm (reflective): like dprsm.frag, the exact hit of each texel's ray (through the layer's random point
+// in the texel, not its centre), plus the VPL it makes:
 // world position, shading normal facing the light, and reflected flux
 //   Φ_v = albedo(v) · I · Δω_v,   Δω_v = 4 / (1 + u² + v²)² · (2 / res)² (paraboloid faces)
 // (the texel's solid angle seen from the light; the thesis's eqs. 7.1–7.3 leave it out, and without it
@@ -30,7 +31,9 @@ layout(location = 2) out vec4 o_flux;     // rgb reflected flux (W), w = Δω (s
 
 void main() {
     float res = float(pc.map_res);
-    vec2 uv = gl_FragCoord.xy / res * 2.0 - 1.0;
+    // The texel's ray passes at the frame's offset in it (dprsm.rs: a Cranley–Patterson rotation of the
+    // texel grid, its own per layer), not at its centre.
+    vec2 uv = (floor(gl_FragCoord.xy) + texel_offset(pc.offset, i_instance)) / res * 2.0 - 1.0;
     if (!lm_covers(uv)) discard;
     vec3 dir = lm_direction(uv);
     // Watertight, as in dprsm.frag: no texel ray slips between two triangles sharing an edge.

@@ -72,7 +72,16 @@ bool lm_covers(vec2 uv) {
     return lm_kind() == LIGHT_MAP_DPRSM ? dot(uv, uv) <= 1.0 : all(lessThanEqual(abs(uv), vec2(1.0)));
 }
 
-// Solid angle of the texel centred at (u, v) of a res² face.
+// Where in its texel layer `layer`'s rays pass, in texels: `offset` (layer 0's, in [0, 1)²) moved on by
+// the R2 sequence's step per layer and wrapped, so that each layer's offset is uniform in the texel when
+// layer 0's is, and the layers of one light do not share it.
+// (crates/graph/src/frame/keys.rs has the host's twin.)
+vec2 texel_offset(vec2 offset, uint layer) {
+    return fract(offset + float(layer) * vec2(0.7548777, 0.5698403));
+}
+
+// Solid angle of the texel centred at (u, v) of a res² face (with u, v anywhere in the texel: the
+// Jacobian there times the texel's area in map coordinates).
 float lm_d_omega(vec2 uv, float res) {
     float r2 = dot(uv, uv);
     if (lm_kind() == LIGHT_MAP_DPRSM) return 4.0 / ((1.0 + r2) * (1.0 + r2)) * (2.0 / res) * (2.0 / res);

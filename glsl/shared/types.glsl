@@ -136,6 +136,7 @@ struct VoxelizePush {
 struct ParaboloidPush {
     uint map_res;     // the map resolution per face
     uint pad;
+    vec2 offset;      // the reflective map's texel ray offset in layer 0, in texels ([0, 1)²; ½: the centre)
 };
 
 // present push constants.

@@ -59,6 +59,8 @@ void main() {
     put4u(uvec4(floatBitsToUint(ip.min_d2), floatBitsToUint(ip.fixed_scale), ip.section, ip.first));
     put4u(uvec4(cp.stage, cp.row_length, cp.rows, cp.section));
     put4u(uvec4(vp.cells_per_invocation, vp.first_triangle, pp.map_res, pp.pad));
+    words[k++] = floatBitsToUint(pp.offset.x);
+    words[k++] = floatBitsToUint(pp.offset.y);
     put4u(uvec4(pr.stage, pr.frames, pr.reset, pr.swap_rb));
     put4u(uvec4(floatBitsToUint(pr.exposure), pr.groups, pr.pad0, pr.pad1));
     put4u(uvec4(rp.history, floatBitsToUint(rp.plane), floatBitsToUint(rp.normal), rp.pad0));

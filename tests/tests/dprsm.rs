@@ -1,10 +1,12 @@
 //! The reflective dual paraboloid maps (the VPLs) against an exact CPU ray cast from the light through
-//! every texel centre. The GPU rasterizes a conservative box around each triangle's exact (curved) image and
-//! intersects per texel, so depths must agree to float rounding everywhere but at texels whose centre
-//! ray grazes a triangle edge (there the two sides may legitimately pick different triangles).
+//! every texel's sample point (the frame's offset in the texel, `Keys::vpl_offset`). The GPU rasterizes a
+//! conservative box around each triangle's exact (curved) image and intersects per texel, so depths must
+//! agree to float rounding everywhere but at texels whose ray grazes a triangle edge (there the two sides
+//! may legitimately pick different triangles). And the VPLs' solid angles over seeds against a closed form.
 
 use bounce_graph::bindings::VPL_MIN_COS;
 use bounce_graph::camera::Camera;
+use bounce_graph::frame::keys::{texel_offset, vpl_offset};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::scene::{point_light, Scene};
 use bounce_oracles::cpu_ref::{Bvh, Trace};
@@ -29,9 +31,11 @@ pub fn big_floor_scene() -> Scene {
     Scene::from_triangles(&tris, &albedo, camera, &[light, light2])
 }
 
-/// Paraboloid coordinates of texel (i, j) of an n² face, offset by (di, dj) texels from its centre.
-fn texel_uv(i: usize, j: usize, n: usize, di: f64, dj: f64) -> (f64, f64) {
-    ((i as f64 + 0.5 + di) / n as f64 * 2.0 - 1.0, (j as f64 + 0.5 + dj) / n as f64 * 2.0 - 1.0)
+/// Paraboloid coordinates of texel (i, j) of an n² face, offset by (di, dj) texels from the point `o`
+/// (in texels) where the face's texel rays pass (`bounce_graph::frame::keys::texel_offset`).
+fn texel_uv(i: usize, j: usize, n: usize, o: [f32; 2], di: f64, dj: f64) -> (f64, f64) {
+    let (oi, oj) = (o[0] as f64, o[1] as f64);
+    ((i as f64 + oi + di) / n as f64 * 2.0 - 1.0, (j as f64 + oj + dj) / n as f64 * 2.0 - 1.0)
 }
 
 /// The unit direction of paraboloid coordinates (u, v) on face 0 (+z) or 1 (−z), in f64: the inverse of
@@ -49,14 +53,19 @@ fn paraboloid_dir((u, v): (f64, f64), face: usize) -> DVec3 {
 /// Whether texel (i, j) of face `face` straddles a triangle edge: a hundredth of a texel away from its centre
 /// the ray from `lp` leaves the unit disk or hits a different triangle (or nothing) than `tri`. Such texels
 /// are rasterised by whichever triangle wins the tie, so they are not compared exactly.
-fn near_triangle_edge(bvh: &Bvh, lp: DVec3, (i, j, n, face): (usize, usize, usize, usize), tri: Option<u32>) -> bool {
+fn near_triangle_edge(
+    bvh: &Bvh,
+    lp: DVec3,
+    (i, j, n, face, o): (usize, usize, usize, usize, [f32; 2]),
+    tri: Option<u32>,
+) -> bool {
     [(0.01, 0.0), (-0.01, 0.0), (0.0, 0.01), (0.0, -0.01)].iter().any(|&(di, dj)| {
-        let (pu, pv) = texel_uv(i, j, n, di, dj);
+        let (pu, pv) = texel_uv(i, j, n, o, di, dj);
         pu * pu + pv * pv > 1.0 || bvh.intersect(lp, paraboloid_dir((pu, pv), face)).map(|h| h.tri) != tri
     })
 }
 
-/// The reflective DPRSM: every texel's VPL against a CPU ray cast through the texel centre: position,
+/// The reflective DPRSM: every texel's VPL against a CPU ray cast through its sample point: position,
 /// light-facing normal, solid angle Δω = 4/(1+u²+v²)² (2/res)², flux albedo · I · Δω and the patch area
 /// A_v = Δω · t² / max(|cos α|, VPL_MIN_COS) (t the hit distance, α between the ray and the face); and the solid
 /// angles of all texels inside the unit disk add up to 4π (minus the ring the disk's texels miss).
@@ -115,6 +124,8 @@ fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
         ..FrameSettings::default()
     };
     let [pos, nrm, flux] = bounce_tests::maps::render_vpls(&r, &s).unwrap();
+    // Where the texel rays pass in layer 0 (the others follow from it): not the centre.
+    let offset = vpl_offset(&s);
     let bvh = Bvh::new(&scene);
     let n = res as usize;
     let (mut checked, mut edge) = (0usize, 0usize);
@@ -128,7 +139,8 @@ fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
             for j in 0..n {
                 for i in 0..n {
                     let k = ((li * 2 + face) * n + j) * n + i;
-                    let (u, v) = texel_uv(i, j, n, 0.0, 0.0);
+                    let o = texel_offset(offset, (li * 2 + face) as u32);
+                    let (u, v) = texel_uv(i, j, n, o, 0.0, 0.0);
                     let r2 = u * u + v * v;
                     if r2 > 1.0 {
                         assert_eq!(pos[k][3], 0.0, "texel outside the disk holds a VPL");
@@ -139,7 +151,7 @@ fn check_reflective_against_ray_cast(scene: &Scene, res: u32) {
                         omega_sum[face] += d_omega;
                     }
                     let hit = bvh.intersect(lp, paraboloid_dir((u, v), face));
-                    if near_triangle_edge(&bvh, lp, (i, j, n, face), hit.as_ref().map(|h| h.tri)) {
+                    if near_triangle_edge(&bvh, lp, (i, j, n, face, o), hit.as_ref().map(|h| h.tri)) {
                         edge += 1;
                         continue;
                     }
@@ -382,4 +394,66 @@ fn the_light_maps_box_depth_is_below_every_texel_depth() {
     );
     assert!(bad.is_empty(), "{} bad cases: {}", bad.len(), bad[..bad.len().min(6)].join("\n"));
     assert!(hits * 10 > rays * 9, "only {hits} of {rays} rays hit their triangles: the rays are not aimed at them");
+}
+
+/// Solid angle of triangle (a, b, c) seen from the origin (Van Oosterom and Strackee 1983).
+fn triangle_solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    2.0 * a.dot(b.cross(c)).abs().atan2(den)
+}
+
+/// The VPLs' places in their texels are random (`Keys::vpl_offset`), so the VPL sum's mean over seeds is
+/// the integral over the light's directions, where the texel centres' sum is a quadrature with an error of
+/// its own. Here the integrand is 1 on a triangle a few texels wide: Σ Δω over its VPLs against its
+/// solid angle in closed form, over 256 seeds. The centres' sum (on the CPU, as the maps held it before)
+/// is off by far more than the test's tolerance, so the test can see that error come back.
+#[test]
+fn the_vpls_solid_angles_are_unbiased_over_seeds() {
+    let v = |x: f32, y: f32| Vec3::new(x, y, 1.0);
+    let tri = [v(0.1, 0.05), v(0.9, 0.2), v(0.3, 0.7)];
+    let camera = Camera { eye: Vec3::new(0.0, 0.0, -1.0), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 60.0 };
+    let scene = Scene::from_triangles(&[tri], &[Vec3::splat(0.5)], camera, &[point_light(Vec3::ZERO, Vec3::ONE)]);
+    let exact = triangle_solid_angle(tri[0].as_dvec3(), tri[1].as_dvec3(), tri[2].as_dvec3());
+    let res = 24u32;
+    let gpu = TestGpu::new();
+    let r = Renderer::new(&gpu, &scene).unwrap();
+    let sums: Vec<f64> = (1..=256u64)
+        .map(|seed| {
+            let s = FrameSettings {
+                dprsm_res: res,
+                seed,
+                method: Method::Uniform,
+                component: Component::Direct,
+                ..FrameSettings::default()
+            };
+            let [pos, _, flux] = bounce_tests::maps::render_vpls(&r, &s).unwrap();
+            pos.iter().zip(&flux).filter(|(p, _)| p[3] != 0.0).map(|(_, f)| f[3] as f64).sum()
+        })
+        .collect();
+    let n = sums.len() as f64;
+    let mean = sums.iter().sum::<f64>() / n;
+    let se = (sums.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    // The texel centres' sum: the directions through the centres of face 0 that hit the triangle.
+    let bvh = Bvh::new(&scene);
+    let n_res = res as usize;
+    let mut centres = 0.0;
+    for j in 0..n_res {
+        for i in 0..n_res {
+            let (u, v) = texel_uv(i, j, n_res, [0.5; 2], 0.0, 0.0);
+            let r2 = u * u + v * v;
+            if r2 <= 1.0 && bvh.intersect(DVec3::ZERO, paraboloid_dir((u, v), 0)).is_some() {
+                centres += 4.0 / ((1.0 + r2) * (1.0 + r2)) * (2.0 / res as f64).powi(2);
+            }
+        }
+    }
+    eprintln!(
+        "Ω = {exact:.5}: VPLs over 256 seeds {mean:.5} ± {se:.5} (per seed {:.5}..{:.5}); texel centres {centres:.5}",
+        sums.iter().cloned().fold(f64::MAX, f64::min),
+        sums.iter().cloned().fold(f64::MIN, f64::max)
+    );
+    assert!(se > 0.0, "every seed gave the same VPLs: the places are not random");
+    assert!((mean - exact).abs() < 4.0 * se, "mean {mean} ± {se} against Ω = {exact}");
+    // The test could see the centres' error: it is many standard errors.
+    assert!((centres - exact).abs() > 8.0 * se, "the centres' sum {centres} is within 8 se {se} of Ω = {exact}");
 }

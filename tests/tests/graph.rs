@@ -136,7 +136,8 @@ fn an_unchanged_frame_records_only_the_gather() {
     let second = r.render(&s).unwrap();
     assert_eq!(second.ran, vec!["gather"], "an unchanged frame recorded more than the gather");
     assert_eq!(first.radiance, second.radiance);
-    let reseeded = r.render(&FrameSettings { seed: 99, ..s.clone() }).unwrap();
+    // A new seed with the light side's kept (as progressive frames keep it) draws only new picks...
+    let reseeded = r.render(&FrameSettings { seed: 99, cdf_seed: Some(s.seed), ..s.clone() }).unwrap();
     assert_eq!(reseeded.ran, vec!["gather"]);
     assert_ne!(reseeded.radiance, first.radiance);
     // Exact shadow rays need no voxel grid: a frame with them never voxelizes.
@@ -146,7 +147,7 @@ fn an_unchanged_frame_records_only_the_gather() {
     let gbg = FrameSettings { method: Method::Gbg, ..s.clone() };
     assert!(r.render(&gbg).unwrap().ran.contains(&"importance"));
     assert_eq!(r.render(&gbg).unwrap().ran, vec!["gather"]);
-    let gbg2 = r.render(&FrameSettings { seed: 5, ..gbg.clone() }).unwrap();
+    let gbg2 = r.render(&FrameSettings { seed: 5, vpl_seed: Some(s.seed), ..gbg.clone() }).unwrap();
     assert!(gbg2.ran.contains(&"importance"), "gbg's importance depends on the seed: {:?}", gbg2.ran);
     let bigger = r.render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
     assert!(bigger.ran.contains(&"gbuffer"));
@@ -157,6 +158,9 @@ fn an_unchanged_frame_records_only_the_gather() {
     }
     let fresh = Renderer::new(&gpu, &scene).unwrap().render(&FrameSettings { width: 32, ..s.clone() }).unwrap();
     assert_eq!(fresh.radiance, bigger.radiance, "the kept validity CDF changed the image");
+    // ...while a new seed alone also puts the VPLs elsewhere in their texels: the maps are redrawn.
+    let moved = r.render(&FrameSettings { seed: 99, width: 32, ..s.clone() }).unwrap();
+    assert!(moved.ran.contains(&"dprsm"), "a new VPL seed kept the maps: {:?}", moved.ran);
 }
 
 /// `Renderer::warm_up` (every `render` runs it before its timed frames, so that a driver's first-use

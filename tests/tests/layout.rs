@@ -71,7 +71,7 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     };
     let cp = CdfPush { stage: 6001, row_length: 6002, rows: 6003, section: 6004 };
     let vp = VoxelizePush { cells_per_invocation: 7001, first_triangle: 7002 };
-    let pp = ParaboloidPush { map_res: 8001, pad: 8002 };
+    let pp = ParaboloidPush { map_res: 8001, pad: 8002, offset: [next(), next()] };
     let pr = PresentPush {
         stage: 9001,
         frames: 9002,

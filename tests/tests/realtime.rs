@@ -26,6 +26,8 @@ fn realtime(seed: u64) -> FrameSettings {
     let mut s = FrameSettings {
         method: Method::Realtime,
         seed,
+        // `all`'s VPL set (the default seed's places in the texels): the means are over the picks alone.
+        vpl_seed: Some(FrameSettings::default().seed),
         clamp: 0.01,
         denoise: false,
         component: Component::Indirect,
@@ -76,7 +78,8 @@ fn moved(scene: &Scene) -> bounce_graph::camera::Camera {
 /// Frame 3 of a static view (its reservoirs combine two frames of history and four neighbours, and the
 /// control variate's β has counted two frames of rays) is unbiased: over 48 runs, each from an empty
 /// history, its mean converges to `all`; and the history is used: frame 3 has a lower error than frame
-/// 1 (summed over the runs: measured 24 % lower). Then the camera moves: the first frame after the move
+/// 1 (summed over the runs: measured 12 %, 17 % and 12 % lower with VPL seeds 1, 2 and 3; 24 % with the
+/// texel centres, whose VPL set put spikes next to corners that frame 1 showed and the reuse smoothed). Then the camera moves: the first frame after the move
 /// reprojects two frames of history made from the old view, and is unbiased against `all` from the new
 /// view.
 #[test]
@@ -104,7 +107,7 @@ fn realtime_frames_are_unbiased_with_reuse_and_after_a_camera_move() {
         img
     });
     eprintln!("realtime: relMSE of frame 1 {first:.4}, of frame {FRAMES} {last:.4} (sums over runs)");
-    assert!(last < 0.8 * first, "the reuse does not help: frame 1 {first}, frame {FRAMES} {last}");
+    assert!(last < 0.9 * first, "the reuse does not help: frame 1 {first}, frame {FRAMES} {last}");
 
     r.set_camera(moved(&scene));
     let all_moved = all(&mut r);

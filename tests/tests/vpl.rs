@@ -284,15 +284,21 @@ fn all_agrees_with_the_exact_one_bounce_reference_in_the_cornell_box() {
 
 /// The VPL kernel (`--vpl-kernel`, glsl/shared/vpl.glsl) against the exact one-bounce image: the converged
 /// sum (`all`, exact visibility) with the patch kernel must be at least 2× closer in relMSE than with the
-/// thesis's point kernel on the Cornell box, whose corners put receivers next to VPLs, and keep its mean
-/// within 1.5 % of the reference. At coarse maps (32² and 64² per face) the patches are large, so both
-/// the point kernel's overshoot and any energy the patch kernel loses show most (measured here: relMSE
-/// 0.044 → 0.0020 at 32², 0.0038 → 0.0013 at 64²; means +5.0 % → +0.7 % and −0.5 % → −1.1 %). The reference is the GPU path tracer
+/// thesis's point kernel on the Cornell box, whose corners put receivers next to VPLs, over 8 VPL sets (the
+/// VPLs' places in their texels, `FrameSettings::vpl_seed`: where a VPL lands next to a receiver decides
+/// the point kernel's error), and its mean, which loses the energy the kernel bounds next to receivers,
+/// must stay within 2.5 % of the reference at 32² per face and 1.5 % at 64², the loss shrinking as the
+/// maps grow. At these coarse maps the patches are large, so both the point kernel's spikes and the patch
+/// kernel's loss show most (measured here: relMSE 0.021 → 0.0024 at 32², 0.0029 → 0.0010 at 64²; the patch
+/// kernel's mean −1.8 % and −0.7 %, the point kernel's, unbiased, −0.5 % and −0.0 %; with the texel
+/// centres, one VPL set, the patch kernel read +0.7 % and −1.1 %: the centres' own error offset its loss).
+/// The reference is the GPU path tracer
 /// (`Method::Reference`, checked against the CPU tracer and closed forms in reference.rs) at 16384 paths
 /// per pixel, whose own relMSE (≈ 1e-4) is well under the differences measured; the CPU tracer at a
 /// test's budget is not (2048 paths: 0.0033).
 #[test]
 fn the_patch_kernel_brings_the_vpl_sum_closer_to_the_exact_one_bounce_image() {
+    const SEEDS: u64 = 8;
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let (w, h) = (24, 24);
     let gpu = TestGpu::new();
@@ -305,27 +311,42 @@ fn the_patch_kernel_brings_the_vpl_sum_closer_to_the_exact_one_bounce_image() {
     };
     let r_img = indirect_with(&mut r, reference, w, h, 32, 32);
     let mr = bounce_tests::mean(&r_img);
+    let mut biases = vec![];
     for res in [32, 64] {
-        let sum = |r: &mut Renderer, vpl_kernel| {
+        let sum = |r: &mut Renderer, vpl_kernel, seed| {
             let s = FrameSettings {
                 method: Method::All,
                 vpl_kernel,
+                seed,
                 component: Component::Direct,
                 ..FrameSettings::default()
             };
             indirect_with(r, s, w, h, res, 32)
         };
-        let (point, patch) = (sum(&mut r, VplKernel::Point), sum(&mut r, VplKernel::Patch));
-        let (ep, eq) = (bounce_tests::rel_mse(&point, &r_img), bounce_tests::rel_mse(&patch, &r_img));
-        let mq = bounce_tests::mean(&patch);
+        let (mut ep, mut eq, mut mq, mut mp) = (0.0, 0.0, 0.0, 0.0);
+        for seed in 1..=SEEDS {
+            let (point, patch) = (sum(&mut r, VplKernel::Point, seed), sum(&mut r, VplKernel::Patch, seed));
+            let (p, q) = (bounce_tests::rel_mse(&point, &r_img), bounce_tests::rel_mse(&patch, &r_img));
+            eprintln!("{res}², VPL seed {seed}: relMSE point {p:.5}, patch {q:.5}");
+            ep += p / SEEDS as f64;
+            eq += q / SEEDS as f64;
+            mq += bounce_tests::mean(&patch) / SEEDS as f64;
+            mp += bounce_tests::mean(&point) / SEEDS as f64;
+        }
         eprintln!(
-            "{res}² per face: relMSE against the exact image: point {ep:.5}, patch {eq:.5}; patch mean {:+.2}%, point {:+.2}%",
+            "{res}² per face, over {SEEDS} VPL sets: relMSE against the exact image: point {ep:.5}, patch {eq:.5}; patch mean {:+.2}%, point {:+.2}%",
             100.0 * (mq - mr) / mr,
-            100.0 * (bounce_tests::mean(&point) - mr) / mr
+            100.0 * (mp - mr) / mr
         );
         assert!(2.0 * eq <= ep, "{res}²: the patch kernel's relMSE {eq} is not 2× below the point kernel's {ep}");
-        assert!(((mq - mr) / mr).abs() <= 0.015, "{res}²: patch kernel mean {mq} vs {mr}");
+        biases.push((mq - mr) / mr);
+        assert!(
+            biases[biases.len() - 1].abs() <= if res == 32 { 0.025 } else { 0.015 },
+            "{res}²: patch kernel mean {mq} vs {mr}"
+        );
     }
+    // The patch kernel's loss is the patches' size next to the receivers: it shrinks as the maps grow.
+    assert!(biases[1].abs() < 0.6 * biases[0].abs(), "the patch kernel's bias does not shrink: {biases:?}");
 }
 
 /// `mis` against `all` with either visibility (voxel march, BVH) and at the default defensive share:
@@ -375,7 +396,9 @@ fn mis_seed_mean(
 ) -> (f64, f64) {
     let means: Vec<f64> = seeds
         .map(|seed| {
-            let s = FrameSettings { method: Method::Mis, seed, vpls: 8, gather_rays: 16, ..base.clone() };
+            // `all`'s VPL set (its seed's places in the texels): the mean is over the picks alone.
+            let vpl_seed = Some(base.seed);
+            let s = FrameSettings { method: Method::Mis, seed, vpl_seed, vpls: 8, gather_rays: 16, ..base.clone() };
             bounce_tests::mean(&indirect_with(r, s, w, h, res, vox))
         })
         .collect();

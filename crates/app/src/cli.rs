@@ -319,8 +319,8 @@ pub struct FrameArgs {
     /// The VPL map at each light (its faces are --dprsm-res² each).
     #[arg(long, value_parser = LightMaps, default_value = LIGHT_MAPS.name_of(&d().light_map))]
     pub light_map: LightMap,
-    /// Seed of the importance's gather points and rays (default: --seed). `bounce view` keeps it fixed
-    /// across its progressive frames.
+    /// Seed of the light side: the importance's gather points and rays, and where in its texel each VPL
+    /// lies (default: --seed). Progressive frames (`render --time-limit`, `bounce view`) keep it fixed.
     #[arg(long)]
     pub cdf_seed: Option<u64>,
     /// Candidate distribution of --method ris (the CDF methods' mixtures, --defensive included, without

@@ -190,14 +190,18 @@ const _: () = assert!(offset_of!(VoxelizePush, first_triangle) == 4);
 
 /// Push constants of the paraboloid maps' shaders (dprsm's and psm's).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ParaboloidPush {
     /// The map resolution per face.
     pub map_res: u32,
     pub pad: u32,
+    /// Where in its texel each reflective-map texel's ray passes, in texels ([0, 1)², ½ the centre), for
+    /// layer 0; layer k adds k times the R2 sequence's step, wrapped (`dprsm_reflective.frag`).
+    pub offset: [f32; 2],
 }
-const _: () = assert!(size_of::<ParaboloidPush>() == 8);
+const _: () = assert!(size_of::<ParaboloidPush>() == 16);
 const _: () = assert!(offset_of!(ParaboloidPush, pad) == 4);
+const _: () = assert!(offset_of!(ParaboloidPush, offset) == 8);
 
 /// present push constants.
 #[repr(C)]

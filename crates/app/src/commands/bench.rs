@@ -44,6 +44,14 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         return Err(bad(anyhow::anyhow!("`all` is the reference of `bounce bench`, not a method to sweep")));
     }
     let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
+    // Against `all` every run takes its VPL set (the VPLs' places in their texels: `vpl_seed`), so that the
+    // error is the selection's alone; against the path-traced truth each seed draws its own.
+    let base = match a.reference {
+        ReferenceArg::All => {
+            FrameSettings { vpl_seed: Some(base.vpl_seed.or(base.cdf_seed).unwrap_or(base.seed)), ..base }
+        }
+        ReferenceArg::Path => base,
+    };
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     // Bad settings are one line at once, before the renderer builds its pipelines and uploads the scene;
     // the checks that need the renderer follow below.
@@ -207,6 +215,8 @@ impl Reference {
             if base.vpl_kernel != VplKernel::Point {
                 kind += &format!("-{:?}", base.vpl_kernel).to_lowercase();
             }
+            // The VPLs' places in their texels (earlier caches, without it, hold the texel centres' sum).
+            kind += &format!("-vplseed{}", base.vpl_seed.or(base.cdf_seed).unwrap_or(base.seed));
         }
         let b = base;
         format!(

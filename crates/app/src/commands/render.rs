@@ -154,6 +154,8 @@ fn animate(
     let gpu_name = r.gpu.name.clone();
     // So that frame 0's `gpu_ms` is its work, as every later frame's is.
     r.warm_up(s)?;
+    // One VPL set for the run (`FrameSettings::vpl_seed`): the maps change only where a light moves.
+    let vpl_seed = s.vpl_seed.or(s.cdf_seed).unwrap_or(s.seed);
     for k in 0..frames {
         if let Some(p) = path {
             p.apply(r, k);
@@ -163,7 +165,11 @@ fn animate(
         }
         // Every frame of a moving light or camera is a change; a static one accumulates nothing here either.
         let since_change = if a.animation.moves() { 0 } else { k };
-        let fs = FrameSettings { seed: a.animation.temporal().seed(s.seed, k, since_change), ..s.clone() };
+        let fs = FrameSettings {
+            seed: a.animation.temporal().seed(s.seed, k, since_change),
+            vpl_seed: Some(vpl_seed),
+            ..s.clone()
+        };
         let f = r.render(&fs)?;
         if let Some(dir) = dir {
             let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);

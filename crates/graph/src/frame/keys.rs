@@ -22,7 +22,8 @@ fn bits(v: &[f32]) -> Vec<u32> {
 pub struct Keys {
     /// The voxel grid: its fitted spec.
     pub voxels: u64,
-    /// The reflective maps (the VPLs): resolution, light map, and the lights.
+    /// The reflective maps (the VPLs): resolution, light map, the VPLs' offset in their texels, and the
+    /// lights.
     pub vpls: u64,
     /// The G-buffer: camera and image size.
     pub gbuffer: u64,
@@ -46,7 +47,7 @@ impl Keys {
         let gbuffer = view_key(camera, s.width, s.height);
         let (positions, intensities) = light_bits(lights);
         let vpls = fingerprint(&(
-            (s.dprsm_res, s.light_map.name(), s.light_map.tan_half_fov().to_bits()),
+            (s.dprsm_res, s.light_map.name(), s.light_map.tan_half_fov().to_bits(), bits(&vpl_offset(s))),
             &positions,
             &intensities,
         ));
@@ -78,4 +79,27 @@ pub fn view_key(camera: &Camera, width: u32, height: u32) -> u64 {
 /// The lights' positions and intensities as bits.
 pub fn light_bits(lights: &[Light]) -> (Vec<u32>, Vec<u32>) {
     (lights.iter().flat_map(|l| bits(&l.position)).collect(), lights.iter().flat_map(|l| bits(&l.intensity)).collect())
+}
+
+/// Where in its texel each VPL's light ray passes in layer 0 of the light maps, in texels ([0, 1)²): a
+/// uniform draw from the VPL seed ([`FrameSettings::vpl_seed`]). Layer k's is
+/// [`texel_offset`]`(offset, k)`. A random shift of the whole texel grid (a Cranley–Patterson
+/// rotation) makes each texel's VPL a uniform sample of its texel: Σ_v Φ_v · f(v), with Φ_v the flux
+/// through the texel's solid angle Δω at that point, is then an unbiased estimate of the integral over
+/// the light's directions of I · albedo · f, for any resolution, where the centres' sum is a quadrature
+/// whose error does not average out over seeds (BENCHMARKS.md, "What the VPL sum converges to").
+pub fn vpl_offset(s: &FrameSettings) -> [f32; 2] {
+    let seed = s.vpl_seed.or(s.cdf_seed).unwrap_or(s.seed);
+    let h = fingerprint(&(seed, "vpl offset"));
+    let unit = |bits: u64| (bits & 0xFF_FFFF) as f32 / (1u32 << 24) as f32;
+    [unit(h), unit(h >> 32)]
+}
+
+/// Layer `layer`'s offset from layer 0's: moved on by the R2 sequence's step per layer and wrapped, so
+/// that each layer's is uniform in the texel and the layers do not share one. The host's twin of
+/// `texel_offset` in glsl/shared/lightmap.glsl (the tests' CPU ray cast uses it).
+pub fn texel_offset(offset: [f32; 2], layer: u32) -> [f32; 2] {
+    const STEP: [f32; 2] = [0.754_877_7, 0.569_840_3];
+    let wrap = |x: f32| x - x.floor();
+    [wrap(offset[0] + layer as f32 * STEP[0]), wrap(offset[1] + layer as f32 * STEP[1])]
 }

@@ -664,6 +664,7 @@ impl RenderContext {
             height: s.height,
             dprsm_res: s.dprsm_res,
             vpl_faces: s.light_map.faces(),
+            vpl_offset: crate::frame::keys::vpl_offset(s),
             vpls_per_dispatch: self.vpls_per_dispatch(s),
         }
     }

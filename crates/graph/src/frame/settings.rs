@@ -392,6 +392,13 @@ pub struct FrameSettings {
     /// `None`: derived from `seed`. The viewer fixes it so that progressive frames, which differ in
     /// `seed`, keep one CDF (each frame is unbiased given any CDF, so their mean is too).
     pub cdf_seed: Option<u64>,
+    /// The seed of the VPLs' places in their texels (`Keys::vpl_offset`: each texel's light ray passes
+    /// through a random point of the texel, the same for every texel of a face, so that the VPL sum's mean
+    /// over seeds is the one-bounce integral itself, not the texel centres' quadrature of it). `None`:
+    /// `cdf_seed`'s, else `seed`'s, so that progressive frames keep one VPL set as they keep one CDF.
+    /// Animations (`render --frames`, `bench --animate`) fix it for the run, so the maps change only where
+    /// a light moves.
+    pub vpl_seed: Option<u64>,
     /// Resolution of each per-VPL paraboloid shadow map (`Visibility::Psm`).
     pub psm_res: u32,
     /// The VPL map at each light (`--light-map`).
@@ -465,6 +472,7 @@ impl Default for FrameSettings {
             vpls: 64,
             seed: 1,
             cdf_seed: None,
+            vpl_seed: None,
             psm_res: 256,
             light_map: LightMap::Dprsm,
             dprsm_res: 512,

@@ -3,8 +3,15 @@
 //! glsl/shared/lightmap.glsl.) psm's per-VPL shadow maps reuse its geometry shader and `dprsm.frag`.
 //!
 //! An array image of `2 × lights` layers; layer `2l + f` is face `f` (0: +z hemisphere, 1: −z)
-//! of light `l`. Texel (i, j) has paraboloid coordinates (u, v) = ((i + ½)/res · 2 − 1, (j + ½)/res · 2
-//! − 1) and stands for the direction d = (2u, 2v, 1 − u² − v²)/(1 + u² + v²) (z mirrored on face 1).
+//! of light `l`. Texel (i, j) has paraboloid coordinates (u, v) = ((i + o_x)/res · 2 − 1, (j + o_y)/res · 2
+//! − 1) and stands for the direction d = (2u, 2v, 1 − u² − v²)/(1 + u² + v²) (z mirrored on face 1), where
+//! o ∈ [0, 1)² is the layer's offset in its texels (`texel_offset` in glsl/shared/lightmap.glsl): one
+//! random point per layer, drawn from the VPL seed (`Keys::vpl_offset`). So each VPL is a
+//! uniform sample of its texel, and the VPL sum's mean over seeds is the one-bounce integral over the
+//! light's directions at any resolution. With the texel centres (o = ½, the thesis's) the sum is a
+//! quadrature whose error stays in every seed: 4.3 % of a generated room's indirect light at 128² per face
+//! (BENCHMARKS.md, "What the VPL sum converges to"; the `dprsm` test
+//! `the_vpls_solid_angles_are_unbiased_over_seeds` checks the mean against a closed form).
 //! The depth is the distance t to the nearest surface along d divided by `far`
 //! (`FrameUniforms.scene_max.w`), or 1 where nothing is hit or u² + v² > 1 (kept inside the pass). Per
 //! texel (RGBA32F each):
@@ -12,7 +19,8 @@
 //! - `normal`: the interpolated shading normal flipped to face the light, w = t;
 //! - `flux`: the VPL's reflected flux Φ_v = albedo(v) · I · Δω_v, w = Δω_v, where
 //!   Δω_v = 4 / (1 + u² + v²)² · (2/res)² is the texel's solid angle seen from the light (the Jacobian of
-//!   the paraboloid map, dω = 4/(1 + u² + v²)² du dv). The thesis's eqs. 7.1–7.3 leave this factor
+//!   the paraboloid map at the VPL's (u, v), dω = 4/(1 + u² + v²)² du dv, times the texel's area: the
+//!   weight of a uniform point of the texel). The thesis's eqs. 7.1–7.3 leave this factor
 //!   out; without it the VPL sum does not converge to the one-bounce integral. Σ_v Δω_v over both faces
 //!   is 4π up to the texels cut by the unit circle (the `dprsm` test checks both).
 //!
@@ -27,14 +35,14 @@
 //!    the edge's circular arc (see `include_arc` in `dprsm.geom`), and emits that box at the depth of
 //!    the triangle's nearest point to the light (a lower bound on every texel's hit distance;
 //!    `glsl/shared/map_depth.glsl`),
-//! 3. the fragment shader intersects the ray through each texel centre with the original triangle and
+//! 3. the fragment shader intersects the ray through each texel's point with the original triangle and
 //!    writes the hit distance as depth (discarding misses), never below the box's. It declares
 //!    `depth_greater`, so the depth test rejects a box's texels behind what is already drawn before the
 //!    shader runs (Sibenik's former 2048² direct-light shadow map, the same geometry: 25 → 19 ms on an
 //!    H200, whose fragment shading is scarce; the same images). The `dprsm` test
 //!    `the_light_maps_box_depth_is_below_every_texel_depth` checks the box against an f64 closest point.
 //!
-//! So every texel holds exactly what a ray cast from the light through its centre hits first: the
+//! So every texel holds exactly what a ray cast from the light through its point hits first: the
 //! `dprsm` test compares it with a CPU ray cast and finds only float rounding.
 
 use super::FrameInputs;
@@ -132,7 +140,7 @@ impl Dprsm {
             .record(move |ctx| {
                 let colors = [o.position, o.normal, o.flux].map(|h| ctx.image(&h).view);
                 let writes = f.scene.writes(f.uniforms);
-                record_paraboloid(ctx, &self.reflective, f, writes, res, layers, &colors, &d)
+                record_paraboloid(ctx, &self.reflective, f, writes, res, layers, &colors, &d, f.vpl_offset)
             });
         out
     }
@@ -151,6 +159,7 @@ pub(crate) fn record_paraboloid(
     layers: u32,
     colors: &[vk::ImageView],
     depth: &Handle<Image>,
+    offset: [f32; 2],
 ) {
     let d = &ctx.gpu.device;
     let extent = vk::Extent2D { width: res, height: res };
@@ -180,7 +189,7 @@ pub(crate) fn record_paraboloid(
     unsafe {
         d.cmd_begin_rendering(ctx.cmd, &info);
         if f.scene.triangle_count > 0 {
-            let push = ParaboloidPush { map_res: res, pad: 0 };
+            let push = ParaboloidPush { map_res: res, pad: 0, offset };
             pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&push));
             d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
         }

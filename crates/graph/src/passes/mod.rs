@@ -79,6 +79,8 @@ pub struct FrameInputs<'a> {
     pub dprsm_res: u32,
     /// Faces of each light's VPL map (`--light-map`: 2 dprsm, 1 rsm, 6 cube).
     pub vpl_faces: u32,
+    /// Where in its texel each VPL's light ray passes, in texels, in layer 0 (`Keys::vpl_offset`).
+    pub vpl_offset: [f32; 2],
     /// How the frame's VPL passes test visibility: each picks its shader variant by it.
     pub visibility: crate::frame::Visibility,
     /// The scene's BVH: the exact visibility's shadow rays and gbg's importance rays, the reference's

@@ -136,7 +136,7 @@ impl Psm {
         g.add_pass("psm").read(&views, Access::ShaderRead).overwrite(&mut depth, Access::DepthAttachment).record(
             move |ctx| {
                 let writes = f.scene.writes(f.uniforms).storage_buffer(B_PSM_VIEWS, ctx.buffer(&vh));
-                record_paraboloid(ctx, maps, f, writes, res, n, &[], &dh);
+                record_paraboloid(ctx, maps, f, writes, res, n, &[], &dh, [0.5; 2]);
             },
         );
         Ok(PsmOut { views, depth })

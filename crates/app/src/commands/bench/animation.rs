@@ -133,8 +133,9 @@ pub(super) fn run(
             for k in 0..a.frames {
                 motion.apply(r, k);
                 let seed = temporal.seed(1, k, 0);
-                let s = FrameSettings { method, vpls, seed, cdf_seed: Some(seed), ..base.clone() };
-                let f = r.render(&s)?;
+                // One VPL set for the run, as `render --frames` has it.
+                let (cdf_seed, vpl_seed) = (Some(seed), Some(base.vpl_seed.unwrap_or(1)));
+                let f = r.render(&FrameSettings { method, vpls, seed, cdf_seed, vpl_seed, ..base.clone() })?;
                 let shown = RgbImage::from_rgba(f.width, f.height, &f.radiance);
                 let (img, denoised) = match &f.raw {
                     Some(raw) => (RgbImage::from_rgba(f.width, f.height, raw), Some(shown)),
@@ -160,8 +161,7 @@ pub(super) fn run(
                     denoised: denoised_score.map(|(r, f, _)| (r, f)),
                     mean_ratio,
                     denoised_mean_ratio: denoised_score.map(|d| d.2),
-                    truth_mean: t.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>()
-                        / (3 * t.len().max(1)) as f64,
+                    truth_mean: image_mean(t),
                 });
                 previous = Some((img, denoised));
                 bar.inc(1);
@@ -177,6 +177,11 @@ pub(super) fn run(
     writeln!(out, "{md}")?;
     writeln!(err, "wrote {}/bench.csv, bench.md, flicker.png", a.out.display())?;
     Ok(())
+}
+
+/// The mean over pixels and channels.
+fn image_mean(p: &[[f32; 3]]) -> f64 {
+    p.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / (3 * p.len().max(1)) as f64
 }
 
 /// The ground truth of every frame, from the cache or rendered (lights at that frame, seed 1).
