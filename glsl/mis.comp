@@ -3,7 +3,7 @@
 // heuristic, both strategies' densities in one measure, and unbiased with respect to `all`.
 //
 // The one measure. A VPL v stands for a patch of surface: give it Q_v, its texel's footprint on its
-// tangent plane (patch_of: a parallelogram centred on it, of area A_v ≈ Δω_v · d_l² / cos α_v, d_l the
+// tangent plane (patch_of: a parallelogram around it, of area A_v ≈ Δω_v · d_l² / cos α_v, d_l the
 // light–VPL distance, α_v the angle at the VPL). At pixel x only its part in front of x's tangent plane
 // counts: Q_v⁺ = Q_v ∩ {y : (y − x)·n_x > 0}, of area A_v⁺ (front_part). Then, exactly,
 //   Σ_v c(v) = Σ_v ∫_{Q_v⁺} F(v, y) dA(y),   F(v, y) = c(v) / A_v⁺,
@@ -128,6 +128,14 @@ Patch patch_of(uint v, Vpl vpl) {
         q.e1 *= s;
         q.e2 *= s;
         q.area = a_max;
+    } else {
+        // Centred where the ray through the texel's centre meets the plane, not on the VPL, which lies at
+        // a random point of its texel (dprsm.rs): so Q_v is the texel's footprint, the set where
+        // T_l(ω_y) = v, wherever the VPL sits in it. (Centred on the VPL it reached into the neighbours'
+        // footprints, where p_g is 0: the second suite's mis relMSE over uniform's 0.52 against 0.15.)
+        // The capped and the fallback patches stay on the VPL.
+        vec3 centre;
+        if (ray_plane(light, to_world * lm_direction(uv), vpl.position, q.n, centre)) q.c = centre;
     }
     return q;
 }
