@@ -47,6 +47,10 @@ const float LUMINANCE_B = 0.114;
 // The least cos α of a VPL's patch area A_v = Δω · d² / cos α (dprsm_reflective.frag): a texel that meets
 // its surface at grazing incidence gets at most 20× the area it would facing the light.
 const float VPL_MIN_COS = 0.05;
+// The step of the VPLs' offset in their texels from one light-map layer to the next (the R2 sequence's,
+// 1/g and 1/g², g the plastic number; shared/lightmap.glsl `texel_offset`, frame/keys.rs).
+const float VPL_OFFSET_STEP_X = 0.7548777;
+const float VPL_OFFSET_STEP_Y = 0.5698403;
 
 // ---- direct: inputs and output (and the BVH) ----------------------------------------------------------------------
 #define B_DIRECT_GPOSITION 7

@@ -77,7 +77,7 @@ bool lm_covers(vec2 uv) {
 // layer 0's is, and the layers of one light do not share it.
 // (crates/graph/src/frame/keys.rs has the host's twin.)
 vec2 texel_offset(vec2 offset, uint layer) {
-    return fract(offset + float(layer) * vec2(0.7548777, 0.5698403));
+    return fract(offset + float(layer) * vec2(VPL_OFFSET_STEP_X, VPL_OFFSET_STEP_Y));
 }
 
 // Solid angle of the texel centred at (u, v) of a res² face (with u, v anywhere in the texel: the

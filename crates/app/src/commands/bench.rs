@@ -47,9 +47,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     // Against `all` every run takes its VPL set (the VPLs' places in their texels: `vpl_seed`), so that the
     // error is the selection's alone; against the path-traced truth each seed draws its own.
     let base = match a.reference {
-        ReferenceArg::All => {
-            FrameSettings { vpl_seed: Some(base.vpl_seed.or(base.cdf_seed).unwrap_or(base.seed)), ..base }
-        }
+        ReferenceArg::All => FrameSettings { vpl_seed: Some(base.vpl_seed_or_derived()), ..base },
         ReferenceArg::Path => base,
     };
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
@@ -216,7 +214,7 @@ impl Reference {
                 kind += &format!("-{:?}", base.vpl_kernel).to_lowercase();
             }
             // The VPLs' places in their texels (earlier caches, without it, hold the texel centres' sum).
-            kind += &format!("-vplseed{}", base.vpl_seed.or(base.cdf_seed).unwrap_or(base.seed));
+            kind += &format!("-vplseed{}", base.vpl_seed_or_derived());
         }
         let b = base;
         format!(

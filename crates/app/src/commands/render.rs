@@ -155,7 +155,7 @@ fn animate(
     // So that frame 0's `gpu_ms` is its work, as every later frame's is.
     r.warm_up(s)?;
     // One VPL set for the run (`FrameSettings::vpl_seed`): the maps change only where a light moves.
-    let vpl_seed = s.vpl_seed.or(s.cdf_seed).unwrap_or(s.seed);
+    let vpl_seed = s.vpl_seed_or_derived();
     for k in 0..frames {
         if let Some(p) = path {
             p.apply(r, k);

@@ -89,8 +89,7 @@ pub fn light_bits(lights: &[Light]) -> (Vec<u32>, Vec<u32>) {
 /// the light's directions of I · albedo · f, for any resolution, where the centres' sum is a quadrature
 /// whose error does not average out over seeds (BENCHMARKS.md, "What the VPL sum converges to").
 pub fn vpl_offset(s: &FrameSettings) -> [f32; 2] {
-    let seed = s.vpl_seed.or(s.cdf_seed).unwrap_or(s.seed);
-    let h = fingerprint(&(seed, "vpl offset"));
+    let h = fingerprint(&(s.vpl_seed_or_derived(), "vpl offset"));
     let unit = |bits: u64| (bits & 0xFF_FFFF) as f32 / (1u32 << 24) as f32;
     [unit(h), unit(h >> 32)]
 }
@@ -99,7 +98,7 @@ pub fn vpl_offset(s: &FrameSettings) -> [f32; 2] {
 /// that each layer's is uniform in the texel and the layers do not share one. The host's twin of
 /// `texel_offset` in glsl/shared/lightmap.glsl (the tests' CPU ray cast uses it).
 pub fn texel_offset(offset: [f32; 2], layer: u32) -> [f32; 2] {
-    const STEP: [f32; 2] = [0.754_877_7, 0.569_840_3];
+    use crate::bindings::{VPL_OFFSET_STEP_X, VPL_OFFSET_STEP_Y};
     let wrap = |x: f32| x - x.floor();
-    [wrap(offset[0] + layer as f32 * STEP[0]), wrap(offset[1] + layer as f32 * STEP[1])]
+    [wrap(offset[0] + layer as f32 * VPL_OFFSET_STEP_X), wrap(offset[1] + layer as f32 * VPL_OFFSET_STEP_Y)]
 }

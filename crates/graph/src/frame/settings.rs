@@ -515,6 +515,11 @@ impl FrameSettings {
             && self.method != Method::Reference
     }
 
+    /// The seed the VPLs' places in their texels are drawn from: `vpl_seed`, else `cdf_seed`, else `seed`.
+    pub fn vpl_seed_or_derived(&self) -> u64 {
+        self.vpl_seed.or(self.cdf_seed).unwrap_or(self.seed)
+    }
+
     /// The method whose CDF and source mixture the frame samples: ris's source, else the method itself.
     pub fn sampling_method(&self) -> Method {
         if self.uses_ris() {

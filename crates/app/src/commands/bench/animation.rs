@@ -134,7 +134,7 @@ pub(super) fn run(
                 motion.apply(r, k);
                 let seed = temporal.seed(1, k, 0);
                 // One VPL set for the run, as `render --frames` has it.
-                let (cdf_seed, vpl_seed) = (Some(seed), Some(base.vpl_seed.unwrap_or(1)));
+                let (cdf_seed, vpl_seed) = (Some(seed), Some(base.vpl_seed_or_derived()));
                 let f = r.render(&FrameSettings { method, vpls, seed, cdf_seed, vpl_seed, ..base.clone() })?;
                 let shown = RgbImage::from_rgba(f.width, f.height, &f.radiance);
                 let (img, denoised) = match &f.raw {
