@@ -466,7 +466,8 @@ const VIEW_SETTINGS: [&str; 12] =
     ["--width", "32", "--height", "32", "--vpls", "4", "--dprsm-res", "32", "--voxels", "32", "--method", "gbg"];
 
 /// The viewer's progressive accumulation is exactly the mean of the frames `bounce render` makes with
-/// the same settings, seeds S, S+1, … and one CDF seed S: 3 frames of gbg, validation on, under Xvfb.
+/// the same settings, seeds S, S+1, … and one CDF seed S (given, so one VPL set): 3 frames of gbg,
+/// validation on, under Xvfb.
 #[test]
 fn view_accumulates_exactly_the_frames_render_makes() {
     let d = scratch("view");
@@ -474,7 +475,7 @@ fn view_accumulates_exactly_the_frames_render_makes() {
     let shot = d.join("view.png");
     let mut args = vec![scene.to_str().unwrap(), "--frames", "3", "--screenshot", shot.to_str().unwrap()];
     args.extend(VIEW_SETTINGS);
-    args.extend(["--seed", "5", "--validation"]);
+    args.extend(["--seed", "5", "--cdf-seed", "5", "--validation"]);
     let o = view(&args, true);
     assert!(o.status.success(), "bounce view failed: {}", String::from_utf8_lossy(&o.stderr));
     assert!(shot.exists());

@@ -296,7 +296,7 @@ fn realtime_progressive_frames_converge_to_the_unbiased_image() {
         let s = FrameSettings { seed: 100 + run, ..s.clone() };
         let mut mean = 0.0;
         for k in 0..48u32 {
-            let f = r.render(&frame_settings(&s, k)).unwrap();
+            let f = r.render(&frame_settings(&s, k, 0)).unwrap();
             if k >= 16 {
                 let img: Vec<[f32; 3]> = f.raw.as_ref().unwrap().iter().map(|p| [p[0], p[1], p[2]]).collect();
                 mean += bounce_tests::mean(&img) / 32.0;

@@ -201,7 +201,7 @@ fn progressive_reference_frames_are_one_sequence() {
         let mut mean = |base: &FrameSettings| {
             let mut sum = vec![[0.0f64; 3]; 16 * 16];
             for k in 0..4 {
-                let frame = frame_settings(&FrameSettings { method: Method::Reference, ..base.clone() }, k);
+                let frame = frame_settings(&FrameSettings { method: Method::Reference, ..base.clone() }, k, 0);
                 assert_eq!(frame.seed, base.seed, "frame {k} changed the seed");
                 for (a, p) in sum.iter_mut().zip(reference_with(&mut r, frame, 16, 16)) {
                     (0..3).for_each(|c| a[c] += p[c] as f64 / 4.0);

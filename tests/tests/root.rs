@@ -14,6 +14,7 @@ mod images;
 mod layout;
 mod lightmaps;
 mod present;
+mod progressive;
 mod psm;
 mod realtime;
 mod reference;

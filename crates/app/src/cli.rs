@@ -320,7 +320,9 @@ pub struct FrameArgs {
     #[arg(long, value_parser = LightMaps, default_value = LIGHT_MAPS.name_of(&d().light_map))]
     pub light_map: LightMap,
     /// Seed of the light side: the importance's gather points and rays, and where in its texel each VPL
-    /// lies (default: --seed). Progressive frames (`render --time-limit`, `bounce view`) keep it fixed.
+    /// lies (default: --seed). Given, progressive frames (`render --time-limit`, `bounce view`) keep one
+    /// VPL set; without it they draw a new one as the time allows (at most 1/28 of it), so that their
+    /// mean converges to the one-bounce image, not to one set's VPL sum.
     #[arg(long)]
     pub cdf_seed: Option<u64>,
     /// Candidate distribution of --method ris (the CDF methods' mixtures, --defensive included, without
@@ -444,6 +446,8 @@ impl FrameArgs {
             defensive: self.defensive.unwrap_or(FrameSettings::default().defensive),
             face: self.face,
             cdf_seed: self.cdf_seed,
+            // A given light-side seed pins the VPL set (`progressive::VplSets`).
+            vpl_seed: self.cdf_seed,
             dprsm_res: self.dprsm_res,
             voxels: self.voxels,
             vpl_kernel: self.vpl_kernel,
@@ -476,9 +480,18 @@ impl FrameArgs {
     }
 }
 
+/// A scene argument: a folder holding `scene.toml` names that file (a suite's scenes are folders);
+/// anything else is taken as given, and loading says what is wrong with it.
+fn scene_path(arg: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(arg);
+    let inside = path.join("scene.toml");
+    Ok(if path.is_dir() && inside.is_file() { inside } else { path })
+}
+
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// The scene file (TOML).
+    /// The scene file (TOML), or its folder (holding `scene.toml`, as `make-scenes.py` writes them).
+    #[arg(value_parser = scene_path)]
     pub scene: PathBuf,
     /// Output EXR (linear float32 RGB).
     #[arg(long, default_value = "out.exr")]
@@ -521,7 +534,8 @@ pub struct RenderArgs {
 #[command(mut_arg("seed", |a| a.help("Seed of the first frame; frame k uses seed + k")))]
 #[command(mut_arg("dprsm_res", |a| a.default_value("256")))]
 pub struct ViewArgs {
-    /// The scene file (TOML).
+    /// The scene file (TOML), or its folder (holding `scene.toml`, as `make-scenes.py` writes them).
+    #[arg(value_parser = scene_path)]
     pub scene: PathBuf,
     #[command(flatten)]
     pub picture: PictureArgs,
@@ -611,7 +625,8 @@ pub const RENDER_FALLBACK_SIZE: u32 = 256;
 #[derive(Args, Debug)]
 #[command(mut_arg("dprsm_res", |a| a.default_value("128")))]
 pub struct BenchArgs {
-    /// The scene file (TOML).
+    /// The scene file (TOML), or its folder (holding `scene.toml`, as `make-scenes.py` writes them).
+    #[arg(value_parser = scene_path)]
     pub scene: PathBuf,
     /// Output folder (also caches the reference image).
     #[arg(long)]

@@ -61,3 +61,25 @@ fn frame_flag_defaults_are_the_graph_defaults() {
     let (ours, graph) = (r.frame.settings(256, 256), FrameSettings::default());
     assert_eq!(format!("{ours:?}"), format!("{graph:?}"));
 }
+
+/// A scene's folder names its `scene.toml` in every command that takes one scene; a file, or a folder
+/// without one, is taken as given (loading then fails with its own `error:` line).
+#[test]
+fn a_scene_folder_names_its_scene_toml() {
+    let dir = std::env::temp_dir().join(format!("bounce-scene-folder-{}", std::process::id()));
+    let bare = dir.join("bare");
+    std::fs::create_dir_all(&bare).unwrap();
+    std::fs::write(dir.join("scene.toml"), "").unwrap();
+    let d = dir.to_str().unwrap();
+    let Command::Render(r) = parse(&["render", d]) else { panic!() };
+    assert_eq!(r.scene, dir.join("scene.toml"));
+    let Command::View(v) = parse(&["view", d]) else { panic!() };
+    assert_eq!(v.scene, dir.join("scene.toml"));
+    let Command::Bench(b) = parse(&["bench", d, "--out", "o"]) else { panic!() };
+    assert_eq!(b.scene, dir.join("scene.toml"));
+    let Command::Render(r) = parse(&["render", bare.to_str().unwrap()]) else { panic!() };
+    assert_eq!(r.scene, bare);
+    let Command::Render(r) = parse(&["render", "s.toml"]) else { panic!() };
+    assert_eq!(r.scene, PathBuf::from("s.toml"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -56,7 +56,8 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
             let p = progressive(&mut renderer, &settings, t)?;
             // The reference's standard error is the last frame's, not the mean's: not reported.
             let last = FrameOutput { radiance: p.radiance, stderr: None, ..p.last };
-            (last, Some((p.frames, p.gpu_ms)))
+            let sets = p.sets.last().map_or(0, |j| j + 1);
+            (last, Some((p.frames, sets, p.gpu_ms)))
         }
     };
     let wall = t0.elapsed().as_secs_f64();
@@ -77,12 +78,13 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         writeln!(err, "warning: {bad_px} pixel(s) are not finite")?;
     }
     let mut meta = metadata(a, &settings, &gpu.name, &frame, bad_px);
-    if let (Some((n, gpu_ms)), Some(t)) = (frames, a.time_limit) {
+    if let (Some((n, sets, gpu_ms)), Some(t)) = (frames, a.time_limit) {
         meta.push(("time_limit_s", t.to_string()));
         meta.push(("frames", n.to_string()));
+        meta.push(("vpl_sets", sets.to_string()));
         meta.push(("wall_s", format!("{wall:.3}")));
         meta.push(("gpu_ms_total", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())));
-        writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {t} s)")?;
+        writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {t} s), {sets} VPL set(s)")?;
     }
     output::write_exr_and_png(&a.out, a.png.as_deref(), &img, &meta)?;
     if a.timings {

@@ -23,11 +23,16 @@
 //! `coherent` (the default) every frame after a change starts again from `--seed`, so a moving light's
 //! frames share their random numbers; `fresh` gives frame k of the run `--seed + k`.
 //!
+//! A still view's frames move on to a new VPL set as `render --time-limit`'s do (`progressive::VplSets`:
+//! the light side at most 1/28 of the time), so that the mean converges to the one-bounce image, not
+//! to one set's VPL sum; `--cdf-seed` keeps one set.
+//!
 //! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
-//! for scripts and tests (under Xvfb on lavapipe). The mean of those N frames is the mean of
-//! `bounce render --seed S+k --cdf-seed C` for k < N with the same settings, C being `--cdf-seed`
-//! (default: S; the reference's frames continue one sequence of seed S instead): the frames share one
-//! CDF, so the importance and CDF passes run only when the camera or a setting changes. The frame flags are `render`'s, with cheaper defaults (`cli::ViewArgs`).
+//! for scripts and tests (under Xvfb on lavapipe). With `--cdf-seed C` the mean of those N frames is the
+//! mean of `bounce render --seed S+k --cdf-seed C` for k < N with the same settings (the reference's
+//! frames continue one sequence of seed S instead): the frames share one CDF and one VPL set, so the
+//! light-side passes run only when the camera or a setting changes. The frame flags are `render`'s, with
+//! cheaper defaults (`cli::ViewArgs`).
 //!
 //! The screenshot reads the GPU's running mean back once (f32 sums: equal to the mean of the frames
 //! `render` makes, bit for bit) and writes it as EXR and, tone-mapped on the host, as PNG; the log line
@@ -41,7 +46,7 @@ use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::{vk, Gpu, GpuOptions, Image, Presented, Swapchain};
 use bounce_graph::camera::Camera;
-use bounce_graph::frame::progressive::frame_settings;
+use bounce_graph::frame::progressive::{frame_settings, VplSets};
 use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer};
 use bounce_graph::graph::Persistent;
 use bounce_graph::passes::present::{Present, PresentParams};
@@ -154,6 +159,8 @@ struct State {
     ldr: Persistent<Image>,
     /// Frames in the running mean (since the last change), and since the start.
     frames: u32,
+    /// The running mean's VPL sets, as `render --time-limit` draws them.
+    vpl_sets: VplSets,
     total: u32,
     /// Frames rendered by `realtime` (while moving).
     realtime_frames: u32,
@@ -167,6 +174,34 @@ struct State {
     full_passes: Vec<&'static str>,
     shots: u32,
     minimized: bool,
+}
+
+/// Moves the camera and the lights for a frame `dt` seconds after the last (their paths, else the keys
+/// held down); whether either moved. A path restarts the mean every frame, as a move does.
+fn step_motion(camera: Option<&CameraPath>, path: Option<&LightPath>, st: &mut State, dt: f32) -> bool {
+    let mut moved = false;
+    match camera {
+        Some(c) => {
+            let before = st.renderer.camera();
+            c.apply(&mut st.renderer, st.total);
+            moved |= st.renderer.camera() != before;
+            st.frames = 0;
+        }
+        None if st.fly.step(dt) => {
+            st.renderer.set_camera(st.fly.camera());
+            (st.frames, moved) = (0, true);
+        }
+        None => {}
+    }
+    let before = st.renderer.lights().to_vec();
+    match path {
+        Some(p) => p.apply(&mut st.renderer, st.total),
+        None => _ = st.lamp.step(&st.fly.keys, &mut st.renderer, dt),
+    }
+    if st.renderer.lights() != before.as_slice() {
+        (st.frames, moved) = (0, true);
+    }
+    moved
 }
 
 /// The fly camera: position, yaw about +Y, pitch, and the input held down.
@@ -322,7 +357,7 @@ impl Viewer<'_> {
         renderer.check(&self.settings)?;
         // As `render` does: a driver that compiles a shader at its first dispatch does it here, so the
         // first frame's title shows its passes' own times.
-        renderer.warm_up(&frame_settings(&self.settings, 0))?;
+        renderer.warm_up(&frame_settings(&self.settings, 0, 0))?;
         if self.realtime.is_some() {
             // The real-time frame's pipelines too, so that the first move does not stall on them.
             renderer.warm_up(&FrameSettings { method: Method::Realtime, ..self.settings.clone() })?;
@@ -340,6 +375,7 @@ impl Viewer<'_> {
             lamp,
             ldr,
             frames: 0,
+            vpl_sets: VplSets::new(&self.settings),
             total: 0,
             realtime_frames: 0,
             accumulate: true,
@@ -360,28 +396,7 @@ impl Viewer<'_> {
         let now = Instant::now();
         let dt = (now - st.last).as_secs_f32();
         st.last = now;
-        let mut moved = false;
-        match &self.camera {
-            Some(c) => {
-                let before = st.renderer.camera();
-                c.apply(&mut st.renderer, st.total);
-                moved |= st.renderer.camera() != before;
-                st.frames = 0;
-            }
-            None if st.fly.step(dt) => {
-                st.renderer.set_camera(st.fly.camera());
-                (st.frames, moved) = (0, true);
-            }
-            None => {}
-        }
-        let before = st.renderer.lights().to_vec();
-        match &self.path {
-            Some(p) => p.apply(&mut st.renderer, st.total),
-            None => _ = st.lamp.step(&st.fly.keys, &mut st.renderer, dt),
-        }
-        if st.renderer.lights() != before.as_slice() {
-            (st.frames, moved) = (0, true);
-        }
+        let moved = step_motion(self.camera.as_ref(), self.path.as_ref(), st, dt);
         let realtime = self.realtime.is_some_and(|always| always || moved);
         if !st.accumulate {
             st.frames = 0;
@@ -391,10 +406,13 @@ impl Viewer<'_> {
         // The run's seed where this accumulation began, then its frame st.frames as `render --time-limit`
         // takes it (seed + k; the reference: the next samples of one sequence).
         let seed = self.args.animation.temporal().seed(self.settings.seed, st.total.saturating_sub(st.frames), 0);
+        if st.frames == 0 {
+            st.vpl_sets = VplSets::new(&self.settings);
+        }
         let s = match realtime {
             // One real-time frame, shown alone: its history lives in the renderer, not in the mean.
             true => FrameSettings { method: Method::Realtime, ..self.settings.clone() },
-            false => frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames),
+            false => frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames, st.vpl_sets.set()),
         };
         let params = PresentParams {
             frames: st.frames + 1,
@@ -407,6 +425,9 @@ impl Viewer<'_> {
         let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
         if st.frames == 0 {
             st.full_passes = f.ran.clone();
+        }
+        if !realtime {
+            st.vpl_sets.frame_done(frame_ms / 1e3);
         }
         st.frames += 1;
         st.total += 1;

@@ -395,9 +395,9 @@ pub struct FrameSettings {
     /// The seed of the VPLs' places in their texels (`Keys::vpl_offset`: each texel's light ray passes
     /// through a random point of the texel, the same for every texel of a face, so that the VPL sum's mean
     /// over seeds is the one-bounce integral itself, not the texel centres' quadrature of it). `None`:
-    /// `cdf_seed`'s, else `seed`'s, so that progressive frames keep one VPL set as they keep one CDF.
-    /// Animations (`render --frames`, `bench --animate`) fix it for the run, so the maps change only where
-    /// a light moves.
+    /// `cdf_seed`'s, else `seed`'s, and progressive frames draw new sets (`progressive::VplSets`); `Some`
+    /// pins it (`--cdf-seed`). Animations (`render --frames`, `bench --animate`) fix it for the run, so
+    /// the maps change only where a light moves.
     pub vpl_seed: Option<u64>,
     /// Resolution of each per-VPL paraboloid shadow map (`Visibility::Psm`).
     pub psm_res: u32,
