@@ -25,7 +25,7 @@
 //!
 //! A still view's frames move on to a new VPL set as `render --time-limit`'s do (`progressive::VplSets`:
 //! the light side at most 1/28 of the time), so that the mean converges to the one-bounce image, not
-//! to one set's VPL sum; `--cdf-seed` keeps one set.
+//! to one set's VPL sum; a move goes on with the set the maps hold, and `--cdf-seed` keeps one set.
 //!
 //! `--frames N --screenshot out.png` renders N frames, writes the screenshot (and `out.exr`) and exits:
 //! for scripts and tests (under Xvfb on lavapipe). With `--cdf-seed C` the mean of those N frames is the
@@ -407,12 +407,14 @@ impl Viewer<'_> {
         // takes it (seed + k; the reference: the next samples of one sequence).
         let seed = self.args.animation.temporal().seed(self.settings.seed, st.total.saturating_sub(st.frames), 0);
         if st.frames == 0 {
-            st.vpl_sets = VplSets::new(&self.settings);
+            st.vpl_sets.restart(&self.settings);
         }
+        // Every frame on the current VPL set, so that a move does not redraw the maps.
+        let still = frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames, st.vpl_sets.set());
         let s = match realtime {
             // One real-time frame, shown alone: its history lives in the renderer, not in the mean.
-            true => FrameSettings { method: Method::Realtime, ..self.settings.clone() },
-            false => frame_settings(&FrameSettings { seed, ..self.settings.clone() }, st.frames, st.vpl_sets.set()),
+            true => FrameSettings { method: Method::Realtime, vpl_seed: still.vpl_seed, ..self.settings.clone() },
+            false => still,
         };
         let params = PresentParams {
             frames: st.frames + 1,

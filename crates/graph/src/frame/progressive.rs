@@ -124,6 +124,12 @@ impl VplSets {
         self.set
     }
 
+    /// A new run of frames of `s` (the viewer's mean restarted by a move or a key) that goes on from the
+    /// current set, whose maps the renderer still holds.
+    pub fn restart(&mut self, s: &FrameSettings) {
+        *self = VplSets { set: self.set, ..VplSets::new(s) };
+    }
+
     /// Records a frame of `seconds` on the current set; the next frame may take a new one.
     pub fn frame_done(&mut self, seconds: f64) {
         if self.frames == 0 {
@@ -238,6 +244,15 @@ mod tests {
         let sets = sets_of(&sampled(), &vec![1.0; n + 7]);
         assert!(sets[..=n].iter().all(|&s| s == 0), "{sets:?}");
         assert_eq!(&sets[n + 1..], [1, 1, 2, 2, 3, 3]);
+        // A restarted run goes on from the set it had reached, its cost measured anew.
+        let mut v = VplSets::new(&sampled());
+        for _ in 0..n + 2 {
+            v.frame_done(1.0);
+        }
+        assert_eq!(v.set(), 1);
+        v.restart(&sampled());
+        v.frame_done(1.0);
+        assert_eq!(v.set(), 1);
         for s in [
             FrameSettings { vpl_seed: Some(3), ..sampled() },
             FrameSettings { method: Method::Reference, ..sampled() },
