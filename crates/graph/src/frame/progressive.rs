@@ -17,8 +17,9 @@
 //! s sets of quadrature variance q², n·F + s·L = T), the best share of time for the sets is
 //! q√L / (σ√F + q√L), which depends on the scene and the map resolution; the error is flat around it,
 //! and shares of 1/4, 1/10 and 1/28 measured the same aggregate (BENCHMARKS.md). Where the light side
-//! is free (a GPU at a small map resolution) a set lasts two frames. A pinned `vpl_seed` (`--cdf-seed`, `bench --reference all`)
-//! keeps one set, as do the reference (no VPLs) and `realtime` (its reuse follows the VPLs).
+//! is free (a GPU at a small map resolution) a set lasts two frames. A pinned `vpl_seed` (`--cdf-seed`,
+//! `bench --reference all`) keeps one set, as do the reference (no VPLs) and `realtime` (its reuse
+//! follows the VPLs).
 //!
 //! The reference is the exception ([`frame_settings`]): its frames keep the seed and continue the
 //! pixel's Owen-scrambled Sobol sequence (frame k takes samples k · spp .. (k + 1) · spp), so their mean
