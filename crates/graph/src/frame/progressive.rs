@@ -95,19 +95,22 @@ pub const VPL_SET_RATIO: f64 = 27.0;
 /// Whether a progressive render of `s` draws new VPL sets: a sampled VPL method whose VPL seed is not
 /// pinned. The reference has no VPLs; `realtime`'s reservoirs follow their VPLs from frame to frame, and
 /// a new set would age them as a moving light does; `all` renders one frame.
-pub fn draws_vpl_sets(s: &FrameSettings) -> bool {
+fn draws_vpl_sets(s: &FrameSettings) -> bool {
     s.vpl_seed.is_none() && averages(s) && !matches!(s.method, Method::Reference | Method::Realtime)
 }
 
 /// Which VPL set a progressive render's next frame takes: a new one once the frames on the current set
-/// have taken [`VPL_SET_RATIO`] times its cost, the first frame of a set less one that reuses it (for the
-/// first set, the whole first frame, which also built the voxels, G-buffer and direct light: an
-/// overestimate, so the first set lasts longest). Timed by the caller (wall time: what the render's
-/// budget counts).
+/// have taken [`VPL_SET_RATIO`] times its cost, the first frame of a set less one that reuses it. Where
+/// the run's first frame did not draw the set (the first set, whose frame also built the voxels, G-buffer
+/// and direct light; a restarted run, whose first frame redid what the move changed) the whole first
+/// frame counts: an overestimate, so such a set lasts longer. Timed by the caller (wall time: what the
+/// render's budget counts).
 #[derive(Clone, Debug)]
 pub struct VplSets {
     draws: bool,
     set: u32,
+    /// Whether the current set's first frame drew it (and nothing else it knows of).
+    first_drew_set: bool,
     /// Frames rendered on the current set.
     frames: u32,
     /// Seconds of the current set's first frame, and of its other frames together.
@@ -117,7 +120,7 @@ pub struct VplSets {
 
 impl VplSets {
     pub fn new(s: &FrameSettings) -> VplSets {
-        VplSets { draws: draws_vpl_sets(s), set: 0, frames: 0, first_s: 0.0, reused_s: 0.0 }
+        VplSets { draws: draws_vpl_sets(s), set: 0, first_drew_set: false, frames: 0, first_s: 0.0, reused_s: 0.0 }
     }
 
     /// The set the next frame takes.
@@ -143,9 +146,9 @@ impl VplSets {
             return;
         }
         let reuse = self.reused_s / (self.frames - 1) as f64;
-        let cost = if self.set == 0 { self.first_s } else { (self.first_s - reuse).max(0.0) };
+        let cost = if self.first_drew_set { (self.first_s - reuse).max(0.0) } else { self.first_s };
         if self.reused_s >= VPL_SET_RATIO * cost {
-            *self = VplSets { set: self.set + 1, frames: 0, reused_s: 0.0, ..*self };
+            *self = VplSets { set: self.set + 1, first_drew_set: true, frames: 0, reused_s: 0.0, ..*self };
         }
     }
 }
@@ -245,15 +248,20 @@ mod tests {
         let sets = sets_of(&sampled(), &vec![1.0; n + 7]);
         assert!(sets[..=n].iter().all(|&s| s == 0), "{sets:?}");
         assert_eq!(&sets[n + 1..], [1, 1, 2, 2, 3, 3]);
-        // A restarted run goes on from the set it had reached, its cost measured anew.
+        // A restarted run goes on from the set it had reached; its first frame did not draw it, so it
+        // counts whole, as the first set's does.
         let mut v = VplSets::new(&sampled());
         for _ in 0..n + 2 {
             v.frame_done(1.0);
         }
         assert_eq!(v.set(), 1);
         v.restart(&sampled());
-        v.frame_done(1.0);
-        assert_eq!(v.set(), 1);
+        let mut after = vec![];
+        for _ in 0..n + 2 {
+            after.push(v.set());
+            v.frame_done(1.0);
+        }
+        assert!(after[..=n].iter().all(|&s| s == 1) && after[n + 1] == 2, "{after:?}");
         for s in [
             FrameSettings { vpl_seed: Some(3), ..sampled() },
             FrameSettings { method: Method::Reference, ..sampled() },
