@@ -41,20 +41,20 @@ const fn variant(name: &'static str, source: &'static str, defines: &'static [&'
 const SHADERS: &[Shader] = &[
     file("gbuffer.vert"),
     file("gbuffer.frag"),
-    // The paraboloid maps: the reflective map that makes the VPLs (dprsm_reflective.frag), and psm's
-    // per-VPL shadow maps (dprsm.psm.geom: the VPL as viewpoint; dprsm.frag, depth only).
-    file("dprsm.vert"),
-    file("dprsm.geom"),
-    file("dprsm.frag"),
-    file("dprsm_reflective.frag"),
-    variant("dprsm.psm.geom", "dprsm.geom", &["PSM_VIEW"]),
+    // The reflective light maps, whose texels are the VPLs: one ray from the light per texel.
+    file("dprsm.comp"),
     file("direct.comp"),
     file("voxelize.comp"),
     file("importance.comp"),
     file("importance_gbg.comp"),
     variant("importance_gbg.exact.comp", "importance_gbg.comp", &["EXACT_VISIBILITY"]),
     file("cdf_reduce.comp"),
+    // psm: the shared VPL set (psm.comp) and its paraboloid shadow maps, rasterized (psm.vert, psm.geom: the
+    // triangle's exact box on the VPL's face; psm.frag: each texel's exact depth).
     file("psm.comp"),
+    file("psm.vert"),
+    file("psm.geom"),
+    file("psm.frag"),
     // gather and mis, each in one variant per `--visibility`: the voxel march, `exact` (shadow rays against
     // the BVH) and `psm` (the frame's shared VPL set and its shadow maps).
     // end_balls: each exact shadow ray's ends' empty balls, per pixel and (END_BALLS_VPLS) per VPL.

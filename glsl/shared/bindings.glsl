@@ -44,7 +44,11 @@ const float LUMINANCE_B = 0.114;
 #define LIGHT_MAP_DPRSM 0
 #define LIGHT_MAP_RSM 1
 #define LIGHT_MAP_CUBE 2
-// The least cos α of a VPL's patch area A_v = Δω · d² / cos α (dprsm_reflective.frag): a texel that meets
+// Written by dprsm.comp (one layer per light and face), read by every VPL consumer at B_VPL_POSITION..FLUX.
+#define B_DPRSM_POSITION_OUT 68
+#define B_DPRSM_NORMAL_OUT 69
+#define B_DPRSM_FLUX_OUT 70
+// The least cos α of a VPL's patch area A_v = Δω · d² / cos α (dprsm.comp): a texel that meets
 // its surface at grazing incidence gets at most 20× the area it would facing the light.
 const float VPL_MIN_COS = 0.05;
 // The step of the VPLs' offset in their texels from one light-map layer to the next (the R2 sequence's,

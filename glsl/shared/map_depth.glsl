@@ -1,7 +1,8 @@
-// The light maps' depths (dprsm.geom, dprsm.frag, dprsm_reflective.frag): the geometry shader emits a
+// The paraboloid maps' depths. psm's rasterized maps (psm.geom, psm.frag): the geometry shader emits a
 // triangle's box at map_box_depth, the fragment shader writes map_texel_depth of its texel ray's hit, and
-// the fragment shaders declare depth_greater, so that a GPU may run the depth test before them: sound
-// only while no fragment writes a depth below its box's. glsl/test/map_depth.comp and the `dprsm` tests
+// declares depth_greater, so that a GPU may run the depth test before it: sound only while no fragment
+// writes a depth below its box's. The light maps (dprsm.comp) place a VPL with map_texel_point against
+// the same bound. glsl/test/map_depth.comp and the `dprsm` tests
 // check the box against an f64 closest point on triangles from a millimetre to kilometres, slivers and
 // a light next to a vertex, an edge or the interior of a huge one. (lavapipe tests depth after the
 // shader, so its images could never show a violation.)
@@ -61,7 +62,7 @@ float map_texel_depth(float t, float far, float box) {
 }
 
 // A texel's hit point in the map's frame (the viewpoint at the origin; xyz) and its distance (w): dir · t,
-// unless t came out short of the box (the fragment's depth `box`: a sliver, above), then the barycentric
+// unless t came out short of the box (`box`, map_box_depth's: a sliver, above), then the barycentric
 // point of the watertight test's weights, a convex combination of the vertices, so on the triangle up to
 // rounding. The usual texel keeps dir · t, the more precise at grazing angles.
 vec4 map_texel_point(vec3 dir, float t, vec2 bary, vec3 a, vec3 b, vec3 c, float far, float box) {

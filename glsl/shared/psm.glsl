@@ -1,6 +1,6 @@
 // Per-VPL paraboloid shadow maps (thesis ch. 6, `--visibility psm`): the map of VPL k is a single
 // paraboloid face around the VPL's normal, centred at the VPL lifted off its surface, storing the
-// distance to the first surface over `far` per texel (exactly, as the light's maps: dprsm.frag).
+// distance to the first surface over `far` per texel (exactly: psm.frag).
 // Include after scene.glsl and types (PsmView); the caller declares `psm_views` and, for the lookup,
 // `psm_depth` (PSM_LOOKUP).
 #ifndef BOUNCE_PSM_GLSL

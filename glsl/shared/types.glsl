@@ -132,7 +132,7 @@ struct VoxelizePush {
     uint first_triangle;       // the triangle of invocation x = 0 (large scenes take several dispatches)
 };
 
-// Push constants of the paraboloid maps' shaders (dprsm.vert/geom/frag, dprsm_reflective.frag; psm's maps).
+// Push constants of the paraboloid maps' shaders (dprsm.comp; psm.vert/geom/frag).
 struct ParaboloidPush {
     uint map_res;     // the map resolution per face
     uint pad;

@@ -8,7 +8,7 @@ struct Vpl {
     vec3 position;
     vec3 normal;
     vec3 flux;
-    float area; // A_v, the surface patch its texel sees (dprsm_reflective.frag); 0: no VPL
+    float area; // A_v, the surface patch its texel sees (dprsm.comp); 0: no VPL
     bool valid;
 };
 

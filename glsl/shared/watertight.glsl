@@ -1,5 +1,5 @@
 // Watertight ray–triangle intersection (Woop, Benthin and Wald 2013) in f32, shared by the BVH
-// (shared/bvh.glsl) and the paraboloid maps (dprsm*.frag). The ray is sheared so that it runs along +z
+// (shared/bvh.glsl), the light maps (dprsm.comp) and psm's maps (psm.frag). The ray is sheared so that it runs along +z
 // from its origin; each vertex is mapped to that frame by a function of the vertex and the ray alone, and
 // the three 2D edge functions are `precise` (no fused multiply-add), so two triangles that share an edge
 // compute exactly opposite values for it: a ray can never slip between them, even through a shared vertex

@@ -1,8 +1,8 @@
 #version 460
 // Test kernel: the light maps' depth bound (shared/map_depth.glsl). Per case, a triangle in the viewpoint's
 // frame (a, b, c; a.w = far) and a point q on it (the CPU's f64 closest point to the origin): the box depth
-// dprsm.geom would emit, the least texel depth t / far over rays from the origin through q, q's
-// neighbours, the vertices, the edge midpoints and a 16 × 16 grid of the triangle (as dprsm*.frag finds t,
+// psm.geom would emit, the least texel depth t / far over rays from the origin through q, q's
+// neighbours, the vertices, the edge midpoints and a 16 × 16 grid of the triangle (as psm.frag and dprsm.comp find t,
 // before map_texel_depth lifts it to the box's), how many of those rays hit, and distance_to_triangle.
 // vec4 [2k] = (box, least texel depth, hits, distance), [2k + 1].x the least distance of the hit points
 // map_texel_point places (the VPLs'), over far. tests/tests/dprsm.rs checks the box, the distance and the
@@ -55,7 +55,7 @@ void main() {
         vec3 dir = normalize(aim(i, a, b, c, q));
         float t;
         vec2 bary;
-        // As dprsm.frag: the watertight test, then the hit distance along the unit direction.
+        // As psm.frag: the watertight test, then the hit distance along the unit direction.
         if (wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, a, b, c, t, bary) && t > 0.0) {
             hits++;
             least = min(least, min(t / far, 1.0));

@@ -1,8 +1,8 @@
 //! The reflective dual paraboloid maps (the VPLs) against an exact CPU ray cast from the light through
-//! every texel's sample point (the frame's offset in the texel, `Keys::vpl_offset`). The GPU rasterizes a
-//! conservative box around each triangle's exact (curved) image and intersects per texel, so depths must
-//! agree to float rounding everywhere but at texels whose ray grazes a triangle edge (there the two sides
-//! may legitimately pick different triangles). And the VPLs' solid angles over seeds against a closed form.
+//! every texel's sample point (the frame's offset in the texel, `Keys::vpl_offset`). The GPU casts the same
+//! ray through its BVH (f32, watertight), so depths must agree to float rounding everywhere but at texels
+//! whose ray grazes a triangle edge (there the two sides may legitimately pick different triangles). And the
+//! VPLs' solid angles over seeds against a closed form, and the paraboloid maps' box depth (psm's raster).
 
 use bounce_graph::bindings::VPL_MIN_COS;
 use bounce_graph::camera::Camera;
@@ -281,7 +281,7 @@ fn closest_point_f64(t: [DVec3; 3]) -> DVec3 {
         .unwrap()
 }
 
-/// The light maps' fragment shaders declare `depth_greater` under the box the geometry shader emits at
+/// psm's map fragment shaders declare `depth_greater` under the box the geometry shader emits at
 /// `map_box_depth` (glsl/shared/map_depth.glsl), so a GPU may reject texels by that depth before they run.
 /// The fragment never writes below its box's depth (`map_texel_depth` lifts it), which is harmless only
 /// while the box lies below the triangle's true nearest distance: checked here against an f64 closest
@@ -290,7 +290,7 @@ fn closest_point_f64(t: [DVec3; 3]) -> DVec3 {
 /// where Ericson's face case alone put 12 boxes above the nearest point), with the bound tight enough that
 /// early rejection still works. lavapipe tests depth after the shader, so no image shows a violation.
 /// The test kernel also casts the fragment shader's texel rays through 271 points of each triangle (its
-/// closest point among them): the points `map_texel_point` places (the VPLs) must not be nearer the light
+/// closest point among them): the points `map_texel_point` places (the VPLs, dprsm.comp) must not be nearer the light
 /// than the triangle (on slivers the plane-form t fell up to 88 % short: 697 triangles failed this before
 /// the barycentric fallback), and it reports how many hit nearer than the box (the texels the lift moves).
 #[test]

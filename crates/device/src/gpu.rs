@@ -114,6 +114,9 @@ pub struct Shared {
     /// driver has such a limit ([`crate::workarounds`]). Passes whose invocations loop long split their
     /// work so that each dispatch stays under it.
     pub loop_iteration_limit: Option<u32>,
+    /// Whether a timestamp takes its time only when a later command flushes the driver's queue
+    /// ([`crate::workarounds`]): [`crate::TimestampPool`] then writes a second one right after it.
+    pub timestamp_needs_flush: bool,
     pub push_descriptor: khr::push_descriptor::Device,
     pub debug_utils: Option<ext::debug_utils::Device>,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
@@ -290,6 +293,7 @@ struct Picked {
     timestamp_valid_bits: u32,
     compute_subgroup_ops: vk::SubgroupFeatureFlags,
     loop_iteration_limit: Option<u32>,
+    timestamp_needs_flush: bool,
 }
 
 /// The device `opts` (or `BOUNCE_DEVICE`) names, else the most suitable one: discrete, integrated,
@@ -355,6 +359,7 @@ fn pick_device(instance: &ash::Instance, opts: &GpuOptions) -> Result<Picked> {
         timestamp_valid_bits: qfs[queue_family as usize].timestamp_valid_bits,
         compute_subgroup_ops: compute_subgroup_ops(instance, physical),
         loop_iteration_limit: crate::workarounds::loop_iteration_limit(driver.driver_id),
+        timestamp_needs_flush: crate::workarounds::timestamp_needs_flush(driver.driver_id),
     })
 }
 
@@ -581,6 +586,7 @@ impl Gpu {
             timestamp_valid_bits: picked.timestamp_valid_bits,
             compute_subgroup_ops: picked.compute_subgroup_ops,
             loop_iteration_limit: picked.loop_iteration_limit,
+            timestamp_needs_flush: picked.timestamp_needs_flush,
             push_descriptor,
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),

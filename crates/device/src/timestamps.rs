@@ -51,6 +51,15 @@ impl TimestampPool {
         // synchronization2 is enabled by `create_device`. Caller contract (not checked): `cmd` is recording
         // (as for `reset`) and `reset` was recorded before this write.
         unsafe { self.gpu.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, q) };
+        if self.gpu.timestamp_needs_flush && self.used < self.capacity {
+            // A second timestamp, never read, whose write flushes the driver's queue, so that `q` takes its
+            // time now, before the next pass runs (crate::workarounds).
+            // SAFETY: as above, for query `self.used` < `capacity`.
+            unsafe {
+                self.gpu.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, self.used)
+            };
+            self.used += 1;
+        }
         Some(q)
     }
 

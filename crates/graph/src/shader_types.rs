@@ -196,7 +196,7 @@ pub struct ParaboloidPush {
     pub map_res: u32,
     pub pad: u32,
     /// Where in its texel each reflective-map texel's ray passes, in texels ([0, 1)², ½ the centre), for
-    /// layer 0; layer k adds k times the R2 sequence's step, wrapped (`dprsm_reflective.frag`).
+    /// layer 0; layer k adds k times the R2 sequence's step, wrapped (`dprsm.comp`).
     pub offset: [f32; 2],
 }
 const _: () = assert!(size_of::<ParaboloidPush>() == 16);

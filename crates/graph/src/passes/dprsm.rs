@@ -1,6 +1,6 @@
-//! dprsm: the reflective dual paraboloid map at each point light (pass `dprsm`), `dprsm_res`² per face,
-//! whose texels are the VPLs. (`--light-map rsm|cube` swaps the faces for perspective ones:
-//! glsl/shared/lightmap.glsl.) psm's per-VPL shadow maps reuse its geometry shader and `dprsm.frag`.
+//! dprsm: the reflective dual paraboloid map at each point light (pass `dprsm`, `glsl/dprsm.comp`),
+//! `dprsm_res`² per face, whose texels are the VPLs. (`--light-map rsm|cube` swaps the faces for
+//! perspective ones: glsl/shared/lightmap.glsl.)
 //!
 //! An array image of `2 × lights` layers; layer `2l + f` is face `f` (0: +z hemisphere, 1: −z)
 //! of light `l`. Texel (i, j) has paraboloid coordinates (u, v) = ((i + o_x)/res · 2 − 1, (j + o_y)/res · 2
@@ -12,11 +12,10 @@
 //! quadrature whose error stays in every seed: 4.3 % of a generated room's indirect light at 128² per face
 //! (BENCHMARKS.md, "What the VPL sum converges to"; the `dprsm` test
 //! `the_vpls_solid_angles_are_unbiased_over_seeds` checks the mean against a closed form).
-//! The depth is the distance t to the nearest surface along d divided by `far`
-//! (`FrameUniforms.scene_max.w`), or 1 where nothing is hit or u² + v² > 1 (kept inside the pass). Per
-//! texel (RGBA32F each):
-//! - `position`: xyz of the hit, w = 1 (0: empty texel, never sampled);
-//! - `normal`: the interpolated shading normal flipped to face the light, w = t;
+//! Per texel (RGBA32F each; all zero where the ray leaves the scene or u² + v² > 1):
+//! - `position`: xyz of the hit, w = A_v = Δω_v · t² / cos α, the surface patch the texel sees, for the
+//!   patch kernel (glsl/shared/vpl.glsl); 0: empty texel, never sampled;
+//! - `normal`: the interpolated shading normal flipped to face the light, w = t, the distance to it;
 //! - `flux`: the VPL's reflected flux Φ_v = albedo(v) · I · Δω_v, w = Δω_v, where
 //!   Δω_v = 4 / (1 + u² + v²)² · (2/res)² is the texel's solid angle seen from the light (the Jacobian of
 //!   the paraboloid map at the VPL's (u, v), dω = 4/(1 + u² + v²)² du dv, times the texel's area: the
@@ -24,44 +23,36 @@
 //!   out; without it the VPL sum does not converge to the one-bounce integral. Σ_v Δω_v over both faces
 //!   is 4π up to the texels cut by the unit circle (the `dprsm` test checks both).
 //!
-//! **Why not rasterize the projected vertices.** The paraboloid projection (u, v) = (x, y)/(|p| + z)
-//! (thesis eq. 6.6; it is a stereographic projection of the direction) is not linear: a triangle's
-//! image is bounded by circular arcs, and rasterizing the straight triangle between the projected
-//! vertices (what a plain paraboloid shadow map does) cuts or overshoots large triangles. Tessellating
-//! only shrinks the error. Instead (the approach of Gascuel et al. 2008 for non-linear projections):
-//! 1. the geometry shader clips the triangle to the face's half-space z ≥ 0 (triangles crossing the
-//!    face boundary are split between the faces exactly),
-//! 2. bounds its exact image: the projected vertices plus, per edge, the closed-form extreme points of
-//!    the edge's circular arc (see `include_arc` in `dprsm.geom`), and emits that box at the depth of
-//!    the triangle's nearest point to the light (a lower bound on every texel's hit distance;
-//!    `glsl/shared/map_depth.glsl`),
-//! 3. the fragment shader intersects the ray through each texel's point with the original triangle and
-//!    writes the hit distance as depth (discarding misses), never below the box's. It declares
-//!    `depth_greater`, so the depth test rejects a box's texels behind what is already drawn before the
-//!    shader runs (Sibenik's former 2048² direct-light shadow map, the same geometry: 25 → 19 ms on an
-//!    H200, whose fragment shading is scarce; the same images). The `dprsm` test
-//!    `the_light_maps_box_depth_is_below_every_texel_depth` checks the box against an f64 closest point.
-//!
-//! So every texel holds exactly what a ray cast from the light through its point hits first: the
-//! `dprsm` test compares it with a CPU ray cast and finds only float rounding.
+//! **Ray casting, not rasterization.** Each texel casts its ray from the light through the scene's BVH
+//! (closest hit, the watertight test), so every texel holds exactly what that ray hits first: the `dprsm`
+//! test compares it with a CPU ray cast and finds only float rounding. The thesis rasterizes the map, and
+//! the paraboloid projection (u, v) = (x, y)/(|p| + z) (thesis eq. 6.6, a stereographic projection of the
+//! direction) is not linear: a triangle's image is bounded by circular arcs, so rasterizing the straight
+//! triangle between the projected vertices cuts or overshoots large triangles. bounce rasterized an exact
+//! box around each triangle's curved image and intersected per texel (the approach psm's per-VPL maps
+//! still take: passes/psm.rs), the same images bit for bit as this pass's; but a rasterized map costs
+//! what the scene has (a geometry shader per triangle and face) and this one what the map has (one ray
+//! per texel). Sibenik's map under a moving light on lavapipe: 300 → 31 ms at 128² a face, 1000 → 440 ms
+//! at 512² (BENCHMARKS.md, "Things tried"). The rays take the threaded walk (`bvh_closest_walk`), level
+//! with the stack traversal on Sibenik and 15–25 % faster on Conference there.
 
 use super::FrameInputs;
+use crate::bindings::*;
 use crate::gpu_scene::scene_bindings;
 use crate::graph::{Graph, Handle};
 use crate::shader_types::ParaboloidPush;
 use crate::shaders;
 use anyhow::Result;
 use bounce_device::sync::Access;
-use bounce_device::{vk, Gpu, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc};
+use bounce_device::{vk, Binding, ComputePipeline, Gpu, Image, ImageDesc};
 
-pub const DPRSM_DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const VPL_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 pub struct Dprsm {
-    reflective: GraphicsPipeline,
+    pipeline: ComputePipeline,
 }
 
-/// The reflective DPRSM: one VPL per non-empty texel. (Its depth attachment stays inside the pass.)
+/// The reflective DPRSM: one VPL per non-empty texel.
 #[derive(Clone, Copy, Debug)]
 pub struct DprsmOut {
     pub position: Handle<Image>,
@@ -73,126 +64,61 @@ crate::products!(DprsmOut { position, normal, flux });
 impl Dprsm {
     /// `textured`: whether the scene has textures (the `SPEC_TEXTURED` specialisation).
     pub fn new(gpu: &Gpu, textured: bool) -> Result<Self> {
-        let spec = [(crate::bindings::SPEC_TEXTURED, textured as u32)];
-        let reflective = GraphicsPipeline::new(
-            gpu,
-            &GraphicsPipelineDesc {
-                name: "dprsm",
-                vertex: &crate::spirv(shaders::DPRSM_VERT),
-                geometry: Some(&crate::spirv(shaders::DPRSM_GEOM)),
-                fragment: &crate::spirv(shaders::DPRSM_REFLECTIVE_FRAG),
-                color_formats: &[VPL_FORMAT; 3],
-                depth_format: Some(DPRSM_DEPTH_FORMAT),
-                depth_compare: vk::CompareOp::LESS,
-                bindings: &scene_bindings(),
-                push_constant_size: std::mem::size_of::<ParaboloidPush>() as u32,
-                spec: &spec,
-            },
-        )?;
-        Ok(Dprsm { reflective })
-    }
-
-    pub(crate) fn depth_image(g: &mut Graph, name: &str, res: u32, layers: u32) -> Handle<Image> {
-        g.create_image(
-            ImageDesc::new(
-                name,
-                res,
-                res,
-                DPRSM_DEPTH_FORMAT,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC,
-            )
-            .layers(layers),
-        )
+        let spec = [(SPEC_TEXTURED, textured as u32)];
+        let mut bindings = scene_bindings();
+        bindings.extend(crate::gpu_bvh::GpuBvh::bindings());
+        bindings.extend([
+            Binding::storage_image(B_DPRSM_POSITION_OUT),
+            Binding::storage_image(B_DPRSM_NORMAL_OUT),
+            Binding::storage_image(B_DPRSM_FLUX_OUT),
+        ]);
+        let push = std::mem::size_of::<ParaboloidPush>() as u32;
+        let pipeline = ComputePipeline::new(gpu, "dprsm", &crate::spirv(shaders::DPRSM_COMP), &bindings, push, &spec)?;
+        Ok(Dprsm { pipeline })
     }
 
     /// The reflective DPRSM (`dprsm_res` per face).
     pub fn add<'a>(&'a self, g: &mut Graph<'a>, f: FrameInputs<'a>) -> DprsmOut {
         let layers = f.vpl_faces * f.scene.light_count;
         let res = f.dprsm_res;
-        let color = |g: &mut Graph<'a>, name: &str| {
+        let image = |g: &mut Graph<'a>, name: &str| {
             g.create_image(
                 ImageDesc::new(
                     name,
                     res,
                     res,
                     VPL_FORMAT,
-                    vk::ImageUsageFlags::COLOR_ATTACHMENT
-                        | vk::ImageUsageFlags::SAMPLED
-                        | vk::ImageUsageFlags::TRANSFER_SRC,
+                    vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
                 )
                 .layers(layers),
             )
         };
         let mut out = DprsmOut {
-            position: color(g, "dprsm.position"),
-            normal: color(g, "dprsm.normal"),
-            flux: color(g, "dprsm.flux"),
+            position: image(g, "dprsm.position"),
+            normal: image(g, "dprsm.normal"),
+            flux: image(g, "dprsm.flux"),
         };
-        let mut depth = Self::depth_image(g, "dprsm.depth", res, layers);
-        let (o, d) = (out, depth);
+        let o = out;
+        let push = ParaboloidPush { map_res: res, pad: 0, offset: f.vpl_offset };
         g.add_pass("dprsm")
-            .overwrite(&mut out.position, Access::ColorAttachment)
-            .overwrite(&mut out.normal, Access::ColorAttachment)
-            .overwrite(&mut out.flux, Access::ColorAttachment)
-            .overwrite(&mut depth, Access::DepthAttachment)
+            .overwrite(&mut out.position, Access::ComputeWrite)
+            .overwrite(&mut out.normal, Access::ComputeWrite)
+            .overwrite(&mut out.flux, Access::ComputeWrite)
             .record(move |ctx| {
-                let colors = [o.position, o.normal, o.flux].map(|h| ctx.image(&h).view);
-                let writes = f.scene.writes(f.uniforms);
-                record_paraboloid(ctx, &self.reflective, f, writes, res, layers, &colors, &d, f.vpl_offset)
+                let writes = f
+                    .bvh
+                    .writes(f.scene.writes(f.uniforms))
+                    .storage_image(B_DPRSM_POSITION_OUT, ctx.image(&o.position))
+                    .storage_image(B_DPRSM_NORMAL_OUT, ctx.image(&o.normal))
+                    .storage_image(B_DPRSM_FLUX_OUT, ctx.image(&o.flux));
+                self.pipeline.dispatch(
+                    ctx.cmd,
+                    &writes,
+                    bytemuck::bytes_of(&push),
+                    [res, res, layers],
+                    [WG_2D, WG_2D, 1],
+                );
             });
         out
-    }
-}
-
-/// Records one layered map rendering: `layers` instances of every scene triangle, instance k into
-/// layer k (the geometry shader picks the viewpoint: a light's face here, a VPL in `psm.rs`), cleared
-/// to far depth and zero colour first.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn record_paraboloid(
-    ctx: &crate::graph::PassContext,
-    pipeline: &GraphicsPipeline,
-    f: FrameInputs,
-    writes: bounce_device::DescriptorWrites,
-    res: u32,
-    layers: u32,
-    colors: &[vk::ImageView],
-    depth: &Handle<Image>,
-    offset: [f32; 2],
-) {
-    let d = &ctx.gpu.device;
-    let extent = vk::Extent2D { width: res, height: res };
-    let color_attachments: Vec<_> = colors
-        .iter()
-        .map(|&view| {
-            vk::RenderingAttachmentInfo::default()
-                .image_view(view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
-        })
-        .collect();
-    let depth = vk::RenderingAttachmentInfo::default()
-        .image_view(ctx.image(depth).view)
-        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-        .load_op(vk::AttachmentLoadOp::CLEAR)
-        .store_op(vk::AttachmentStoreOp::STORE)
-        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
-    // Layered rendering: the geometry shader routes each instance to its layer.
-    let info = vk::RenderingInfo::default()
-        .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
-        .layer_count(layers)
-        .color_attachments(&color_attachments)
-        .depth_attachment(&depth);
-    unsafe {
-        d.cmd_begin_rendering(ctx.cmd, &info);
-        if f.scene.triangle_count > 0 {
-            let push = ParaboloidPush { map_res: res, pad: 0, offset };
-            pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&push));
-            d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
-        }
-        d.cmd_end_rendering(ctx.cmd);
     }
 }

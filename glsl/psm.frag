@@ -1,5 +1,5 @@
 #version 460
-// dprsm (depth only; psm's per-VPL maps): exact per-texel depth. Each texel's centre direction is
+// psm's per-VPL maps (depth only): exact per-texel depth. Each texel's centre direction is
 // intersected with the (unclipped) triangle; the stored depth is that distance over `far`, so the map
 // holds exactly what a ray cast from the viewpoint through the texel centre would hit.
 #include "shared/scene.glsl"
@@ -9,14 +9,14 @@
 // The map resolution per face.
 layout(push_constant) uniform Push { ParaboloidPush pc; };
 
-// Never nearer than the box's own depth (dprsm.geom's lower bound), so the depth test may run early.
+// Never nearer than the box's own depth (psm.geom's lower bound), so the depth test may run early.
 layout(depth_greater) out float gl_FragDepth;
 
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;
 layout(location = 2) flat in vec3 i_c;
 layout(location = 3) flat in uint i_tri;
-layout(location = 4) flat in uint i_instance; // unused here; declared so the interface matches dprsm.geom
+layout(location = 4) flat in uint i_instance; // unused here; declared so the interface matches psm.geom
 
 void main() {
     vec2 uv = gl_FragCoord.xy / float(pc.map_res) * 2.0 - 1.0;

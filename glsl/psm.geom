@@ -1,20 +1,17 @@
 #version 460
-// dprsm: bound the triangle's exact image on one paraboloid face and emit that box as a quad; the fragment
-// shader then intersects each texel's ray with the triangle. See crates/graph/src/passes/dprsm.rs.
+// psm's maps: bound the triangle's exact image on one VPL's paraboloid face and emit that box as a quad; the
+// fragment shader (psm.frag) then intersects each texel's ray with the triangle. See crates/graph/src/passes/psm.rs.
 #include "shared/scene.glsl"
 #include "shared/map_depth.glsl"
 
-// The reflective map (faces per `--light-map`) and, as dprsm.psm.geom, psm's per-VPL maps share them.
 layout(push_constant) uniform Push { ParaboloidPush pc; };
 
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 4) out;
 
-#ifdef PSM_VIEW
-// dprsm.psm.geom: the viewpoints are the frame's shared VPLs (psm.comp).
+// The viewpoints: the frame's shared VPLs (psm.comp).
 layout(std430, set = 0, binding = B_PSM_VIEWS) readonly buffer PsmViews { PsmView psm_views[]; };
 #include "shared/psm.glsl"
-#endif
 
 layout(location = 0) in vec3 i_world[];
 layout(location = 1) flat in uint i_instance[];
@@ -80,56 +77,12 @@ void emit_box(vec3 p[3], uint inst, vec2 lo, vec2 hi) {
     EndPrimitive();
 }
 
-// A perspective face (`--light-map rsm|cube`): clip to z >= z_near (lines stay lines, so the clipped
-// polygon's image is the hull of its vertices' images) and bound those; the fragment test is exact.
-void emit_perspective(vec3 p[3], uint inst) {
-    float far = frame.scene_max.w;
-    float zn = 1e-6 * far;
-    vec3 poly[4];
-    int n = 0;
-    bool touches_light = false;
-    for (int k = 0; k < 3; k++) {
-        vec3 a = p[k], b = p[(k + 1) % 3];
-        if (length(a) < 1e-6 * far) touches_light = true;
-        if (a.z >= zn) poly[n++] = a;
-        if ((a.z >= zn) != (b.z >= zn)) poly[n++] = mix(a, b, (a.z - zn) / (a.z - b.z));
-    }
-    if (n < 3) return;
-    vec2 lo = vec2(1e30), hi = vec2(-1e30);
-    if (touches_light) {
-        lo = vec2(-1.0);
-        hi = vec2(1.0);
-    } else {
-        for (int k = 0; k < n; k++) include_uv(lm_project(poly[k]), lo, hi);
-        float margin = 2.0 / float(pc.map_res);  // as below: the texel rays pass anywhere in the texel
-        lo = max(lo - margin, vec2(-1.0));
-        hi = min(hi + margin, vec2(1.0));
-    }
-    if (any(greaterThan(lo, hi))) return;
-    emit_box(p, inst, lo, hi);
-}
-
 void main() {
     uint inst = i_instance[0];
     vec3 p[3];
-#ifdef PSM_VIEW
     PsmView view = psm_views[inst];
     if (!(view.normal_p.w > 0.0)) return;  // no VPL drawn: the map stays empty (never read)
     for (int k = 0; k < 3; k++) p[k] = psm_to_local(i_world[k] - view.position_v.xyz, view.normal_p.xyz);
-    bool perspective = false;
-#else
-    bool perspective = lm_kind() != LIGHT_MAP_DPRSM;
-    uint faces = lm_faces();
-    uint face = inst % faces, li = inst / faces;
-    vec3 light = lights[li].position.xyz;
-    for (int k = 0; k < 3; k++) {
-        p[k] = lm_to_local(i_world[k] - light, li, face);
-    }
-#endif
-    if (perspective) {
-        emit_perspective(p, inst);
-        return;
-    }
 
     // Clip to this face's half-space z >= 0 (Sutherland–Hodgman against one plane: at most 4 vertices).
     vec3 poly[4];
@@ -162,14 +115,8 @@ void main() {
             include_uv(a.xy / (1.0 + a.z), lo, hi);
             include_arc(a, b, lo, hi);
         }
-        // Margin against rounding (the fragment test is exact anyway): half a texel, and in the reflective
-        // map another half, since its texel rays pass anywhere in the texel (dprsm_reflective.frag) while
-        // a fragment runs where the box covers the texel's centre.
-#ifdef PSM_VIEW
+        // Margin against rounding (the fragment test is exact anyway): half a texel.
         float margin = 1.0 / float(pc.map_res);
-#else
-        float margin = 2.0 / float(pc.map_res);
-#endif
         lo = max(lo - margin, vec2(-1.0));
         hi = min(hi + margin, vec2(1.0));
     }

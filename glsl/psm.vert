@@ -1,5 +1,5 @@
 #version 460
-// dprsm: one instance per (light, face); the geometry shader does the paraboloid projection.
+// psm's maps: one instance per VPL of the shared set; the geometry shader does the paraboloid projection.
 #include "shared/scene.glsl"
 
 layout(location = 0) out vec3 o_world;
