@@ -684,9 +684,9 @@ impl RenderContext {
         Ok(uniforms)
     }
 
-    /// Memory the reflective DPRSM takes: 3 RGBA32F images + depth, plus importance and CDF.
+    /// Memory the reflective DPRSM takes: 3 RGBA32F images, plus importance and CDF.
     pub fn dprsm_bytes(&self, s: &FrameSettings) -> u64 {
-        s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2) * (3 * 16 + 4 + 4 + 4)
+        s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2) * (3 * 16 + 4 + 4)
     }
 
     /// Reject settings this device or scene cannot run (bad input, not a runtime failure).
