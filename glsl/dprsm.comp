@@ -22,15 +22,15 @@ layout(set = 0, binding = B_DPRSM_POSITION_OUT, rgba32f) uniform writeonly image
 layout(set = 0, binding = B_DPRSM_NORMAL_OUT, rgba32f) uniform writeonly image2DArray o_normal;
 layout(set = 0, binding = B_DPRSM_FLUX_OUT, rgba32f) uniform writeonly image2DArray o_flux;
 
-// The texel's VPL, or false where its ray leaves the scene (or the face).
-bool texel_vpl(ivec3 id, out vec4 position, out vec4 normal, out vec4 flux) {
+// The texel's VPL; all zero where its ray leaves the scene (or the face).
+void texel_vpl(ivec3 id, out vec4 position, out vec4 normal, out vec4 flux) {
     position = vec4(0.0);
     normal = vec4(0.0);
     flux = vec4(0.0);
     float res = float(pc.map_res);
     uint layer = uint(id.z);
     vec2 uv = (vec2(id.xy) + texel_offset(pc.offset, layer)) / res * 2.0 - 1.0;
-    if (!lm_covers(uv)) return false;
+    if (!lm_covers(uv)) return;
     uint face = layer % lm_faces(), li = layer / lm_faces();
     Light light = lights[li];
     vec3 dir = lm_direction(uv);
@@ -38,7 +38,7 @@ bool texel_vpl(ivec3 id, out vec4 position, out vec4 normal, out vec4 flux) {
     uint tri;
     vec2 bary;
     float t = bvh_closest_walk(light.position.xyz, lm_from_local(dir, li, face), far, tri, bary);
-    if (!(t > 0.0)) return false;
+    if (!(t > 0.0)) return;
     // The hit again in the map's frame (the light at the origin), as the rasterized map computed it: t from
     // the triangle's plane, exact at grazing angles, and the point on the triangle where t came out short
     // (slivers: shared/map_depth.glsl). Where rounding in this frame misses the triangle that the world
@@ -68,7 +68,6 @@ bool texel_vpl(ivec3 id, out vec4 position, out vec4 normal, out vec4 flux) {
     position = vec4(world, max(d_omega * t * t / cos_a, 1e-30));
     normal = vec4(n, t);
     flux = vec4(albedo_at(tri, tex) * light.intensity.rgb * d_omega, d_omega);
-    return true;
 }
 
 void main() {

@@ -15,12 +15,10 @@ layout(depth_greater) out float gl_FragDepth;
 layout(location = 0) flat in vec3 i_a;
 layout(location = 1) flat in vec3 i_b;
 layout(location = 2) flat in vec3 i_c;
-layout(location = 3) flat in uint i_tri;
-layout(location = 4) flat in uint i_instance; // unused here; declared so the interface matches psm.geom
 
 void main() {
     vec2 uv = gl_FragCoord.xy / float(pc.map_res) * 2.0 - 1.0;
-    if (dot(uv, uv) > 1.0) discard; // outside this face's hemisphere: the other face covers it
+    if (dot(uv, uv) > 1.0) discard; // outside the map's one face: behind the VPL's surface, which it never lights
     // Watertight (shared/watertight.glsl), so a texel ray through an edge two triangles share hits one
     // of them: with Möller–Trumbore a few texel rays slipped out of a closed box around the light.
     vec3 dir = paraboloid_direction(uv);

@@ -19,8 +19,6 @@ layout(location = 1) flat in uint i_instance[];
 layout(location = 0) flat out vec3 o_a;
 layout(location = 1) flat out vec3 o_b;
 layout(location = 2) flat out vec3 o_c;
-layout(location = 3) flat out uint o_tri;
-layout(location = 4) flat out uint o_instance;
 
 void include_uv(vec2 uv, inout vec2 lo, inout vec2 hi) {
     lo = min(lo, uv);
@@ -68,8 +66,6 @@ void emit_box(vec3 p[3], uint inst, vec2 lo, vec2 hi) {
         o_a = p[0];
         o_b = p[1];
         o_c = p[2];
-        o_tri = uint(gl_PrimitiveIDIn);
-        o_instance = inst;
         gl_Layer = int(inst);
         gl_Position = vec4(corners[k], z, 1.0);
         EmitVertex();

@@ -13,7 +13,9 @@ pub struct TimestampPool {
 }
 
 impl TimestampPool {
+    /// A pool for `capacity` timestamps (twice as many queries where each needs a flushing second one).
     pub fn new(gpu: &Gpu, capacity: u32) -> Result<Self> {
+        let capacity = if gpu.timestamp_needs_flush { 2 * capacity } else { capacity };
         let pool = if gpu.timestamp_valid_bits == 0 || capacity == 0 {
             vk::QueryPool::null()
         } else {

@@ -619,7 +619,7 @@ impl<'a> Graph<'a> {
         let live = self.live_passes();
         self.realise(&live)?;
         let n_live = live.iter().filter(|&&l| l).count() as u32;
-        let mut ts = TimestampPool::new(&self.gpu, 4 * n_live)?;
+        let mut ts = TimestampPool::new(&self.gpu, 2 * n_live)?;
         let (mut ran, mut skipped, mut stamps) = (vec![], vec![], vec![]);
         let gpu = self.gpu.clone();
         let passes = std::mem::take(&mut self.passes);

@@ -30,9 +30,9 @@
 //! direction) is not linear: a triangle's image is bounded by circular arcs, so rasterizing the straight
 //! triangle between the projected vertices cuts or overshoots large triangles. bounce rasterized an exact
 //! box around each triangle's curved image and intersected per texel (the approach psm's per-VPL maps
-//! still take: passes/psm.rs), the same images as this pass's (bit for bit but for ties); but a rasterized map costs
-//! what the scene has (a geometry shader per triangle and face) and this one what the map has (one ray
-//! per texel). Under a moving light on lavapipe, Sibenik's map 379 → 29–45 ms at 128² a face and 962 →
+//! still take: passes/psm.rs), the same images as this pass's (bit for bit but for ties); but a
+//! rasterized map costs what the scene has (a geometry shader per triangle and face) and this one what
+//! the map has (one ray per texel). Under a moving light on lavapipe, Sibenik's map 379 → 29–45 ms at 128² a face and 962 →
 //! 435–536 ms at 512², Conference's 1050 → 24 and 1303 → 383 ms; rooms of tens of triangles lose up to
 //! 2.8× (12 → 21 ms at 128²; BENCHMARKS.md, "Things tried"). The rays take the threaded walk
 //! (`bvh_closest_walk`): the stack traversal took 0.6–1.3× its time.

@@ -160,7 +160,7 @@ impl Psm {
         g.add_pass("psm").read(&views, Access::ShaderRead).overwrite(&mut depth, Access::DepthAttachment).record(
             move |ctx| {
                 let writes = f.scene.writes(f.uniforms).storage_buffer(B_PSM_VIEWS, ctx.buffer(&vh));
-                record_paraboloid(ctx, maps, f, writes, res, n, &[], &dh, [0.5; 2]);
+                record_maps(ctx, maps, f, writes, res, n, &dh);
             },
         );
         Ok(PsmOut { views, depth })
@@ -188,33 +188,19 @@ fn depth_image(g: &mut Graph, name: &str, res: u32, layers: u32) -> Handle<Image
     )
 }
 
-/// Records one layered map rendering: `layers` instances of every scene triangle, instance k into
-/// layer k (the geometry shader takes VPL k as the viewpoint), cleared to far depth first.
-#[allow(clippy::too_many_arguments)]
-fn record_paraboloid(
+/// Records the maps: `layers` instances of every scene triangle, instance k into layer k (the geometry
+/// shader takes VPL k as the viewpoint), cleared to far depth first. Depth only, at the texel centres.
+fn record_maps(
     ctx: &crate::graph::PassContext,
     pipeline: &GraphicsPipeline,
     f: FrameInputs,
     writes: bounce_device::DescriptorWrites,
     res: u32,
     layers: u32,
-    colors: &[vk::ImageView],
     depth: &Handle<Image>,
-    offset: [f32; 2],
 ) {
     let d = &ctx.gpu.device;
     let extent = vk::Extent2D { width: res, height: res };
-    let color_attachments: Vec<_> = colors
-        .iter()
-        .map(|&view| {
-            vk::RenderingAttachmentInfo::default()
-                .image_view(view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
-        })
-        .collect();
     let depth = vk::RenderingAttachmentInfo::default()
         .image_view(ctx.image(depth).view)
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -225,12 +211,14 @@ fn record_paraboloid(
     let info = vk::RenderingInfo::default()
         .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
         .layer_count(layers)
-        .color_attachments(&color_attachments)
         .depth_attachment(&depth);
+    // SAFETY: `ctx.cmd` is recording outside a rendering instance (the graph records passes one after
+    // another); the depth image was transitioned to DepthAttachment by the graph for this pass; the
+    // pipeline was built for this device with a D32 depth attachment and no colour ones, as rendered here.
     unsafe {
         d.cmd_begin_rendering(ctx.cmd, &info);
         if f.scene.triangle_count > 0 {
-            let push = ParaboloidPush { map_res: res, pad: 0, offset };
+            let push = ParaboloidPush { map_res: res, pad: 0, offset: [0.5; 2] };
             pipeline.bind(ctx.cmd, extent, &writes, bytemuck::bytes_of(&push));
             d.cmd_draw(ctx.cmd, 3 * f.scene.triangle_count, layers, 0, 0);
         }
