@@ -79,8 +79,7 @@ void main() {
             len = min(h.a + 1.0, MAX_HISTORY);
             float a = max(max(pc.alpha, 1.0 / len), gradient_weight(px, q));
             illum = mix(h.rgb, illum, a);
-            float b = 1.0 - a;
-            variance = b * b * texelFetch(prev_variance, q, 0).r + a * a * variance;
+            variance = mix(texelFetch(prev_variance, q, 0).r, variance, a);
         }
     }
     imageStore(color_out, px, vec4(illum, len));
