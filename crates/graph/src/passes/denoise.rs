@@ -29,6 +29,7 @@
 //! gather, averages the peak into its dim plane: the light-corner scenes' denoised images held 0.33–0.48
 //! of the truth's mean. With the measured variance they hold 0.55–0.75, and the generated suite's
 //! denoised error fell by a fifth to a quarter (and by as much again with the gradient test) (BENCHMARKS.md, "Real time under motion").
+//!
 //! Why a frame's variance, blended over the history, and not the accumulation's (which falls as 1 / n as
 //! the history grows): the tighter stop keeps a corner's peak in a still view, but the filter serves
 //! moving views, whose short histories it then leaves noisier: on the generated suite under motion 1.09×
