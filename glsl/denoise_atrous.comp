@@ -8,7 +8,6 @@
 
 layout(set = 0, binding = B_DENOISE_IN) uniform sampler2D ping;
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
-layout(set = 0, binding = B_DENOISE_VARIANCE) uniform sampler2D weight_sum;
 layout(set = 0, binding = B_DENOISE_OUT, rgba32f) uniform writeonly image2D out_color;
 
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
@@ -19,26 +18,36 @@ void main() {
     vec4 c = texelFetch(ping, px, 0);
     Surface p = surface_at(px);
     if (p.hit) {
-        float lp = luminance(c.rgb), wp = texelFetch(weight_sum, px, 0).r;
-        vec3 sum_c = vec3(0.0);
-        float sum_v = 0.0, sum_k = 0.0;
+        // The variance blurred by a 3 × 3 Gaussian: the luminance stop's scale.
+        float var = 0.0, wsum = 0.0;
+        for (int dy = -1; dy <= 1; dy++) {
+            for (int dx = -1; dx <= 1; dx++) {
+                ivec2 q = px + ivec2(dx, dy);
+                if (!inside(q)) continue;
+                float w = (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25);
+                var += w * texelFetch(ping, q, 0).a;
+                wsum += w;
+            }
+        }
+        float sd = sqrt(max(var / wsum, 0.0));
+        float lp = luminance(c.rgb);
+        vec3 sum_c = c.rgb * (KERNEL[0] * KERNEL[0]);
+        float sum_v = c.a * (KERNEL[0] * KERNEL[0]) * (KERNEL[0] * KERNEL[0]), sum_w = KERNEL[0] * KERNEL[0];
         for (int dy = -2; dy <= 2; dy++) {
             for (int dx = -2; dx <= 2; dx++) {
                 if (dx == 0 && dy == 0) continue;
                 ivec2 q = px + ivec2(dx, dy) * int(pc.step);
                 if (!inside(q)) continue;
                 vec4 cq = texelFetch(ping, q, 0);
-                float k = KERNEL[abs(dx)] * KERNEL[abs(dy)]
-                    * geometry_weight_symmetric(p, surface_at(q), length(vec2(dx, dy)) * float(pc.step))
-                    * luminance_weight(lp, luminance(cq.rgb), sqrt(sqrt(max(c.a * cq.a, 0.0))))
-                    / max(wp, texelFetch(weight_sum, q, 0).r);
-                sum_c += k * cq.rgb;
-                sum_v += k * k * cq.a;
-                sum_k += k;
+                float w = KERNEL[abs(dx)] * KERNEL[abs(dy)]
+                    * geometry_weight(p, surface_at(q), length(vec2(dx, dy)) * float(pc.step))
+                    * luminance_weight(lp, luminance(cq.rgb), sd);
+                sum_c += w * cq.rgb;
+                sum_v += w * w * cq.a;
+                sum_w += w;
             }
         }
-        float k0 = 1.0 - sum_k;
-        c = vec4(sum_c + k0 * c.rgb, sum_v + k0 * k0 * c.a);
+        c = vec4(sum_c / sum_w, sum_v / (sum_w * sum_w));
     }
     if (pc.last != 0u) {
         vec3 radiance = c.rgb * texelFetch(g_albedo, px, 0).rgb;

@@ -60,18 +60,5 @@ void main() {
         c.rgb = sum_c / sum_cw;
         var = sd * sd;
     }
-    else if (p.hit) {
-        float sum = 0.0, wsum = 0.0;
-        for (int dy = -1; dy <= 1; dy++) {
-            for (int dx = -1; dx <= 1; dx++) {
-                ivec2 q = px + ivec2(dx, dy);
-                if (!inside(q)) continue;
-                float w = (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25);
-                sum += w * texelFetch(variance, q, 0).r;
-                wsum += w;
-            }
-        }
-        var = sum / wsum;
-    }
     imageStore(out_color, px, vec4(c.rgb, var));
 }

@@ -80,7 +80,6 @@ const SHADERS: &[Shader] = &[
     file("reproject.comp"),
     file("denoise_temporal.comp"),
     file("denoise_variance.comp"),
-    file("denoise_weights.comp"),
     file("denoise_atrous.comp"),
     // The reference: two-strategy MIS (cosine at x, light side at y).
     file("reference.comp"),

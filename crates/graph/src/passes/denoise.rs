@@ -65,7 +65,6 @@ pub struct Denoise {
     temporal: Lazy<1>,
     variance: Lazy<1>,
     atrous: Lazy<1>,
-    weights: Lazy<1>,
     sampler: Sampler,
 }
 
@@ -118,18 +117,11 @@ impl Denoise {
         ]);
         let variance =
             with(&[sampled(B_DENOISE_IN), sampled(B_DENOISE_VARIANCE), Binding::storage_image(B_DENOISE_OUT)]);
-        let atrous = with(&[
-            sampled(B_DENOISE_IN),
-            sampled(B_GATHER_DIRECT),
-            sampled(B_DENOISE_VARIANCE),
-            Binding::storage_image(B_DENOISE_OUT),
-        ]);
-        let weights = with(&[sampled(B_DENOISE_IN), Binding::storage_image(B_DENOISE_OUT)]);
+        let atrous = with(&[sampled(B_DENOISE_IN), sampled(B_GATHER_DIRECT), Binding::storage_image(B_DENOISE_OUT)]);
         Ok(Denoise {
             temporal: Lazy::new(gpu, "denoise_temporal", shaders::DENOISE_TEMPORAL_COMP, &temporal, push),
             variance: Lazy::new(gpu, "denoise_variance", shaders::DENOISE_VARIANCE_COMP, &variance, push),
             atrous: Lazy::new(gpu, "denoise_atrous", shaders::DENOISE_ATROUS_COMP, &atrous, push),
-            weights: Lazy::new(gpu, "denoise_weights", shaders::DENOISE_WEIGHTS_COMP, &weights, push),
             sampler: Sampler::nearest(gpu)?,
         })
     }
@@ -145,12 +137,8 @@ impl Denoise {
         direct: Option<Handle<Image>>,
     ) -> Result<Handle<Image>> {
         let (w, h) = (f.width, f.height);
-        let (temporal, variance, atrous, weights) = (
-            self.temporal.pipeline()?,
-            self.variance.pipeline()?,
-            self.atrous.pipeline()?,
-            self.weights.pipeline()?,
-        );
+        let (temporal, variance, atrous) =
+            (self.temporal.pipeline()?, self.variance.pipeline()?, self.atrous.pipeline()?);
         let color = g.history_image("denoise.color", image("denoise.color", w, h), &(w, h));
         let variance_image = |name| image_of(name, w, h, vk::Format::R32_SFLOAT);
         let noise = g.history_image("denoise.variance", variance_image("denoise.variance"), &(w, h));
@@ -205,20 +193,11 @@ impl Denoise {
             let mut next = g.create_image(image(name, w, h));
             let (src, dst) = (ping, next);
             let push = DenoisePush { step: 1 << i, last: last as u32, ..base };
-            let mut sums = g.create_image(variance_image("denoise.weights"));
-            let sw = sums;
-            stage(g, "denoise_weights", &gb, &[src]).overwrite(&mut sums, Access::ComputeWrite).record(move |ctx| {
-                let writes = gbw(ctx)
-                    .sampled_image(B_DENOISE_IN, ctx.image(&src), s)
-                    .storage_image(B_DENOISE_OUT, ctx.image(&sw));
-                weights.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
-            });
-            stage(g, "denoise_atrous", &gb, &[src, direct_or, sums]).overwrite(&mut next, Access::ComputeWrite).record(
+            stage(g, "denoise_atrous", &gb, &[src, direct_or]).overwrite(&mut next, Access::ComputeWrite).record(
                 move |ctx| {
                     let writes = gbw(ctx)
                         .sampled_image(B_DENOISE_IN, ctx.image(&src), s)
                         .sampled_image(B_GATHER_DIRECT, ctx.image(&direct_or), s)
-                        .sampled_image(B_DENOISE_VARIANCE, ctx.image(&sums), s)
                         .storage_image(B_DENOISE_OUT, ctx.image(&dst));
                     atrous.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&push), size, [WG_2D, WG_2D, 1]);
                 },
