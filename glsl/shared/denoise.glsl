@@ -44,6 +44,17 @@ float geometry_weight(Surface p, Surface q, float pixels) {
     return wn * wz;
 }
 
+// The same stop made symmetric (w(p, q) = w(q, p)): the larger of the two plane distances, each in its
+// own pixel's footprints.
+float geometry_weight_symmetric(Surface p, Surface q, float pixels) {
+    if (!q.hit) return 0.0;
+    float wn = pow(max(0.0, dot(p.n, q.n)), pc.sigma_n);
+    vec3 d = q.x - p.x;
+    float off = max(abs(dot(p.n, d)) / p.footprint, abs(dot(q.n, d)) / q.footprint);
+    float wz = off == 0.0 ? 1.0 : exp(-off / (pc.sigma_z * pixels));
+    return wn * wz;
+}
+
 // The luminance edge stop: |l_p − l_q| against σ_l standard deviations of p's (filtered) variance; 1
 // for equal values (also where the variance is 0), 0 for different ones there.
 float luminance_weight(float lp, float lq, float sd) {

@@ -385,12 +385,13 @@ fn light_corner_room() -> Scene {
 }
 
 /// The denoiser keeps most of a bright corner's light: with the light next to the corner, the indirect
-/// light is a peak at the corner's edges, and a luminance stop scaled by a variance that counts the
-/// peak's own gradient as noise (SVGF's moments) lets the à-trous, a normalized gather, average the peak
-/// into the dim planes around it. Over the first 8 frames of a static view every denoised frame's mean is
-/// at least 0.7 of `all`'s (measured 0.76–0.86 with the estimate's own variance; with SVGF's moments
-/// 0.53 at frame 0, which this test fails, and 0.51–0.69 over the 8 frames of another random sequence;
-/// the raw frames 0.97–1.04).
+/// light is a peak at the corner's edges, which a normalized gather averages into the dim planes around
+/// it, losing light at each iteration (an edge pixel's taps are cut, so its neighbours, normalizing by
+/// their larger sums, take less of its light than it gives up), and so does a luminance stop scaled by a
+/// variance that counts the peak's own gradient as noise (SVGF's moments). Over the first 8 frames of a
+/// static view every denoised frame's mean is at least 0.78 of `all`'s (measured 0.81–0.92 with two
+/// gathering iterations and three exchanging ones; with five gathering, 0.72–0.87, which this test fails
+/// from frame 1; with SVGF's moments 0.53 at frame 0; the raw frames 0.95–1.04).
 #[test]
 fn the_denoiser_keeps_a_corners_light() {
     let scene = light_corner_room();
@@ -406,7 +407,7 @@ fn the_denoiser_keeps_a_corners_light() {
         let raw = bounce_tests::mean(&rgb(f.raw.as_ref().unwrap())) / truth;
         let den = bounce_tests::mean(&rgb(&f.radiance)) / truth;
         eprintln!("frame {frame}: image mean over all's: raw {raw:.3}, denoised {den:.3}");
-        assert!(den >= 0.7, "frame {frame}: the denoiser lost the corner's light: {den:.3} of all's mean");
+        assert!(den >= 0.78, "frame {frame}: the denoiser lost the corner's light: {den:.3} of all's mean");
     }
 }
 
