@@ -30,8 +30,9 @@
 //! neighbourhood for a young history) counts the signal's own variation as noise, so next to a bright
 //! peak (a light in a corner) every pixel's stop accepts everything and the à-trous, a normalized
 //! gather, averages the peak into its dim plane: the light-corner scenes' denoised images held 0.33–0.48
-//! of the truth's mean. With the measured variance they hold 0.55–0.75, and the generated suite's
-//! denoised error fell by a fifth to a quarter (and by as much again with the gradient test) (BENCHMARKS.md, "Real time under motion").
+//! of the truth's mean. With the measured variance they held 0.55–0.75 (0.68–0.83 since the wide
+//! iterations exchange), and the generated suite's denoised error fell by a fifth to a quarter (and by as
+//! much again with the gradient test) (BENCHMARKS.md, "Real time under motion").
 //!
 //! Why the wide iterations exchange and the first two gather: a normalized gather loses light wherever the
 //! signal peaks at a plane's edge. Its weights sum to 1 over each output pixel, not over each input
