@@ -34,25 +34,26 @@ Surface surface_at(ivec2 p) {
     return s;
 }
 
-// The geometric edge stop between p's surface and q's, `pixels` apart: normals (cos^σ_n) and q's
-// distance off p's tangent plane against σ_z footprints per pixel of offset (scale-free).
+// The geometric edge stop between surfaces of normals n_p and n_q, `pixels` apart, the one `off`
+// footprints off the other's plane: normals (cos^σ_n) and the distance against σ_z footprints per pixel
+// of offset (scale-free).
+float geometry_stop(vec3 np, vec3 nq, float off, float pixels) {
+    float wn = pow(max(0.0, dot(np, nq)), pc.sigma_n);
+    return off == 0.0 ? wn : wn * exp(-off / (pc.sigma_z * pixels));
+}
+
+// The stop between p's surface and q's, q's distance off p's tangent plane in p's footprints.
 float geometry_weight(Surface p, Surface q, float pixels) {
     if (!q.hit) return 0.0;
-    float wn = pow(max(0.0, dot(p.n, q.n)), pc.sigma_n);
-    float off = abs(dot(p.n, q.x - p.x));
-    float wz = off == 0.0 ? 1.0 : exp(-off / (pc.sigma_z * p.footprint * pixels));
-    return wn * wz;
+    return geometry_stop(p.n, q.n, abs(dot(p.n, q.x - p.x)) / p.footprint, pixels);
 }
 
 // The same stop made symmetric (w(p, q) = w(q, p)): the larger of the two plane distances, each in its
 // own pixel's footprints.
 float geometry_weight_symmetric(Surface p, Surface q, float pixels) {
     if (!q.hit) return 0.0;
-    float wn = pow(max(0.0, dot(p.n, q.n)), pc.sigma_n);
     vec3 d = q.x - p.x;
-    float off = max(abs(dot(p.n, d)) / p.footprint, abs(dot(q.n, d)) / q.footprint);
-    float wz = off == 0.0 ? 1.0 : exp(-off / (pc.sigma_z * pixels));
-    return wn * wz;
+    return geometry_stop(p.n, q.n, max(abs(dot(p.n, d)) / p.footprint, abs(dot(q.n, d)) / q.footprint), pixels);
 }
 
 // The luminance edge stop: |l_p − l_q| against σ_l standard deviations of p's (filtered) variance; 1
