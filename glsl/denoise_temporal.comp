@@ -1,7 +1,8 @@
 #version 460
 // denoise, temporal stage (dispatch W × H): the raw estimate's indirect illumination (radiance minus
-// the direct light, demodulated by the albedo) blended into last frame's accumulation at the pixel's
-// previous pixel (passes/reproject.rs), and so is the estimate's variance (the raw image's alpha: ris's
+// the direct light, demodulated by the albedo) blended into last frame's accumulation where the pixel's
+// surface was (passes/reproject.rs: bilinear over the four pixels around it that held the same surface),
+// and so is the estimate's variance (the raw image's alpha: ris's
 // shade measures it over the pixel's reservoirs); the blend's weight of the new frame is max(α, 1 /
 // history length), the history restarting where the surface was disoccluded.
 // The history is first clamped into this frame's neighbourhood (mean ± DENOISE_CLAMP_SIGMAS standard
@@ -72,14 +73,28 @@ void main() {
     float len = 1.0;
     vec4 mv = texelFetch(motion, px, 0);
     if (pc.history != 0u && mv.z != 0.0) {
+        // Last frame's accumulation where the surface was: bilinear where all four pixels around it held the
+        // same surface, else the pixel it fell in, q (which also anchors the gradient test). A bilinear
+        // lookup renormalized over fewer pixels is a gather, which at a plane's edge would lose a bright
+        // edge's light frame after frame (passes/denoise.rs).
         ivec2 q = ivec2(mv.xy);
         vec4 h = texelFetch(prev_color, q, 0);
+        float hv = texelFetch(prev_variance, q, 0).r;
+        if (uint(mv.w) == 15u) {
+            vec2 f = mv.xy - 0.5;
+            ivec2 base = ivec2(floor(f));
+            vec2 t = f - vec2(base);
+            h = mix(mix(texelFetch(prev_color, base, 0), texelFetch(prev_color, base + ivec2(1, 0), 0), t.x),
+                    mix(texelFetch(prev_color, base + ivec2(0, 1), 0), texelFetch(prev_color, base + 1, 0), t.x), t.y);
+            hv = mix(mix(texelFetch(prev_variance, base, 0).r, texelFetch(prev_variance, base + ivec2(1, 0), 0).r, t.x),
+                     mix(texelFetch(prev_variance, base + ivec2(0, 1), 0).r, texelFetch(prev_variance, base + 1, 0).r, t.x), t.y);
+        }
         if (h.a > 0.0) {
             h.rgb = clamp_to_neighbourhood(px, h.rgb);
             len = min(h.a + 1.0, MAX_HISTORY);
             float a = max(max(pc.alpha, 1.0 / len), gradient_weight(px, q));
             illum = mix(h.rgb, illum, a);
-            variance = mix(texelFetch(prev_variance, q, 0).r, variance, a);
+            variance = mix(hv, variance, a);
         }
     }
     imageStore(color_out, px, vec4(illum, len));

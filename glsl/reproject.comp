@@ -3,7 +3,9 @@
 // (crates/graph/src/passes/reproject.rs). A pixel's surface point x projects through last frame's
 // view_proj to where last frame saw it; the pixel there is its previous pixel when last frame's surface
 // at it is the same surface: a point within `plane` pixel footprints of x's plane and a normal within
-// acos(`normal`) of x's (disocclusion by depth and normal). The scene is static, so the world position
+// acos(`normal`) of x's (disocclusion by depth and normal). Also written: where x was (xy, in pixels) and
+// which of the four pixels around it hold the same surface (w, a 4-bit mask: the denoiser's bilinear
+// lookup of its history). The scene is static, so the world position
 // is the motion: no motion vector is rasterized.
 #include "shared/scene.glsl"
 
@@ -19,6 +21,15 @@ layout(set = 0, binding = B_MOTION, rgba32f) uniform writeonly image2D motion;
 layout(set = 0, binding = B_SURFACE_POSITION_OUT, rgba32f) uniform writeonly image2D surface_position;
 layout(set = 0, binding = B_SURFACE_OUT, rgba32ui) uniform writeonly uimage2D surface;
 
+// Whether last frame's surface at pixel q is the surface (x, n): within `plane` footprints of x's plane,
+// its normal within acos(`normal`) of n.
+bool same_surface(ivec2 q, vec3 x, vec3 n, float footprint) {
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size.xy)))) return false;
+    vec4 pp = texelFetch(prev_position, q, 0);
+    vec3 pn = uintBitsToFloat(texelFetch(prev_surface, q, 0).xyz);
+    return pp.w != 0.0 && abs(dot(n, pp.xyz - x)) <= pc.plane * footprint && dot(n, pn) >= pc.normal;
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size.xy)))) return;
@@ -31,17 +42,24 @@ void main() {
     if (gp.w != 0.0 && pc.history != 0u) {
         vec4 clip = frame.prev_view_proj * vec4(gp.xyz, 1.0);
         if (clip.w > 0.0) {
-            // Vulkan clip space: y down the image, as the G-buffer's rows.
-            vec2 at = (clip.xy / clip.w * 0.5 + 0.5) * vec2(frame.size.xy);
-            ivec2 q = ivec2(floor(at));
-            if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size.xy)))) {
-                vec4 pp = texelFetch(prev_position, q, 0);
-                vec3 pn = uintBitsToFloat(texelFetch(prev_surface, q, 0).xyz);
-                float footprint = frame.camera.x * distance(gp.xyz, frame.eye.xyz);
-                bool same = pp.w != 0.0 && abs(dot(n, pp.xyz - gp.xyz)) <= pc.plane * footprint
-                    && dot(n, pn) >= pc.normal;
-                if (same) m = vec4(vec2(q), 1.0, 0.0);
+            // Vulkan clip space: y down the image, as the G-buffer's rows. The motion is the difference of
+            // x's two projections, added to the pixel's centre: the rounding of x (far from the origin, a
+            // footprint may be a few ulps of it) cancels, and a still camera's pixel maps onto itself exactly.
+            vec4 now = frame.view_proj * vec4(gp.xyz, 1.0);
+            vec2 at = vec2(px) + 0.5 + (clip.xy / clip.w - now.xy / now.w) * 0.5 * vec2(frame.size.xy);
+            float footprint = frame.camera.x * distance(gp.xyz, frame.eye.xyz);
+            m.xy = at;
+            // The four pixels around `at` whose centres a bilinear lookup weighs (the denoiser's history);
+            // the one `at` falls in, ⌊at⌋, is among them: the nearest centre.
+            vec2 f = at - 0.5;
+            ivec2 base = ivec2(floor(f));
+            uint taps = 0u;
+            for (uint k = 0u; k < 4u; k++) {
+                if (same_surface(base + ivec2(k & 1u, k >> 1u), gp.xyz, n, footprint)) taps |= 1u << k;
             }
+            uvec2 near = uvec2(greaterThanEqual(f - vec2(base), vec2(0.5)));
+            m.z = float((taps >> (near.x + 2u * near.y)) & 1u);
+            m.w = float(taps);
         }
     }
     imageStore(motion, px, m);

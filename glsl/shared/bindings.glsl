@@ -196,7 +196,8 @@ const float END_BALL_MAX_RADIUS = 0.03;
 #define B_PREV_VPL_FLUX 67
 
 // ---- reproject (passes/reproject.rs): motion from the G-buffer, and the surface kept for the next frame --
-// Written: each pixel's previous pixel (B_MOTION: xy, z = 1 where last frame saw the same surface there)
+// Written: where each pixel's point was last frame (B_MOTION: xy in pixels, its previous pixel ⌊xy⌋; z = 1
+// where last frame saw the same surface there; w, a 4-bit mask of the four pixels around xy that did)
 // and this frame's surface (B_SURFACE_POSITION_OUT: xyz, hit; B_SURFACE_OUT: the normal's float bits and
 // the albedo as unorm8). Read by ris's temporal stage and the denoiser: B_MOTION and last frame's surface
 // at B_PREV_POSITION and B_PREV_SURFACE.

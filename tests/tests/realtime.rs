@@ -8,8 +8,8 @@
 //! estimate; a static view's progressive mean of realtime frames converges to the unbiased image;
 //! `auto` learns visibility only where visibility blocks nearly everything; the raw frame's alpha is its
 //! estimate's variance (against the spread of independent runs); the denoiser keeps most of a bright
-//! corner's light and follows a change of the lighting at once; and a real-time sequence does not
-//! depend on what the renderer drew before it.
+//! corner's light, follows a change of the lighting at once and keeps its history while the camera pans;
+//! and a real-time sequence does not depend on what the renderer drew before it.
 
 use crate::vpl::{converges_to, indirect_with};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
@@ -461,4 +461,58 @@ fn the_denoiser_follows_a_change_of_the_lighting() {
     let (raw, shown) = (bounce_tests::mean(&rgb(f.raw.as_ref().unwrap())), bounce_tests::mean(&rgb(&f.radiance)));
     eprintln!("after the light doubled: image mean over all's: raw {:.3}, denoised {:.3}", raw / truth, shown / truth);
     assert!(shown / truth >= 0.75, "the denoiser lags: {:.3} of all's mean", shown / truth);
+}
+
+/// The scene's camera slid sideways by `px` pixels (at the target's distance), still looking ahead.
+fn panned(scene: &Scene, px: f32, height: u32) -> bounce_graph::camera::Camera {
+    let c = scene.camera;
+    let side = (c.target - c.eye).cross(c.up).normalize();
+    let footprint = 2.0 * (c.fov_y_deg.to_radians() / 2.0).tan() * (c.target - c.eye).length() / height as f32;
+    let d = side * (px * footprint);
+    bounce_graph::camera::Camera { eye: c.eye + d, target: c.target + d, ..c }
+}
+
+/// The denoiser's history follows a panning camera: the camera slides sideways 0.37 of a pixel a frame,
+/// so that each frame's surface points fall between last frame's pixel centres, and the accumulation is
+/// looked up there (bilinearly where the four pixels around hold the same surface). After 10 frames the
+/// denoised frame's relMSE against `all` of its view, summed over 8 runs, is at most 1.8× a still view's
+/// after 10 frames (measured 1.42×, 1.54× and 1.54× with three sets of seeds; looking the history up in
+/// the pixel the point fell in, as first built, 2.16–2.22×, which this test fails) and below half the raw
+/// estimate's.
+#[test]
+fn the_denoisers_history_follows_a_panning_camera() {
+    const FRAMES: usize = 10;
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let (w, h, res, vox) = SIZE;
+    let rgb = |v: &[[f32; 4]]| v.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+    let all_still = all(&mut r);
+    r.set_camera(panned(&scene, 0.37 * (FRAMES - 1) as f32, h));
+    let all_panned = all(&mut r);
+    let (mut still, mut moving, mut raw) = (0.0, 0.0, 0.0);
+    for run in 0..8 {
+        let s = FrameSettings { width: w, height: h, dprsm_res: res, voxels: vox, denoise: true, ..realtime(20 + run) };
+        for pan in [false, true] {
+            r.clear_frame_cache();
+            let mut f = None;
+            for k in 0..FRAMES {
+                r.set_camera(if pan { panned(&scene, 0.37 * k as f32, h) } else { scene.camera });
+                f = Some(r.render(&s).unwrap());
+            }
+            let f = f.unwrap();
+            if pan {
+                moving += bounce_tests::rel_mse(&rgb(&f.radiance), &all_panned);
+                raw += bounce_tests::rel_mse(&rgb(f.raw.as_ref().unwrap()), &all_panned);
+            } else {
+                still += bounce_tests::rel_mse(&rgb(&f.radiance), &all_still);
+            }
+        }
+    }
+    eprintln!(
+        "frame {FRAMES}: denoised relMSE still {still:.5}, panning {moving:.5} ({:.2}x), raw panning {raw:.5}",
+        moving / still
+    );
+    assert!(moving <= 1.8 * still, "the history is lost under a pan: {moving} against {still} still");
+    assert!(moving < 0.5 * raw, "the denoiser does not help under a pan: {moving} against raw {raw}");
 }

@@ -2,13 +2,18 @@
 //! surface kept for the next one. `glsl/reproject.comp`, one dispatch of W × H.
 //!
 //! Inputs: the G-buffer (position, normal, albedo), last frame's surface (a history kept by this pass),
-//! `FrameUniforms::prev_view_proj`. Outputs: `motion` RGBA32F (xy: the previous pixel, z: 1 where last
-//! frame saw the same surface there, else 0) and this frame's surface (`surface.position` RGBA32F: xyz,
+//! `FrameUniforms::prev_view_proj`. Outputs: `motion` RGBA32F (xy: where the point was on last frame's
+//! screen, in pixels, its previous pixel q = ⌊xy⌋; z: 1 where last frame saw the same surface at q, else 0;
+//! w: a 4-bit mask of the four pixels around xy that saw it, whose centres a bilinear lookup weighs) and
+//! this frame's surface (`surface.position` RGBA32F: xyz,
 //! hit; `surface` RGBA32UI: the normal's float bits and the albedo as unorm8), which ris's temporal
 //! stage and the denoiser read as last frame's.
 //!
 //! The scene is static, so a surface point's motion is the camera's: x projects through last frame's
-//! view-projection to q = ⌊(clip.xy / clip.w · ½ + ½) · (W, H)⌋. q is x's previous pixel when last
+//! view-projection to p + ½ + (ndc_prev(x) − ndc(x)) · ½ · (W, H) (p the pixel; the difference of x's two
+//! projections, so that the rounding of x cancels and a still camera maps each pixel onto itself exactly:
+//! far from the origin a footprint is a few ulps of x, and the projection alone drifted by parts of a
+//! pixel), and q is its floor. q is x's previous pixel when last
 //! frame's point there lies within `plane` pixel footprints of x's tangent plane, |n · (x_q − x)| ≤
 //! plane · θ_px · |x − eye| (θ_px = 2 tan(fov/2) / H: scale-free, from millimetres to kilometres), and
 //! its normal within acos(`normal`) of n: disocclusion by depth and normal. A point that was off screen
