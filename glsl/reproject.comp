@@ -43,8 +43,8 @@ void main() {
         vec4 clip = frame.prev_view_proj * vec4(gp.xyz, 1.0);
         if (clip.w > 0.0) {
             // Vulkan clip space: y down the image, as the G-buffer's rows. The motion is the difference of
-            // x's two projections, added to the pixel's centre: the rounding of x (far from the origin, a
-            // footprint may be a few ulps of it) cancels, and a still camera's pixel maps onto itself exactly.
+            // x's two projections, added to the pixel's centre: their rounding cancels, and a still camera's
+            // pixel maps onto itself exactly (by the projection alone it landed off the centre).
             vec4 now = frame.view_proj * vec4(gp.xyz, 1.0);
             vec2 at = vec2(px) + 0.5 + (clip.xy / clip.w - now.xy / now.w) * 0.5 * vec2(frame.size.xy);
             float footprint = frame.camera.x * distance(gp.xyz, frame.eye.xyz);

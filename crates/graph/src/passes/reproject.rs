@@ -11,12 +11,13 @@
 //!
 //! The scene is static, so a surface point's motion is the camera's: x projects through last frame's
 //! view-projection to p + ½ + (ndc_prev(x) − ndc(x)) · ½ · (W, H) (p the pixel; the difference of x's two
-//! projections, so that the rounding of x cancels and a still camera maps each pixel onto itself exactly:
-//! far from the origin a footprint is a few ulps of x, and the projection alone drifted by parts of a
-//! pixel), and q is its floor. q is x's previous pixel when last
-//! frame's point there lies within `plane` pixel footprints of x's tangent plane, |n · (x_q − x)| ≤
-//! plane · θ_px · |x − eye| (θ_px = 2 tan(fov/2) / H: scale-free, from millimetres to kilometres), and
-//! its normal within acos(`normal`) of n: disocclusion by depth and normal. A point that was off screen
+//! projections, so that their rounding cancels and a still camera maps each pixel onto itself exactly: by
+//! the projection alone a still camera's points landed off the pixel centres, and on a millimetre room the
+//! denoiser's bilinear lookups blurred its history, 3.2× the flicker), and q is its floor. q is x's
+//! previous pixel when last frame's point there lies within `plane` pixel footprints of x's tangent
+//! plane, |n · (x_q − x)| ≤ plane · θ_px · |x − eye| (θ_px = 2 tan(fov/2) / H: scale-free, from
+//! millimetres to kilometres), and its normal within acos(`normal`) of n: disocclusion by depth and
+//! normal. A point that was off screen
 //! or hidden gets no previous pixel. Where a history is reused by weights that evaluate last frame's
 //! target at last frame's surface (ris's temporal stage), this test decides only how often the history
 //! is used, never whether the result is unbiased.
@@ -46,7 +47,8 @@ pub struct Reproject {
 /// What reprojection gives the frame's temporal stages.
 #[derive(Clone, Copy, Debug)]
 pub struct Motion {
-    /// Per pixel: the previous pixel (xy) and whether it holds the same surface (z).
+    /// Per pixel: where its point was (xy, in pixels; the previous pixel is ⌊xy⌋), whether that pixel holds
+    /// the same surface (z), and which of the four around xy do (w, a 4-bit mask).
     pub motion: Handle<Image>,
     /// Last frame's surface (stand-ins of 1 × 1 on a first frame, when `history` is false).
     pub prev_position: Handle<Image>,
