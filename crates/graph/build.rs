@@ -98,13 +98,19 @@ const SHADERS: &[Shader] = &[
     file("test/voxel_rcp.comp"),
 ];
 
+/// `glsl/` from this package's root.
+const GLSL_FROM_PACKAGE: &str = "../../glsl";
+
 fn main() {
     // The manifest dir at run time, not env!() at the script's compile time: a build cache shared by
     // two checkouts may reuse a build script compiled for the other one.
     let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
-    let glsl = Path::new(&manifest).join("../../glsl").canonicalize().expect("glsl/ exists");
+    let glsl = Path::new(&manifest).join(GLSL_FROM_PACKAGE).canonicalize().expect("glsl/ exists");
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
-    println!("cargo:rerun-if-changed={}", glsl.display());
+    // Inputs are registered relative to the package root, where cargo resolves them: an absolute path
+    // would be the first checkout's, and a second one sharing the build cache would never see its own
+    // shaders change.
+    println!("cargo:rerun-if-changed={GLSL_FROM_PACKAGE}");
     check_table(&glsl);
     compile_all(&glsl, &out);
 }
@@ -130,9 +136,9 @@ fn check_table(glsl: &Path) {
     for dir in [glsl.to_path_buf(), glsl.join("test"), glsl.join("shared")] {
         for e in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())).flatten() {
             let p = e.path();
-            println!("cargo:rerun-if-changed={}", p.display());
+            let rel = p.strip_prefix(glsl).unwrap().to_str().unwrap().replace('\\', "/");
+            println!("cargo:rerun-if-changed={GLSL_FROM_PACKAGE}/{rel}");
             if matches!(p.extension().and_then(|x| x.to_str()), Some("vert" | "geom" | "frag" | "comp")) {
-                let rel = p.strip_prefix(glsl).unwrap().to_str().unwrap().replace('\\', "/");
                 assert!(SHADERS.iter().any(|s| s.source == rel), "glsl/{rel} is in no row of build.rs's SHADERS");
             }
         }

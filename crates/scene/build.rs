@@ -9,7 +9,9 @@ fn main() {
     // two checkouts may reuse a build script compiled for the other one.
     let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
     let path = std::path::Path::new(&manifest).join("../../glsl/shared/bindings.glsl");
-    println!("cargo:rerun-if-changed={}", path.display());
+    // Relative to the package root, where cargo resolves it: an absolute path would be the first
+    // checkout's, and a second one sharing the build cache would never see its own file change.
+    println!("cargo:rerun-if-changed=../../glsl/shared/bindings.glsl");
     let header = std::fs::read_to_string(&path).expect("glsl/shared/bindings.glsl");
     let b = bindings_rs(&header).unwrap_or_else(|e| panic!("glsl/shared/bindings.glsl: {e}"));
     let out = std::path::PathBuf::from(std::env::var("OUT_DIR").unwrap());
