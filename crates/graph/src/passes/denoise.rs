@@ -51,8 +51,8 @@
 //! Why the history is looked up bilinearly, and only where all four pixels saw the same surface: under a
 //! moving camera a point falls between last frame's pixel centres, and the pixel it fell in holds the
 //! accumulation up to half a pixel away, a shift that changes from frame to frame (a still camera loses
-//! nothing: its points fall on the centres). Bilinearly, the generated suite's camera orbits had 0.82× the
-//! denoised error and 0.85× the flicker, and no run more than 1.04×; renormalized over the pixels that
+//! nothing: its points fall on the centres). Bilinearly, the generated suite's camera orbits had 0.83× the
+//! denoised error and 0.85× the flicker, and no run more than 1.03×; renormalized over the pixels that
 //! saw the surface where some did not, the lookup is a gather, which loses a bright edge's light frame
 //! after frame (the light-corner runs 1.3–5× the error) (BENCHMARKS.md, "Real time under motion").
 //!
