@@ -7,14 +7,15 @@
 # and the raw estimate's efficiency 1 / (relMSE × raw GPU ms) over ris's at 64 (raw GPU ms: the frame less
 # the denoiser's passes, what `--denoise off` costs; ris has none).
 # Usage: lab/bench-realtime.sh [output dir]   (CARGO_TARGET_DIR is honoured; BOUNCE=path/to/bounce
-# measures that build instead of building this tree)
+# measures that build instead of building this tree; REFERENCE_SPP=1 times the same runs against 1-spp
+# truths in minutes, whose errors are not to be used: the table's GPU ms)
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$here"
 out="${1:-${CARGO_TARGET_DIR:-target}/bench-realtime}"
 if [ -z "${BOUNCE:-}" ]; then cargo build -q -p bounce; fi
 bin="${BOUNCE:-${CARGO_TARGET_DIR:-target}/debug/bounce}"
-common=(--frames 24 --width 128 --height 128 --temporal coherent)
+common=(--frames 24 --width 128 --height 128 --temporal coherent --reference-spp "${REFERENCE_SPP:-1024}")
 # The `mean` row of bench.csv: method,temporal,mean,gpu_ms,rays,rel_mse,flicker,denoised_rel_mse,denoised_flicker,raw_gpu_ms
 mean_row() { awk -F, -v m="$1" '$1 == m && $3 == "mean"' "$2"; }
 echo "| scene | motion | method | GPU ms / frame | raw GPU ms | rays / px | relMSE | flicker | denoised relMSE | denoised flicker | efficiency ÷ ris 64 |"
