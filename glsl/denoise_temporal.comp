@@ -1,8 +1,8 @@
 #version 460
 // denoise, temporal stage (dispatch W × H): the raw estimate's indirect illumination (radiance minus
 // the direct light, demodulated by the albedo) blended into last frame's accumulation where the pixel's
-// surface was (passes/reproject.rs: bilinear over the four pixels around it that held the same surface),
-// and so is the estimate's variance (the raw image's alpha: ris's
+// surface was (passes/reproject.rs; bilinear where the four pixels around that place held the same
+// surface, else the pixel it fell in), and so is the estimate's variance (the raw image's alpha: ris's
 // shade measures it over the pixel's reservoirs); the blend's weight of the new frame is max(α, 1 /
 // history length), the history restarting where the surface was disoccluded.
 // The history is first clamped into this frame's neighbourhood (mean ± DENOISE_CLAMP_SIGMAS standard
