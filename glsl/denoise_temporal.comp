@@ -81,13 +81,11 @@ void main() {
         vec4 h = texelFetch(prev_color, q, 0);
         float hv = texelFetch(prev_variance, q, 0).r;
         if (uint(mv.w) == 15u) {
-            vec2 f = mv.xy - 0.5;
-            ivec2 base = ivec2(floor(f));
-            vec2 t = f - vec2(base);
-            h = mix(mix(texelFetch(prev_color, base, 0), texelFetch(prev_color, base + ivec2(1, 0), 0), t.x),
-                    mix(texelFetch(prev_color, base + ivec2(0, 1), 0), texelFetch(prev_color, base + 1, 0), t.x), t.y);
-            hv = mix(mix(texelFetch(prev_variance, base, 0).r, texelFetch(prev_variance, base + ivec2(1, 0), 0).r, t.x),
-                     mix(texelFetch(prev_variance, base + ivec2(0, 1), 0).r, texelFetch(prev_variance, base + 1, 0).r, t.x), t.y);
+            ivec2 base;
+            vec2 t;
+            bilinear_footprint(mv.xy, base, t);
+            h = bilinear_fetch(prev_color, base, t);
+            hv = bilinear_fetch(prev_variance, base, t).r;
         }
         if (h.a > 0.0) {
             h.rgb = clamp_to_neighbourhood(px, h.rgb);

@@ -50,15 +50,16 @@ void main() {
             float footprint = frame.camera.x * distance(gp.xyz, frame.eye.xyz);
             m.xy = at;
             // The four pixels around `at` whose centres a bilinear lookup weighs (the denoiser's history);
-            // the one `at` falls in, ⌊at⌋, is among them: the nearest centre.
-            vec2 f = at - 0.5;
-            ivec2 base = ivec2(floor(f));
+            // the one `at` falls in, ⌊at⌋ (the previous pixel), is among them.
+            ivec2 base;
+            vec2 t;
+            bilinear_footprint(at, base, t);
             uint taps = 0u;
             for (uint k = 0u; k < 4u; k++) {
                 if (same_surface(base + ivec2(k & 1u, k >> 1u), gp.xyz, n, footprint)) taps |= 1u << k;
             }
-            uvec2 near = uvec2(greaterThanEqual(f - vec2(base), vec2(0.5)));
-            m.z = float((taps >> (near.x + 2u * near.y)) & 1u);
+            ivec2 o = ivec2(floor(at)) - base;
+            m.z = float((taps >> uint(o.x + 2 * o.y)) & 1u);
             m.w = float(taps);
         }
     }

@@ -84,6 +84,21 @@ vec3 demodulate(vec3 c, vec3 albedo) {
                 albedo.b > 0.0 ? c.b / albedo.b : 0.0);
 }
 
+// The bilinear footprint of a point `at` in pixels (centres at k + ½): its lower-left pixel `base` and the
+// weights' fractions t, so that pixels base + (0|1, 0|1) weigh (1 − t or t) per axis. ⌊at⌋ is one of the
+// four: base + (t ≥ ½).
+void bilinear_footprint(vec2 at, out ivec2 base, out vec2 t) {
+    vec2 f = at - 0.5;
+    base = ivec2(floor(f));
+    t = f - vec2(base);
+}
+
+// `s` interpolated bilinearly over the footprint (base, t) by texel fetches (every pixel in the image).
+vec4 bilinear_fetch(sampler2D s, ivec2 base, vec2 t) {
+    return mix(mix(texelFetch(s, base, 0), texelFetch(s, base + ivec2(1, 0), 0), t.x),
+               mix(texelFetch(s, base + ivec2(0, 1), 0), texelFetch(s, base + 1, 0), t.x), t.y);
+}
+
 // a / b (b > 0) in f32 with one correction either way: llvmpipe divides integers lane by lane, floats
 // for the whole vector. Exact while a / b < 2^21 and a + b < 2^32: the f32 quotient's relative error is
 // a few ulps (the conversions' and GLSL's 2.5-ulp division), so it is within 1 of the true one.

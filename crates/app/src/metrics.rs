@@ -3,6 +3,9 @@
 //! |t − r|; and the count of non-finite test pixels (which never count as agreeing). For animations,
 //! [`flicker`]: the relMSE of the frame-to-frame differences.
 
+/// relMSE's ε in (t − r)² / (r² + ε), in radiance units: where the reference is dark, an absolute error.
+pub const REL_EPS: f64 = 0.01;
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Metrics {
     pub rmse: f64,
@@ -31,7 +34,7 @@ impl Metrics {
                 let (t, r) = (t[c] as f64, r[c] as f64);
                 let t = if t.is_finite() { t } else { f64::INFINITY };
                 se += (t - r) * (t - r);
-                rel += (t - r) * (t - r) / (r * r + 0.01);
+                rel += (t - r) * (t - r) / (r * r + REL_EPS);
                 st += t;
                 sr += r;
                 abs.push((t - r).abs());
@@ -106,7 +109,7 @@ pub fn flicker(t: &[[f32; 3]], t_prev: &[[f32; 3]], r: &[[f32; 3]], r_prev: &[[f
             let dt = t[i][c] as f64 - t_prev[i][c] as f64;
             let dr = r[i][c] as f64 - r_prev[i][c] as f64;
             let e = if dt.is_finite() { dt - dr } else { f64::INFINITY };
-            sum += e * e / ((r[i][c] as f64).powi(2) + 0.01);
+            sum += e * e / ((r[i][c] as f64).powi(2) + REL_EPS);
         }
     }
     sum / (3 * r.len()).max(1) as f64

@@ -11,7 +11,7 @@
 //! where the folder holds several).
 
 use anyhow::{bail, Context, Result};
-use bounce::metrics::{flicker, Metrics};
+use bounce::metrics::{flicker, Metrics, REL_EPS};
 use bounce::output::read_exr;
 use std::path::{Path, PathBuf};
 
@@ -62,7 +62,7 @@ fn main() -> Result<()> {
                 let (a, b) = (a[c] as f64, b[c] as f64);
                 let e = (a - b) * (a - b);
                 if b != 0.0 {
-                    lit += e / (b * b + 0.01);
+                    lit += e / (b * b + REL_EPS);
                 }
                 (se, sr2, st, sr) = (se + e, sr2 + b * b, st + a, sr + b);
             }

@@ -4,14 +4,14 @@
 //! `lab/unshadowed-all.patch`). One VPL drawn with probability f_v / F and weighed F / f_v
 //! gives F · V(v): mean t, variance t (F − t), whatever reuse chose it, since the target knows nothing
 //! of V. So k independent rays cannot go below relMSE = mean over pixels and channels of
-//! t (F − t) / k / (t² + 0.01) (`bounce compare`'s ε). Prints the visible share Σ t / Σ F, that floor
+//! t (F − t) / k / (t² + ε) (`bounce compare`'s ε, `metrics::REL_EPS`). Prints the visible share Σ t / Σ F, that floor
 //! for 1, 2 and 64 rays, and each further image's relMSE against t (BENCHMARKS.md, "Real time under
 //! motion").
 //!
 //!     cargo run --release -p bounce-lab --bin visibility-floor ALL.exr UNSHADOWED.exr [IMAGE.exr…]
 
 use anyhow::{bail, Result};
-use bounce::metrics::Metrics;
+use bounce::metrics::{Metrics, REL_EPS};
 use bounce::output::read_exr;
 use std::path::Path;
 
@@ -30,7 +30,7 @@ fn main() -> Result<()> {
         for c in 0..3 {
             let (t, f) = (a[c] as f64, b[c] as f64);
             // F ≥ t up to the sums' rounding.
-            floor += t * (f - t).max(0.0) / (t * t + 0.01);
+            floor += t * (f - t).max(0.0) / (t * t + REL_EPS);
             (visible, unshadowed) = (visible + t, unshadowed + f);
         }
     }
