@@ -8,7 +8,7 @@ Each scene isolates one way a voxel march goes wrong against exact visibility:
                 far side: thin geometry the grid must neither thicken into a closed door nor leak through;
   clutter       a room with a 5x5 grid of crates, three hanging zero-thickness panels and two lights.
 With --suite DIR it writes the generated suite instead: FAMILIES × --per-family scenes (default 5 each,
-45 in all) of the kinds a VPL method meets in the wild, each room randomized from --seed and then scaled
+50 in all) of the kinds a VPL method meets in the wild, each room randomized from --seed and then scaled
 by a factor from millimetres to kilometres and, for every other scene, moved far from the origin:
   boxes           a closed room with 2-10 random boxes on the floor;
   furniture       tables (a top on four thin legs), shelves and hanging zero-thickness panels;
@@ -18,7 +18,10 @@ by a factor from millimetres to kilometres and, for every other scene, moved far
   light-occluded  the light above a wide table or behind a panel that hides it from most of the room;
   other-room      two rooms joined by a doorway, the light in the one the camera is not in;
   multi-light     two to four lights of different colours and powers;
-  textured        checkered walls and floor (map_Kd PNGs) with boxes.
+  textured        checkered walls and floor (map_Kd PNGs) with boxes;
+  dark-room       two rooms joined by a doorway, the camera in the unlit one looking away from the door or
+                  along the shared wall: most of what the pixels see lies beyond a wall (the team's two
+                  rooms' kind of view, where nearly all of the unshadowed transport is blocked).
 Each suite scene also gets light-path.toml, a loop of keyframes for `bench --animate` that moves every
 light and keeps it where its family put it: along its wall, along its corner's edge, under its table or
 behind its panel, in its part of the room or the far room (an orbit about its start, the bench's default
@@ -167,8 +170,9 @@ def clutter(root):
 
 # ---- The generated suite --------------------------------------------------------------------------------
 
+# New families go at the end: the scenes before them keep their random numbers, so their figures stand.
 FAMILIES = ["boxes", "furniture", "thin-walls", "light-wall", "light-corner", "light-occluded", "other-room",
-            "multi-light", "textured"]
+            "multi-light", "textured", "dark-room"]
 SCALES = [0.001, 0.01, 1.0, 100.0, 1000.0]
 SUITE_MATERIALS = {
     "wall": (0.75, 0.75, 0.72), "floor": (0.55, 0.5, 0.45), "red": (0.7, 0.15, 0.12), "green": (0.15, 0.6, 0.2),
@@ -385,6 +389,36 @@ def suite_scene(rng, family, scale, offset):
     elif family == "textured":
         room_walls(m, lo, hi, "checker_floor", "checker_wall", "wall")
         random_boxes(rng, m, lo, hi, rng.randint(2, 6), [eye, light, target])
+    elif family == "dark-room":
+        # other-room's two rooms, the camera in the near one (z < D) with the doorway behind it or at its
+        # side, the light in the far one, mostly off the doorway's line: the near room is lit by the
+        # floor patch the doorway lets light onto and by the far room's VPLs through the doorway alone.
+        D2 = rng.uniform(3, 6)
+        room_walls(m, lo, (W, H, D + D2), *walls)
+        door = rng.uniform(0.1, 0.7) * W
+        wall_with_door(m, D, door, W, H, "wall")
+        away = rng.uniform(0.05, 0.3) * W
+        lx = door + 0.45 + (away if door + 0.45 < W / 2 else -away) * (1 if rng.random() < 0.75 else -1)
+        p = (min(max(lx, 0.1 * W), 0.9 * W), H * rng.uniform(0.5, 0.85), D + rng.uniform(0.2, 0.6) * D2)
+        # 40 times as strong: the unlit room's indirect light is then of the other families' order, as a
+        # photographer would expose it (at their powers it is 0.001-0.003, where relMSE's absolute epsilon
+        # turns relMSE into a plain mean squared error).
+        lights = [(p, (40 * power, 40 * power, 40 * power))]
+        # `bench --camera-path orbit`'s first quarter turn (16 frames of 60) moves the eye by up to r0 in -x
+        # and +z (r0: a tenth of the scene's diagonal): it stays in the near room, clear of the boxes.
+        r0 = 0.1 * math.sqrt(W * W + H * H + (D + D2) ** 2)
+        eye = (rng.uniform(r0 + 0.25, max(0.8 * W, r0 + 0.3)), rng.uniform(1.2, 1.7), D - r0 - rng.uniform(0.25, 0.6))
+        arc = [(eye[0] + r0 * (math.cos(t) - 1), eye[1], eye[2] + r0 * math.sin(t)) for t in
+               [i * math.pi / 16 for i in range(9)]]
+        if rng.random() < 0.6:
+            # Away from the door: the back wall and floor.
+            target = (rng.uniform(0.2, 0.8) * W, rng.uniform(0.3, 1.2), 0.0)
+        else:
+            # Along the shared wall, at the side wall the doorway is farther from.
+            side = 0.0 if door + 0.45 > W / 2 else W
+            target = (side, rng.uniform(0.5, 1.5), D - rng.uniform(0.5, 1.5))
+        random_boxes(rng, m, lo, (W, H, D), rng.randint(0, 3), arc + [(door + 0.45, 1.0, D - 0.3)])
+        motions = [(circle, (margin, margin, D + margin), (W - margin, H - margin, D + D2 - margin))]
     else:
         raise ValueError(family)
     if motions is None:

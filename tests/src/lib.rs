@@ -9,7 +9,7 @@ pub mod maps;
 
 use bounce::output::{self, RgbImage};
 use bounce_device::{Gpu, GpuOptions};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// A device with validation on; asserts on drop that the validation layers said nothing.
 pub struct TestGpu {
@@ -76,9 +76,13 @@ pub fn run_test_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
     bytemuck::pod_collect_to_vec(&outb.read_back(Access::ComputeWrite).unwrap())
 }
 
-/// The workspace root (tests run with the tests crate as working directory).
+/// The workspace root (tests run with the tests crate as working directory). Read at run time where cargo
+/// runs the test: two checkouts sharing one build cache share this crate too, compiled in whichever built
+/// it first, whose compile-time path names that checkout's scripts and assets.
 pub fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    let tests =
+        std::env::var_os("CARGO_MANIFEST_DIR").map_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")), PathBuf::from);
+    tests.parent().unwrap().to_path_buf()
 }
 
 pub fn default_scene() -> PathBuf {

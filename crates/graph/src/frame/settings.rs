@@ -79,7 +79,8 @@ pub const REALTIME_RESERVOIRS: u32 = 2;
 /// cell move on, so learning pays only where visibility blocks nearly everything (measured at 64²,
 /// 16 frames, light and camera orbits: learning cost 1.0–2.1× the raw error at blocked shares 0.43–0.55,
 /// the doorway and the generated rooms lit from the next room, 1.2–1.3× on Sibenik at 0.16, and saved
-/// 4–5× in the two rooms at 0.99; BENCHMARKS.md, "Real time under motion"). The threshold sits between.
+/// 4–5× in the two rooms at 0.99 and 2.5× on the generated suite's dark rooms at 0.86–0.93; BENCHMARKS.md,
+/// "Real time under motion"). The threshold sits between.
 pub const REALTIME_LEARN_BLOCKED: f32 = 0.75;
 /// A real-time frame's learning decision is made again every this many frames (`Renderer`).
 pub const REALTIME_LEARN_EVERY: u64 = 16;

@@ -189,7 +189,9 @@ pub struct RisFrame {
 }
 
 /// `--learn-visibility auto` turns the learned visibility on (at this floor) for a view where visibility
-/// blocks at least [`AUTO_LEARN_BLOCKED`] of the unshadowed transport ([`blocked_share`]).
+/// blocks at least [`AUTO_LEARN_BLOCKED`] of the unshadowed transport ([`blocked_share`]). For a real-time
+/// frame over the generated dark rooms 0.05 read level and 0.2 1.08× the error (BENCHMARKS.md, "Real time
+/// under motion").
 pub const AUTO_LEARN_FLOOR: f32 = 0.1;
 /// The blocked share from which `auto` learns (and `render --time-limit` gives a frame its blocked
 /// budget, `cli::RIS_FRAME_BLOCKED`). Measured with the control variate (BENCHMARKS.md, "ris: the
