@@ -226,7 +226,9 @@ pub const RIS_FRAME_OPEN: (u32, u32, u32, u32) = (2, 128, 16, 3);
 /// --defensive is given. A uniform pool then holds almost nothing visible, and which few visible VPLs
 /// it holds moves every pixel's estimate at once: in the two rooms (blocked 0.99) the image mean of a
 /// 0.7 s render varied by 1.5 % RMS from run to run, 0.5 % with the gathered source, at 1.1–1.2× lower
-/// relMSE. In the doorway (0.52) it cost 1.5× (BENCHMARKS.md, "ris: several picks per reservoir").
+/// relMSE. In the doorway (0.52) it cost 1.5× (BENCHMARKS.md, "ris: several picks per reservoir"). On
+/// the generated suite's five dark rooms (0.86–0.93), chosen before they existed, the uniform source read
+/// 1.9× and the open views' budget 1.6× the error (BENCHMARKS.md, "The source").
 pub const RIS_GATHERED_BLOCKED: f32 = 0.8;
 pub const RIS_GATHERED_DEFENSIVE: f32 = 0.5;
 
