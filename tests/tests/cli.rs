@@ -1053,3 +1053,37 @@ fn suite_runs_every_method_on_every_scene_and_aggregates() {
     let r = bounce(&[&args[..], &["--equal-count", "--time-limit", "1"]].concat());
     assert_eq!((r.code, error_lines(&r).len()), (2, 1), "{}", r.stderr);
 }
+
+/// `bounce suite` measures ris as `render --time-limit` runs it: without --vpls, each scene's ris takes the
+/// per-view budget `render` chooses for the same view (the same line on stderr: the open budget on the
+/// Cornell box, the gathered source in the two rooms); with --vpls, --vpls reservoirs as every method.
+#[test]
+fn the_suite_runs_ris_with_renders_budget() {
+    let d = scratch("suite-ris");
+    let ws = bounce_tests::workspace();
+    let scenes = [ws.join("assets/cornell-box/scene.toml"), ws.join("assets/two-rooms/scene.toml")];
+    let size = ["--width", "16", "--height", "16", "--dprsm-res", "16"];
+    let budget = |stderr: &str| -> Vec<String> {
+        stderr.lines().filter(|l| l.starts_with("ris per frame:")).map(String::from).collect()
+    };
+    let mut rendered = vec![];
+    for scene in &scenes {
+        let png = d.join("r.exr");
+        let args = ["render", scene.to_str().unwrap(), "--method", "ris", "--time-limit", "0.05", "--out"];
+        let r = bounce(&[&args[..], &[png.to_str().unwrap()], &size[..]].concat());
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        rendered.extend(budget(&r.stderr));
+    }
+    assert_eq!(rendered.len(), 2, "{rendered:?}");
+    assert!(rendered[0].contains("128 candidates") && rendered[1].contains("gathered CDF"), "{rendered:?}");
+    let out = d.join("out");
+    let args = ["suite", scenes[0].to_str().unwrap(), scenes[1].to_str().unwrap(), "--methods", "uniform,ris"];
+    let tiny = ["--seeds", "1", "--time-limit", "0.05", "--reference-spp", "4", "--validation", "--out"];
+    let r = bounce(&[&args[..], &tiny[..], &[out.to_str().unwrap()], &size[..]].concat());
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert_eq!(budget(&r.stderr), rendered);
+    assert!(std::fs::read_to_string(out.join("suite.md")).unwrap().contains("ris: its per-view budget"));
+    let r = bounce(&[&args[..], &tiny[..], &[out.to_str().unwrap(), "--vpls", "4"], &size[..]].concat());
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(budget(&r.stderr).is_empty(), "{}", r.stderr);
+}

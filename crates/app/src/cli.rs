@@ -702,9 +702,10 @@ pub struct SuiteArgs {
     /// instead of --time-limit's equal time.
     #[arg(long, conflicts_with = "time_limit")]
     pub equal_count: bool,
-    /// VPLs per pixel per frame (ris: reservoirs).
-    #[arg(long, default_value_t = 16)]
-    pub vpls: u32,
+    /// VPLs per pixel per frame (default 16; ris: reservoirs). Without it, ris at equal time takes the
+    /// per-view budget of `render --time-limit` (its reservoirs, candidates, picks and source).
+    #[arg(long)]
+    pub vpls: Option<u32>,
     /// Image width.
     #[arg(long, default_value_t = 128)]
     pub width: u32,

@@ -2,7 +2,8 @@
 //! every method and wall-time budget: each budget's column is then an equal-time comparison, every
 //! method averaging as many progressive frames (`--vpls`'s first value per frame) as fit in it.
 //!
-//! For each method × VPL count it renders `--repeats` full frames (seeds 1..=K; the renderer's frame
+//! For each method × VPL count it renders `--repeats` full frames (runs 1..=K, each with its own seed far
+//! from the others' frames: `run_seed`; the renderer's frame
 //! cache is cleared before each) of the indirect component and records, per frame, the GPU time (sum
 //! of pass timestamps) and each pass's time, the wall time of `Renderer::render`, and the error
 //! against a reference image. The reference (`--reference`) is the path-traced ground truth or the
@@ -79,6 +80,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             ReferenceArg::Path => Reference::Path { spp: a.reference_spp },
             ReferenceArg::All => Reference::All,
         },
+        ris_budget: None,
     };
     // Every frame the sweep will render, checked before the first one renders.
     for &method in &plan.methods {
@@ -142,6 +144,9 @@ struct BenchPlan {
     repeats: u32,
     base: FrameSettings,
     reference: Reference,
+    /// ris's settings in the equal-time columns where it takes `render --time-limit`'s per-view budget
+    /// (`suite` without --vpls: `super::ris_frame_budget`), in place of the base and the column's VPLs.
+    ris_budget: Option<FrameSettings>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -158,7 +163,16 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// The path-traced reference's seed, none of the runs' (1..=repeats): the reference method's progressive
+/// The seed run `k` (1..=repeats) renders with. A progressive run's frame j takes the seed + j
+/// (`progressive::frame_settings`), so runs seeded k and k + 1 would share all frames but one: the same
+/// pixels' random numbers, the same presampled pool, the same texels drawn where the CDF is the same
+/// (uniform's, whatever the VPL set), and four "seeds" were nearly one. Run k starts k · φ · 2⁶⁴ (φ the
+/// golden ratio's fraction) instead, far from every other run's frames; its label stays k.
+fn run_seed(k: u64) -> u64 {
+    k.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
+
+/// The path-traced reference's seed, none of the runs' (`run_seed(1..=repeats)`): the reference method's progressive
 /// frames continue their seed's sample sequence, so a run with the reference's seed would take its first
 /// samples, and its error against it would read low.
 const PATH_REFERENCE_SEED: u64 = 0xFFFF_FFF0;
@@ -265,18 +279,26 @@ fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
         // so no timed frame or budget pays for it (each still records its full frame: `measure` clears
         // the kept products).
         let first = plan.columns.first().map_or(1, |c| c.vpls);
-        r.warm_up(&FrameSettings { method, vpls: first, component: Component::Indirect, ..plan.base.clone() })?;
+        let warm = match (&plan.ris_budget, method) {
+            (Some(ris), Method::Ris) => ris.clone(),
+            _ => FrameSettings { method, vpls: first, ..plan.base.clone() },
+        };
+        r.warm_up(&FrameSettings { component: Component::Indirect, ..warm })?;
         for &column in &plan.columns {
             for seed in 1..=plan.repeats as u64 {
                 bar.set_message(format!("{} {}", method.name(), column.label()));
+                let (base, vpls) = match (&plan.ris_budget, method, column.seconds) {
+                    (Some(ris), Method::Ris, Some(_)) => (ris, ris.vpls),
+                    _ => (&plan.base, column.vpls),
+                };
                 let s = FrameSettings {
                     method,
-                    vpls: column.vpls,
-                    seed,
+                    vpls,
+                    seed: run_seed(seed),
                     component: Component::Indirect,
-                    ..plan.base.clone()
+                    ..base.clone()
                 };
-                samples.push(measure(r, &s, column, &reference)?);
+                samples.push(Sample { seed, ..measure(r, &s, column, &reference)? });
                 bar.inc(1);
             }
         }
@@ -411,7 +433,7 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
     let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
     let mut md = format!(
         "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {:?} VPLs, {} repeat(s) \
-         (seeds 1..={}); medians over repeats. Reference: {}. {}\n\n## {}, p99.9 |error| and mean FLIP against the reference\n\n| method |",
+         (runs 1..={}, each its own seed); medians over repeats. Reference: {}. {}\n\n## {}, p99.9 |error| and mean FLIP against the reference\n\n| method |",
         b.width,
         b.height,
         b.dprsm_res,

@@ -7,8 +7,10 @@ pub mod info;
 pub mod render;
 pub mod view;
 
+use crate::cli::FrameArgs;
 use anyhow::Result;
 use bounce_device::Gpu;
+use bounce_graph::frame::{FrameSettings, Renderer, RisSource};
 use bounce_graph::scene::Scene;
 use std::io::Write;
 use std::path::Path;
@@ -28,4 +30,43 @@ fn check_validation(gpu: &Gpu, validation: bool) -> Result<()> {
         anyhow::ensure!(msgs.is_empty(), "{} validation message(s); first: {}", msgs.len(), msgs[0]);
     }
     Ok(())
+}
+
+/// ris's reservoirs, candidates, picks and source per progressive frame under a time budget when
+/// `--vpls` is not given (`render --time-limit`, and `suite` at equal time, so that the suite measures
+/// ris as `render` runs it): chosen per view by the share of the unshadowed transport that visibility
+/// blocks ([`crate::cli::RIS_FRAME_BLOCKED`], [`crate::cli::RIS_FRAME_OPEN`],
+/// [`crate::cli::RIS_GATHERED_BLOCKED`]); --candidates, --near-candidates, --picks, --source and
+/// --defensive stand where given. Returns the line that says what was chosen.
+fn ris_frame_budget(frame: &FrameArgs, renderer: &mut Renderer, settings: &mut FrameSettings) -> Result<String> {
+    let blocked = renderer.blocked_share(settings.width, settings.height)?;
+    let (r, m, n, k) = if frame.candidates.is_none() && !frame.near_candidates_given() {
+        if blocked.is_some_and(|b| b < bounce_graph::passes::ris::AUTO_LEARN_BLOCKED) {
+            crate::cli::RIS_FRAME_OPEN
+        } else {
+            crate::cli::RIS_FRAME_BLOCKED
+        }
+    } else {
+        let k = crate::cli::RIS_FRAME_BLOCKED.3;
+        (crate::cli::RIS_FRAME_BLOCKED.0, settings.ris.candidates, settings.ris.near_candidates, k)
+    };
+    // An explicit --picks stands.
+    let k = frame.picks.unwrap_or(k);
+    (settings.vpls, settings.ris.candidates, settings.ris.near_candidates, settings.ris.picks) = (r, m, n, k);
+    let gathered = frame.source.is_none()
+        && frame.defensive.is_none()
+        && blocked.is_some_and(|b| b >= crate::cli::RIS_GATHERED_BLOCKED);
+    if gathered {
+        (settings.ris.source, settings.defensive) = (RisSource::Gbg, crate::cli::RIS_GATHERED_DEFENSIVE);
+    }
+    let share = blocked.map_or("nothing lit in view".into(), |b| format!("{:.0} %", 100.0 * b));
+    let source = if gathered {
+        format!(", from the gathered CDF (gbg, defensive {})", crate::cli::RIS_GATHERED_DEFENSIVE)
+    } else {
+        String::new()
+    };
+    Ok(format!(
+        "ris per frame: {r} reservoirs × {m} candidates ({} from the near window){source}, {k} picks each; visibility blocks {share} of the view's unshadowed transport",
+        n.min(m.saturating_sub(1))
+    ))
 }

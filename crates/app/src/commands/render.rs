@@ -11,7 +11,7 @@ use crate::output::{self, RgbImage};
 use anyhow::{Context, Result};
 use bounce_device::Gpu;
 use bounce_graph::frame::progressive::{render_for, Progressive};
-use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer, RisSource};
+use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer};
 use bounce_graph::passes::psm::{Psm, MAX_PSM_BYTES};
 use std::io::Write;
 use std::time::{Duration, Instant};
@@ -34,7 +34,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     let mut renderer = Renderer::new(&gpu, &scene)?;
     let renderer_s = started.elapsed().as_secs_f64() - device_s;
     if a.time_limit.is_some() && a.picture.vpls.is_none() && settings.method == Method::Ris {
-        ris_frame_budget(a, &mut renderer, &mut settings, err)?;
+        writeln!(err, "{}", super::ris_frame_budget(&a.frame, &mut renderer, &mut settings)?)?;
         settings.validate(&gpu)?;
     }
     renderer.check(&settings)?;
@@ -347,47 +347,5 @@ fn timings(out: &mut dyn Write, s: &FrameSettings, frame: &FrameOutput, wall: f6
         )?;
     }
     writeln!(out, "wall {wall:.3} s on {device}")?;
-    Ok(())
-}
-
-/// ris's reservoirs and candidates per progressive frame when `--vpls` is not given
-/// ([`crate::cli::RIS_FRAME_BLOCKED`], [`crate::cli::RIS_FRAME_OPEN`]), said on `err`.
-fn ris_frame_budget(
-    a: &RenderArgs,
-    renderer: &mut Renderer,
-    settings: &mut FrameSettings,
-    err: &mut dyn Write,
-) -> Result<()> {
-    let blocked = renderer.blocked_share(settings.width, settings.height)?;
-    let (r, m, n, k) = if a.frame.candidates.is_none() && !a.frame.near_candidates_given() {
-        if blocked.is_some_and(|b| b < bounce_graph::passes::ris::AUTO_LEARN_BLOCKED) {
-            crate::cli::RIS_FRAME_OPEN
-        } else {
-            crate::cli::RIS_FRAME_BLOCKED
-        }
-    } else {
-        let k = crate::cli::RIS_FRAME_BLOCKED.3;
-        (crate::cli::RIS_FRAME_BLOCKED.0, settings.ris.candidates, settings.ris.near_candidates, k)
-    };
-    // An explicit --picks stands.
-    let k = a.frame.picks.unwrap_or(k);
-    (settings.vpls, settings.ris.candidates, settings.ris.near_candidates, settings.ris.picks) = (r, m, n, k);
-    let gathered = a.frame.source.is_none()
-        && a.frame.defensive.is_none()
-        && blocked.is_some_and(|b| b >= crate::cli::RIS_GATHERED_BLOCKED);
-    if gathered {
-        (settings.ris.source, settings.defensive) = (RisSource::Gbg, crate::cli::RIS_GATHERED_DEFENSIVE);
-    }
-    let share = blocked.map_or("nothing lit in view".into(), |b| format!("{:.0} %", 100.0 * b));
-    let source = if gathered {
-        format!(", from the gathered CDF (gbg, defensive {})", crate::cli::RIS_GATHERED_DEFENSIVE)
-    } else {
-        String::new()
-    };
-    writeln!(
-        err,
-        "ris per frame: {r} reservoirs × {m} candidates ({} from the near window){source}, {k} picks each; visibility blocks {share} of the view's unshadowed transport",
-        n.min(m.saturating_sub(1))
-    )?;
     Ok(())
 }

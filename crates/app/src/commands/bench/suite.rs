@@ -5,7 +5,12 @@
 //! scenes named `<family>-<k>`) or scene files. For each scene it runs `bench`'s equal-time sweep (one
 //! budget, `--time-limit` seconds of progressive frames per method and seed, every method paying for its
 //! whole frames; or, with `--equal-count`, one frame of `--vpls` VPLs a pixel, the thesis's comparison)
-//! against the path-traced ground truth, cached in `OUT/<scene>/`. It writes:
+//! against the path-traced ground truth, cached in `OUT/<scene>/`. At equal time without `--vpls`, ris
+//! runs as `render --time-limit` runs it, with the per-view budget of `commands::ris_frame_budget` (2
+//! reservoirs of 64 or 128 candidates, 3 picks, the gathered source where visibility blocks most of the
+//! view): 16 reservoirs of 32 candidates, what it ran before, read 1.29× the error over the generated
+//! suite's 50 scenes, 3.6× on its dark rooms (BENCHMARKS.md, "On scenes of every kind"). Each run k of a
+//! scene renders with `bench`'s `run_seed(k)`, far from the other runs' frames. It writes:
 //! - `suite.csv`: one row per scene, method and seed (frames, wall ms, relMSE, mean ratio, p99.9 |error|);
 //! - `suite.md`: per method over the scenes, the geometric mean and the worst case of its relMSE over
 //!   `uniform`'s (each the median over seeds), how many scenes it loses to `uniform`, the largest bias of
@@ -23,6 +28,9 @@ use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+/// VPLs per pixel per frame without --vpls.
+const SUITE_VPLS: u32 = 16;
 
 /// One measured budget: a scene, a method, a seed.
 struct Row {
@@ -45,8 +53,9 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     }
     let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
+    let vpls = a.vpls.unwrap_or(SUITE_VPLS);
     for &method in &a.methods {
-        FrameSettings { method, vpls: a.vpls, ..base.clone() }.validate(&gpu)?;
+        FrameSettings { method, vpls, ..base.clone() }.validate(&gpu)?;
     }
     let mut rows = vec![];
     for (k, path) in scenes.iter().enumerate() {
@@ -54,15 +63,29 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         writeln!(err, "scene {}/{}: {name}", k + 1, scenes.len())?;
         let scene = super::super::load_scene(path, err)?;
         let mut renderer = Renderer::new(&gpu, &scene)?;
+        // ris as `render --time-limit` runs it: its budget chosen for this scene's view.
+        let ris_budget = (a.vpls.is_none() && !a.equal_count && a.methods.contains(&Method::Ris))
+            .then(|| {
+                let mut s = FrameSettings { method: Method::Ris, ..base.clone() };
+                let line = super::super::ris_frame_budget(&a.frame, &mut renderer, &mut s)?;
+                writeln!(err, "{line}")?;
+                s.validate(&gpu)?;
+                anyhow::Ok(s)
+            })
+            .transpose()?;
         let plan = BenchPlan {
             methods: a.methods.clone(),
-            columns: vec![Column { vpls: a.vpls, seconds: (!a.equal_count).then_some(a.time_limit) }],
+            columns: vec![Column { vpls, seconds: (!a.equal_count).then_some(a.time_limit) }],
             repeats: a.seeds,
             base: base.clone(),
             reference: Reference::Path { spp: a.reference_spp },
+            ris_budget,
         };
         for &method in &plan.methods {
-            renderer.check(&FrameSettings { method, vpls: a.vpls, ..base.clone() })?;
+            match (&plan.ris_budget, method) {
+                (Some(ris), Method::Ris) => renderer.check(ris)?,
+                _ => renderer.check(&FrameSettings { method, vpls, ..base.clone() })?,
+            }
         }
         for sample in sweep(&mut renderer, &plan, path, &a.out.join(&name), err)? {
             rows.push(Row { scene: name.clone(), family: family(&name), sample });
@@ -203,9 +226,15 @@ fn worst(m: &BTreeMap<String, f64>) -> (String, f64) {
 
 /// suite.md's title and the line that says how it was measured.
 fn header(a: &SuiteArgs, scenes: usize, device: &str, command: &str) -> String {
-    let budget = match a.equal_count {
-        true => format!("one frame of {} VPLs a pixel per method and seed (equal count)", a.vpls),
-        false => format!("{} s per method and seed (equal time), {} VPLs a frame", a.time_limit, a.vpls),
+    let vpls = a.vpls.unwrap_or(SUITE_VPLS);
+    let budget = match (a.equal_count, a.vpls) {
+        (true, _) => format!("one frame of {vpls} VPLs a pixel per method and seed (equal count)"),
+        (false, Some(_)) => format!("{} s per method and seed (equal time), {vpls} VPLs a frame", a.time_limit),
+        (false, None) => format!(
+            "{} s per method and seed (equal time), {vpls} VPLs a frame (ris: its per-view budget, as `render \
+             --time-limit`)",
+            a.time_limit
+        ),
     };
     format!(
         "# Suite: {scenes} scenes, {} seeds, {budget}, {}×{}\n\n`{command}` on {device}; relMSE against each \
