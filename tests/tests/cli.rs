@@ -1056,9 +1056,10 @@ fn suite_runs_every_method_on_every_scene_and_aggregates() {
 
 /// `bounce suite` measures ris as `render --time-limit` runs it: without --vpls, each scene's ris takes the
 /// per-view budget `render` chooses for the same view (the same line on stderr: the open budget on the
-/// Cornell box, the gathered source in the two rooms); with --vpls, --vpls reservoirs as every method.
+/// Cornell box, the gathered source in the two rooms); with --vpls, --vpls reservoirs as every method. So
+/// does `bench --time-limits`.
 #[test]
-fn the_suite_runs_ris_with_renders_budget() {
+fn the_suite_and_bench_run_ris_with_renders_budget() {
     let d = scratch("suite-ris");
     let ws = bounce_tests::workspace();
     let scenes = [ws.join("assets/cornell-box/scene.toml"), ws.join("assets/two-rooms/scene.toml")];
@@ -1084,6 +1085,15 @@ fn the_suite_runs_ris_with_renders_budget() {
     assert_eq!(budget(&r.stderr), rendered);
     assert!(std::fs::read_to_string(out.join("suite.md")).unwrap().contains("ris: its per-view budget"));
     let r = bounce(&[&args[..], &tiny[..], &[out.to_str().unwrap(), "--vpls", "4"], &size[..]].concat());
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(budget(&r.stderr).is_empty(), "{}", r.stderr);
+    // `bench --time-limits` the same way.
+    let args = ["bench", scenes[0].to_str().unwrap(), "--methods", "uniform,ris", "--time-limits", "0.05"];
+    let tiny = ["--repeats", "1", "--reference-spp", "4", "--validation", "--out", out.to_str().unwrap()];
+    let r = bounce(&[&args[..], &tiny[..], &size[..]].concat());
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert_eq!(budget(&r.stderr), rendered[..1]);
+    let r = bounce(&[&args[..], &tiny[..], &size[..], &["--vpls", "4"]].concat());
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(budget(&r.stderr).is_empty(), "{}", r.stderr);
 }

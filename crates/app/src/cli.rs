@@ -636,15 +636,16 @@ pub struct BenchArgs {
     /// Methods to sweep, comma-separated.
     #[arg(long, value_parser = METHODS, value_delimiter = ',', default_value = "uniform,global,stratified,local,gbg,mis")]
     pub methods: Vec<Method>,
-    /// VPL counts per pixel, comma-separated (with --time-limits: the first is the VPLs per frame).
-    #[arg(long, value_delimiter = ',', default_value = "16,64,256")]
+    /// VPL counts per pixel, comma-separated (default 16,64,256; with --time-limits the first is the VPLs
+    /// per frame, and without --vpls ris takes the per-view budget of `render --time-limit`).
+    #[arg(long, value_delimiter = ',')]
     pub vpls: Vec<u32>,
     /// Wall-time budgets in seconds, comma-separated: instead of one frame per VPL count, each method
     /// renders progressive frames for each budget (`render --time-limit`), so every column is an
     /// equal-time comparison.
     #[arg(long, value_delimiter = ',', value_name = "SECONDS")]
     pub time_limits: Vec<f64>,
-    /// Frames (seeds 1..=K) per method and VPL count; medians are reported.
+    /// Runs per method and VPL count (each its own seed); medians are reported.
     #[arg(long, default_value_t = 3)]
     pub repeats: u32,
     /// Image width.
@@ -677,6 +678,17 @@ pub struct BenchArgs {
     /// The seed schedules --animate compares, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "fresh,coherent")]
     pub temporal: Vec<Temporal>,
+}
+
+impl BenchArgs {
+    /// The VPL counts to sweep: --vpls, else 16, 64 and 256.
+    pub fn vpl_counts(&self) -> Vec<u32> {
+        if self.vpls.is_empty() {
+            vec![16, 64, 256]
+        } else {
+            self.vpls.clone()
+        }
+    }
 }
 
 /// `suite` renders many frames on many scenes, so its maps default to a smaller resolution than `render`'s.

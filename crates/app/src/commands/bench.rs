@@ -1,6 +1,7 @@
 //! `bounce bench`: run time against error for every method and VPL count, or (with `--time-limits`) for
 //! every method and wall-time budget: each budget's column is then an equal-time comparison, every
-//! method averaging as many progressive frames (`--vpls`'s first value per frame) as fit in it.
+//! method averaging as many progressive frames (`--vpls`'s first value per frame; without --vpls ris takes
+//! `render --time-limit`'s per-view budget, `commands::ris_frame_budget`) as fit in it.
 //!
 //! For each method × VPL count it renders `--repeats` full frames (runs 1..=K, each with its own seed far
 //! from the others' frames: `run_seed`; the renderer's frame
@@ -38,8 +39,9 @@ use std::time::{Duration, Instant};
 pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     output::check_folder(&a.out).map_err(bad)?;
     let scene = super::load_scene(&a.scene, err)?;
-    if a.methods.is_empty() || a.vpls.is_empty() || a.repeats == 0 {
-        return Err(bad(anyhow::anyhow!("--methods, --vpls and --repeats must not be empty or zero")));
+    let vpl_counts = a.vpl_counts();
+    if a.methods.is_empty() || a.repeats == 0 {
+        return Err(bad(anyhow::anyhow!("--methods and --repeats must not be empty or zero")));
     }
     if a.methods.contains(&Method::All) {
         return Err(bad(anyhow::anyhow!("`all` is the reference of `bounce bench`, not a method to sweep")));
@@ -55,7 +57,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     // Bad settings are one line at once, before the renderer builds its pipelines and uploads the scene;
     // the checks that need the renderer follow below.
     for &method in &a.methods {
-        for &vpls in &a.vpls {
+        for &vpls in &vpl_counts {
             FrameSettings { method, vpls, ..base.clone() }.validate(&gpu)?;
         }
     }
@@ -68,9 +70,18 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         return Err(bad(anyhow::anyhow!("--time-limits must be positive numbers of seconds")));
     }
     let columns = match a.time_limits.is_empty() {
-        true => a.vpls.iter().map(|&vpls| Column { vpls, seconds: None }).collect(),
-        false => a.time_limits.iter().map(|&t| Column { vpls: a.vpls[0], seconds: Some(t) }).collect(),
+        true => vpl_counts.iter().map(|&vpls| Column { vpls, seconds: None }).collect(),
+        false => a.time_limits.iter().map(|&t| Column { vpls: vpl_counts[0], seconds: Some(t) }).collect(),
     };
+    // At equal time without --vpls, ris as `render --time-limit` runs it (as `suite` does).
+    let ris_budget = (a.vpls.is_empty() && !a.time_limits.is_empty() && a.methods.contains(&Method::Ris))
+        .then(|| {
+            let mut s = FrameSettings { method: Method::Ris, ..base.clone() };
+            writeln!(err, "{}", super::ris_frame_budget(&a.frame, &mut renderer, &mut s)?)?;
+            s.validate(&gpu)?;
+            anyhow::Ok(s)
+        })
+        .transpose()?;
     let plan = BenchPlan {
         methods: a.methods.clone(),
         columns,
@@ -80,12 +91,15 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             ReferenceArg::Path => Reference::Path { spp: a.reference_spp },
             ReferenceArg::All => Reference::All,
         },
-        ris_budget: None,
+        ris_budget,
     };
     // Every frame the sweep will render, checked before the first one renders.
     for &method in &plan.methods {
         for c in &plan.columns {
-            renderer.check(&FrameSettings { method, vpls: c.vpls, ..plan.base.clone() })?;
+            match (&plan.ris_budget, method, c.seconds) {
+                (Some(ris), Method::Ris, Some(_)) => renderer.check(ris)?,
+                _ => renderer.check(&FrameSettings { method, vpls: c.vpls, ..plan.base.clone() })?,
+            }
         }
     }
     renderer.check(&plan.reference.settings(&plan.base))?;

@@ -113,7 +113,7 @@ pub(super) fn run(
     if a.reference != crate::cli::ReferenceArg::Path {
         return Err(bad(anyhow::anyhow!("--animate measures against the path-traced ground truth (--reference path)")));
     }
-    let vpls = a.vpls[0];
+    let vpls = a.vpl_counts()[0];
     for &method in &a.methods {
         r.check(&FrameSettings { method, vpls, ..base.clone() })?;
     }
@@ -325,7 +325,7 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
         b.height,
         b.dprsm_res,
         b.voxels,
-        a.vpls[0],
+        a.vpl_counts()[0],
         a.frames,
         a.reference_spp,
         a.frames - 1,
