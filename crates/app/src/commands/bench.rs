@@ -75,12 +75,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     };
     // At equal time without --vpls, ris as `render --time-limit` runs it (as `suite` does).
     let ris_budget = (a.vpls.is_empty() && !a.time_limits.is_empty() && a.methods.contains(&Method::Ris))
-        .then(|| {
-            let mut s = FrameSettings { method: Method::Ris, ..base.clone() };
-            writeln!(err, "{}", super::ris_frame_budget(&a.frame, &mut renderer, &mut s)?)?;
-            s.validate(&gpu)?;
-            anyhow::Ok(s)
-        })
+        .then(|| ris_budget(&a.frame, &mut renderer, &base, &gpu, err))
         .transpose()?;
     let plan = BenchPlan {
         methods: a.methods.clone(),
@@ -93,15 +88,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         },
         ris_budget,
     };
-    // Every frame the sweep will render, checked before the first one renders.
-    for &method in &plan.methods {
-        for c in &plan.columns {
-            match (&plan.ris_budget, method, c.seconds) {
-                (Some(ris), Method::Ris, Some(_)) => renderer.check(ris)?,
-                _ => renderer.check(&FrameSettings { method, vpls: c.vpls, ..plan.base.clone() })?,
-            }
-        }
-    }
+    plan.check(&mut renderer)?;
     renderer.check(&plan.reference.settings(&plan.base))?;
     let samples = sweep(&mut renderer, &plan, &a.scene, &a.out, err)?;
     super::check_validation(&gpu, a.frame.validation)?;
@@ -159,8 +146,43 @@ struct BenchPlan {
     base: FrameSettings,
     reference: Reference,
     /// ris's settings in the equal-time columns where it takes `render --time-limit`'s per-view budget
-    /// (`suite` without --vpls: `super::ris_frame_budget`), in place of the base and the column's VPLs.
+    /// (without --vpls: [`ris_budget`]), in place of the base and the column's VPLs.
     ris_budget: Option<FrameSettings>,
+}
+
+impl BenchPlan {
+    /// What `method` renders in `column` (its runs' seeds aside).
+    fn settings(&self, method: Method, column: Column) -> FrameSettings {
+        match (&self.ris_budget, method, column.seconds) {
+            (Some(ris), Method::Ris, Some(_)) => FrameSettings { component: Component::Indirect, ..ris.clone() },
+            _ => FrameSettings { method, vpls: column.vpls, component: Component::Indirect, ..self.base.clone() },
+        }
+    }
+
+    /// Every frame the sweep will render, checked before the first one renders.
+    fn check(&self, r: &mut Renderer) -> Result<()> {
+        for &method in &self.methods {
+            for &c in &self.columns {
+                r.check(&self.settings(method, c))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// ris's settings over `base` under `render --time-limit`'s per-view budget for the renderer's view
+/// (`super::ris_frame_budget`), said on `err`.
+fn ris_budget(
+    frame: &crate::cli::FrameArgs,
+    r: &mut Renderer,
+    base: &FrameSettings,
+    gpu: &Gpu,
+    err: &mut dyn Write,
+) -> Result<FrameSettings> {
+    let mut s = FrameSettings { method: Method::Ris, ..base.clone() };
+    writeln!(err, "{}", super::ris_frame_budget(frame, r, &mut s)?)?;
+    s.validate(gpu)?;
+    Ok(s)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -292,26 +314,12 @@ fn sweep(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: &mut
         // An untimed frame of the method first: the driver compiles there what it compiles at first use,
         // so no timed frame or budget pays for it (each still records its full frame: `measure` clears
         // the kept products).
-        let first = plan.columns.first().map_or(1, |c| c.vpls);
-        let warm = match (&plan.ris_budget, method) {
-            (Some(ris), Method::Ris) => ris.clone(),
-            _ => FrameSettings { method, vpls: first, ..plan.base.clone() },
-        };
-        r.warm_up(&FrameSettings { component: Component::Indirect, ..warm })?;
+        let first = plan.columns.first().copied().unwrap_or(Column { vpls: 1, seconds: None });
+        r.warm_up(&plan.settings(method, first))?;
         for &column in &plan.columns {
             for seed in 1..=plan.repeats as u64 {
                 bar.set_message(format!("{} {}", method.name(), column.label()));
-                let (base, vpls) = match (&plan.ris_budget, method, column.seconds) {
-                    (Some(ris), Method::Ris, Some(_)) => (ris, ris.vpls),
-                    _ => (&plan.base, column.vpls),
-                };
-                let s = FrameSettings {
-                    method,
-                    vpls,
-                    seed: run_seed(seed),
-                    component: Component::Indirect,
-                    ..base.clone()
-                };
+                let s = FrameSettings { seed: run_seed(seed), ..plan.settings(method, column) };
                 samples.push(Sample { seed, ..measure(r, &s, column, &reference)? });
                 bar.inc(1);
             }

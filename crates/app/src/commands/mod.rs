@@ -33,8 +33,8 @@ fn check_validation(gpu: &Gpu, validation: bool) -> Result<()> {
 }
 
 /// ris's reservoirs, candidates, picks and source per progressive frame under a time budget when
-/// `--vpls` is not given (`render --time-limit`, and `suite` at equal time, so that the suite measures
-/// ris as `render` runs it): chosen per view by the share of the unshadowed transport that visibility
+/// `--vpls` is not given (`render --time-limit`, and `suite` and `bench` at equal time, so that they
+/// measure ris as `render` runs it): chosen per view by the share of the unshadowed transport that visibility
 /// blocks ([`crate::cli::RIS_FRAME_BLOCKED`], [`crate::cli::RIS_FRAME_OPEN`],
 /// [`crate::cli::RIS_GATHERED_BLOCKED`]); --candidates, --near-candidates, --picks, --source and
 /// --defensive stand where given. Returns the line that says what was chosen.

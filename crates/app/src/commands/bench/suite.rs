@@ -19,7 +19,7 @@
 //!   every scene's ratios;
 //! - `suite.png`: each method's ratios over `uniform`, sorted, against the share of scenes.
 
-use super::{median, sweep, BenchPlan, Column, Reference, Sample};
+use super::{median, ris_budget, sweep, BenchPlan, Column, Reference, Sample};
 use crate::cli::SuiteArgs;
 use crate::error::{self, bad};
 use anyhow::{Context, Result};
@@ -65,13 +65,7 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         let mut renderer = Renderer::new(&gpu, &scene)?;
         // ris as `render --time-limit` runs it: its budget chosen for this scene's view.
         let ris_budget = (a.vpls.is_none() && !a.equal_count && a.methods.contains(&Method::Ris))
-            .then(|| {
-                let mut s = FrameSettings { method: Method::Ris, ..base.clone() };
-                let line = super::super::ris_frame_budget(&a.frame, &mut renderer, &mut s)?;
-                writeln!(err, "{line}")?;
-                s.validate(&gpu)?;
-                anyhow::Ok(s)
-            })
+            .then(|| ris_budget(&a.frame, &mut renderer, &base, &gpu, err))
             .transpose()?;
         let plan = BenchPlan {
             methods: a.methods.clone(),
@@ -81,12 +75,7 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             reference: Reference::Path { spp: a.reference_spp },
             ris_budget,
         };
-        for &method in &plan.methods {
-            match (&plan.ris_budget, method) {
-                (Some(ris), Method::Ris) => renderer.check(ris)?,
-                _ => renderer.check(&FrameSettings { method, vpls, ..base.clone() })?,
-            }
-        }
+        plan.check(&mut renderer)?;
         for sample in sweep(&mut renderer, &plan, path, &a.out.join(&name), err)? {
             rows.push(Row { scene: name.clone(), family: family(&name), sample });
         }
