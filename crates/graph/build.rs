@@ -77,8 +77,6 @@ const SHADERS: &[Shader] = &[
     file("ris_spatial.comp"),
     file("ris_shade.comp"),
     variant("ris_shade.exact.comp", "ris_shade.comp", &["EXACT_VISIBILITY"]),
-    variant("ris_shade.history.comp", "ris_shade.comp", &["RIS_HISTORY"]),
-    variant("ris_shade.history_exact.comp", "ris_shade.comp", &["RIS_HISTORY", "EXACT_VISIBILITY"]),
     file("reproject.comp"),
     file("denoise_temporal.comp"),
     file("denoise_variance.comp"),

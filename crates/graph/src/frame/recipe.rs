@@ -301,7 +301,6 @@ pub(crate) fn ris_push(s: &FrameSettings) -> RisPush {
             (true, 0, _) => RIS_CONTROL_OFF,
             (true, _, _) => RIS_CONTROL_REUSE,
         },
-        pad: [std::env::var("BOUNCE_K").ok().and_then(|v| v.parse::<f32>().ok()).unwrap_or(0.0).to_bits(), std::env::var("BOUNCE_DBG").ok().and_then(|v| v.parse().ok()).unwrap_or(0)],
         ..RisPush::default()
     }
 }

@@ -72,7 +72,7 @@ pub enum Method {
 /// issue's bound of two rays a pixel. Two against one (BENCHMARKS.md, "Real time under motion"): half the
 /// raw error and flicker for 1.1–1.5× the frame time, 1.4–1.9× the raw efficiency in four runs of motion
 /// (Sibenik and the two rooms, camera and light; measured there only).
-pub const REALTIME_RESERVOIRS: u32 = 1;
+pub const REALTIME_RESERVOIRS: u32 = 2;
 
 /// The blocked share ([`crate::passes::ris::blocked_share`]) from which a real-time frame under
 /// `--learn-visibility auto` learns. Under motion a count goes stale as its screen tile and light-map
@@ -184,7 +184,7 @@ impl RisSettings {
     /// positive target).
     pub fn realtime() -> Self {
         RisSettings {
-            temporal_cap: std::env::var("BOUNCE_CAP").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0),
+            temporal_cap: 1.0,
             spatial_passes: 1,
             spatial_neighbors: 4,
             spatial_radius: 4.0,

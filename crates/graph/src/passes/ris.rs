@@ -157,17 +157,13 @@ pub struct Ris {
     spatial: Lazy<1>,
     /// The shade in the gather's per-pixel visibility variants (voxel, exact).
     shade: VisibilityVariants,
-    /// The shade combining last frame's reservoirs in (`--temporal-cap` > 0, while they are kept).
-    shade_history: VisibilityVariants,
     sampler: Sampler,
 }
 
 /// The shade's inputs and outputs: the final reservoirs and their U_g; the counts it adds to (learned
 /// visibility, control variate, rays); the radiance it writes.
 struct ShadeIo<'h> {
-    /// The final reservoirs; rewritten with last frame's combined in where `previous` is given.
-    reservoirs: &'h mut Handle<Buffer>,
-    previous: Option<(Handle<Buffer>, LastFrame)>,
+    reservoirs: Handle<Buffer>,
     unshadowed: Handle<Buffer>,
     vis: &'h mut Handle<Buffer>,
     cv: &'h mut Handle<Buffer>,
@@ -362,12 +358,6 @@ impl Ris {
         let mut shade = base();
         shade.extend([B_RIS_IN, B_RIS_VIS, B_RIS_UNSHADOWED, B_RIS_CV, B_RIS_RAYS].map(Binding::storage_buffer));
         shade.extend([Binding::sampled_image(B_GATHER_DIRECT), Binding::storage_image(B_GATHER_OUT)]);
-        let mut shade_history = shade.clone();
-        shade_history.extend([Binding::storage_buffer(B_RIS_HISTORY)]);
-        shade_history.extend(
-            [B_MOTION, B_PREV_POSITION, B_PREV_SURFACE, B_PREV_VPL_POSITION, B_PREV_VPL_NORMAL, B_PREV_VPL_FLUX]
-                .map(Binding::sampled_image),
-        );
         Ok(Ris {
             presample: Lazy::new(
                 gpu,
@@ -384,13 +374,6 @@ impl Ris {
             temporal: Lazy::new(gpu, "ris_temporal", RIS_TEMPORAL_COMP, &temporal, push),
             spatial: Lazy::new(gpu, "ris_spatial", RIS_SPATIAL_COMP, &spatial, push),
             shade: VisibilityVariants::new(gpu, "ris_shade", [RIS_SHADE_COMP, RIS_SHADE_EXACT_COMP], shade, push),
-            shade_history: VisibilityVariants::new(
-                gpu,
-                "ris_shade",
-                [RIS_SHADE_HISTORY_COMP, RIS_SHADE_HISTORY_EXACT_COMP],
-                shade_history,
-                push,
-            ),
             sampler: Sampler::nearest(gpu)?,
         })
     }
@@ -455,6 +438,9 @@ impl Ris {
             let dst = if target(0) { &mut current } else { scratch.as_mut().expect("P > 0") };
             let learned = (r.push.learned > 0.0).then_some(vis);
             self.add_initial(g, f, i, dst, &mut unshadowed, pool, learned, push, r)?;
+            if let Some((previous, last)) = previous {
+                self.add_temporal(g, f, i, (previous, last, vis), dst, push, r.push)?;
+            }
         }
         for pass in 0..r.spatial_passes {
             let s = pass + 1;
@@ -470,8 +456,7 @@ impl Ris {
         // The frame's shadow rays, counted by the shade.
         let mut rays = g.create_buffer(BufferDesc::storage("ris.rays", 4));
         g.add_clear("ris_rays_clear", &mut [&mut rays]);
-        let shade =
-            ShadeIo { reservoirs: &mut current, previous, unshadowed, vis: &mut vis, cv: &mut cv, rays: &mut rays, out };
+        let shade = ShadeIo { reservoirs: current, unshadowed, vis: &mut vis, cv: &mut cv, rays: &mut rays, out };
         self.add_shade(g, f, i, shade, push, r.push)?;
         Ok(rays)
     }
@@ -716,23 +701,12 @@ impl Ris {
         push: GatherPush,
         ris: RisPush,
     ) -> Result<()> {
-        let (reservoirs, unshadowed, previous) = (*io.reservoirs, io.unshadowed, io.previous);
+        let (reservoirs, unshadowed) = (io.reservoirs, io.unshadowed);
         let (i, o, hv, hc, hr) = (*i, *io.out, *io.vis, *io.cv, *io.rays);
-        let pipeline = match previous {
-            Some(_) => self.shade_history.pipeline(&f, false)?,
-            None => self.shade.pipeline(&f, false)?,
-        };
-        let mut b = Self::reads(g.add_pass("ris_shade"), &i).read(&unshadowed, Access::ComputeRead);
-        b = match &previous {
-            Some((p, LastFrame { motion: m, vpls })) => {
-                let mut b = b.write(io.reservoirs, Access::ComputeWrite).read(p, Access::ComputeRead);
-                for h in [m.motion, m.prev_position, m.prev_surface, vpls.position, vpls.normal, vpls.flux] {
-                    b = b.read(&h, Access::ComputeRead);
-                }
-                b
-            }
-            None => b.read(&reservoirs, Access::ComputeRead),
-        };
+        let pipeline = self.shade.pipeline(&f, false)?;
+        let mut b = Self::reads(g.add_pass("ris_shade"), &i)
+            .read(&reservoirs, Access::ComputeRead)
+            .read(&unshadowed, Access::ComputeRead);
         // The learned visibility's and the control's counts are added to (or, off, the stand-ins are never
         // touched), and so is the ray count.
         b = b
@@ -759,20 +733,6 @@ impl Ris {
                 .storage_buffer(B_RIS_RAYS, ctx.buffer(&hr))
                 .sampled_image(B_GATHER_DIRECT, direct, self.sampler.raw)
                 .storage_image(B_GATHER_OUT, ctx.image(&o));
-            let writes = match &previous {
-                Some((p, LastFrame { motion: m, vpls })) => {
-                    let s = self.sampler.raw;
-                    writes
-                        .storage_buffer(B_RIS_HISTORY, ctx.buffer(p))
-                        .sampled_image(B_MOTION, ctx.image(&m.motion), s)
-                        .sampled_image(B_PREV_POSITION, ctx.image(&m.prev_position), s)
-                        .sampled_image(B_PREV_SURFACE, ctx.image(&m.prev_surface), s)
-                        .sampled_image(B_PREV_VPL_POSITION, ctx.image(&vpls.position), s)
-                        .sampled_image(B_PREV_VPL_NORMAL, ctx.image(&vpls.normal), s)
-                        .sampled_image(B_PREV_VPL_FLUX, ctx.image(&vpls.flux), s)
-                }
-                None => writes,
-            };
             // The gather's visibility variants, chosen and bound as the gather's (with the end balls where
             // the layout has them: exact).
             let (writes, end_balls) = match f.visibility {
