@@ -1093,7 +1093,17 @@ fn the_suite_and_bench_run_ris_with_renders_budget() {
     let r = bounce(&[&args[..], &tiny[..], &size[..]].concat());
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert_eq!(budget(&r.stderr), rendered[..1]);
+    // bench.csv's ris rows name the VPLs the budget shaded (reservoirs × picks), not the column's.
+    let words: Vec<&str> = rendered[0].split_whitespace().collect();
+    let number_before = |w: &str| words[words.iter().position(|x| *x == w).unwrap() - 1].parse::<u32>().unwrap();
+    let shaded = number_before("reservoirs") * number_before("picks");
+    let ris_vpls = || -> Vec<u32> {
+        let csv = std::fs::read_to_string(out.join("bench.csv")).unwrap();
+        csv.lines().filter(|l| l.starts_with("ris,")).map(|l| l.split(',').nth(1).unwrap().parse().unwrap()).collect()
+    };
+    assert_eq!(ris_vpls(), [shaded]);
     let r = bounce(&[&args[..], &tiny[..], &size[..], &["--vpls", "4"]].concat());
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(budget(&r.stderr).is_empty(), "{}", r.stderr);
+    assert_eq!(ris_vpls(), [4]);
 }

@@ -120,6 +120,9 @@ impl Column {
 struct Sample {
     method: Method,
     column: Column,
+    /// VPLs a frame shaded per pixel (`FrameSettings::vpls_per_frame`): the column's, or ris's per-view
+    /// budget's.
+    vpls: u32,
     seed: u64,
     /// Frames averaged (1 without a time budget).
     frames: u32,
@@ -355,7 +358,8 @@ fn measure(r: &mut Renderer, s: &FrameSettings, column: Column, reference: &RgbI
         *passes.entry(t.name).or_insert(0.0) += t.ms.unwrap_or(f64::NAN);
     }
     let metrics = Metrics::with_flip(&img, reference);
-    Ok(Sample { method: s.method, column, seed: s.seed, frames, gpu_ms, wall_ms, passes, metrics })
+    let vpls = s.vpls_per_frame();
+    Ok(Sample { method: s.method, column, vpls, seed: s.seed, frames, gpu_ms, wall_ms, passes, metrics })
 }
 
 /// Write bench.csv, bench.md and time_vs_error.png (each through a temporary file).
@@ -405,7 +409,7 @@ fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
         csv.push_str(&format!(
             "{},{},{},{:.4},{:.3},{:.6e},{:.6e},{:.6},{:.6e},{:.6e},{:.6},{},{}",
             s.method.name(),
-            s.column.vpls,
+            s.vpls,
             s.seed,
             s.gpu_ms,
             s.wall_ms,

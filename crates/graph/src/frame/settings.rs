@@ -556,6 +556,16 @@ impl FrameSettings {
         }
     }
 
+    /// VPLs a frame shades per pixel, each with its own visibility test: `vpls`, or for ris its candidate
+    /// streams times their picks (what a frame's reservoirs hold, as the shade traces them).
+    pub fn vpls_per_frame(&self) -> u32 {
+        if self.uses_ris() {
+            self.ris_streams() * self.ris_settings().picks
+        } else {
+            self.vpls
+        }
+    }
+
     /// The sample counts, and where the pixel's sequence starts (`sample_offset`).
     fn validate_samples(&self) -> Result<(), SettingsError> {
         if self.spp == 0 {

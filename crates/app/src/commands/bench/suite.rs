@@ -362,6 +362,7 @@ mod tests {
             sample: Sample {
                 method,
                 column: Column { vpls: 1, seconds: None },
+                vpls: 1,
                 seed: 1,
                 frames: 1,
                 gpu_ms: 0.0,
