@@ -1,7 +1,9 @@
 #version 460
 // present: the running mean of the frames, Reinhard 2002 (global operator) and sRGB, into an 8-bit
 // image. Three stages (PresentPush.stage), one dispatch each, serialized by the pass:
-//   PRESENT_ACCUMULATE  per pixel: sum += radiance (or sum = radiance on reset); per workgroup, the
+//   PRESENT_ACCUMULATE  per pixel: sum += radiance (or sum = radiance on reset), plus the kept prior
+//                       times the change of its weight (prior_delta; a real-time frame is kept as
+//                       the prior with keep_prior); per workgroup, the
 //                       partial Σ ln(δ + L), the count of finite L ≥ 0, and max L of the mean image
 //   PRESENT_TOTAL       one workgroup: the partials' totals → stats[groups] = (a / L̄_w, L_white, n, 0)
 //   PRESENT_MAP         per pixel: L_d = L (1 + L / L_white²) / (1 + L) on the luminance, colour ratios
@@ -17,6 +19,8 @@ layout(set = 0, binding = B_PRESENT_SUM, rgba32f) uniform image2D sum_image;
 layout(set = 0, binding = B_PRESENT_OUT, rgba8) uniform writeonly image2D out_image;
 // Per workgroup of the per-pixel stages: (Σ ln(δ + L), n, max L, 0); element `groups`: the totals.
 layout(std430, set = 0, binding = B_PRESENT_STATS) buffer Stats { vec4 stats[]; };
+// The last real-time frame, which a still view's first frames after a move carry (passes/present.rs).
+layout(set = 0, binding = B_PRESENT_PRIOR, rgba32f) uniform image2D prior_image;
 
 const uint LANES = WG_2D * WG_2D;
 shared vec4 partial[LANES];
@@ -59,9 +63,12 @@ void main() {
         if (inside) {
             vec4 l = texelFetch(radiance, px, 0);
             sum = pc.reset != 0u ? l : imageLoad(sum_image, px) + l;
+            // (Read only when its weight changes: a prior never kept is not read.)
+            if (pc.prior_delta != 0.0) sum += pc.prior_delta * imageLoad(prior_image, px);
             imageStore(sum_image, px, sum);
+            if (pc.keep_prior != 0u) imageStore(prior_image, px, l);
         }
-        float l = luminance(sum.rgb / float(pc.frames));
+        float l = luminance(sum.rgb / pc.frames);
         partial[lane] = inside && usable(l) ? vec4(log(REINHARD_DELTA + l), 1.0, l, 0.0) : vec4(0.0);
         vec4 total = reduce(lane);
         if (lane == 0u) stats[group] = total;
@@ -84,7 +91,7 @@ void main() {
         }
     } else {
         if (!inside) return;
-        vec3 mean = imageLoad(sum_image, px).rgb / float(pc.frames);
+        vec3 mean = imageLoad(sum_image, px).rgb / pc.frames;
         vec4 t = stats[pc.groups];
         float lw = luminance(mean);
         vec3 c = vec3(0.0);

@@ -244,6 +244,7 @@ const float DENOISE_GRADIENT_SIGMAS = 3.0;
 #define B_PRESENT_SUM 41
 #define B_PRESENT_OUT 42
 #define B_PRESENT_STATS 43
+#define B_PRESENT_PRIOR 44
 // PresentPush.stage
 #define PRESENT_ACCUMULATE 0
 #define PRESENT_TOTAL 1

@@ -547,9 +547,17 @@ fn view_is_real_time_while_the_camera_moves() {
     let scene = bounce_tests::default_scene();
     let shot = d.join("s.png");
     let small = ["--width", "32", "--height", "32", "--dprsm-res", "32", "--vpls", "2"];
+    // A walk that stops after frame 2: the still frame after it carries the last real-time frame.
+    let stop = d.join("stop.toml");
+    std::fs::write(
+        &stop,
+        "[[key]]\nframe = 0\neye = [0, 1, 3.9]\ntarget = [0, 1, 0]\n\n[[key]]\nframe = 2\neye = [0.2, 1, 3.8]\ntarget = [0, 1, 0]\n",
+    )
+    .unwrap();
     for (path, want) in [
         (Some("orbit:8"), "1 frame in the mean, 4 in all, 3 real-time"),
         (None, "4 frames in the mean, 4 in all, 0 real-time"),
+        (stop.to_str(), "1 frame in the mean with the last real-time frame as 1, 4 in all, 2 real-time"),
     ] {
         let mut args = vec![scene.to_str().unwrap(), "--frames", "4", "--screenshot", shot.to_str().unwrap()];
         args.extend(small);

@@ -74,12 +74,13 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
     let pp = ParaboloidPush { map_res: 8001, pad: 8002, offset: [next(), next()] };
     let pr = PresentPush {
         stage: 9001,
-        frames: 9002,
+        frames: next(),
         reset: 9003,
         swap_rb: 9004,
         exposure: next(),
         groups: 9006,
-        pad: [9007, 9008],
+        prior_delta: next(),
+        keep_prior: 9008,
     };
     let rp = ReprojectPush { history: 9501, plane: next(), normal: next(), pad: 9504 };
     let dp = DenoisePush {

@@ -9,7 +9,7 @@ use bounce_device::{vk, Buffer, Image, ImageDesc};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::graph::Graph;
 use bounce_graph::passes::direct::RADIANCE_FORMAT;
-use bounce_graph::passes::present::{Present, PresentParams};
+use bounce_graph::passes::present::{stop_prior_weight, Present, PresentParams, Prior, STOP_PRIOR_FADE};
 use bounce_graph::scene::Scene;
 use bounce_tests::TestGpu;
 use glam::Vec3;
@@ -28,7 +28,7 @@ fn settings() -> FrameSettings {
 }
 
 fn params(frames: u32, reset: bool) -> PresentParams {
-    PresentParams { frames, reset, exposure: 1.0, swap_rb: false }
+    PresentParams { frames, reset, exposure: 1.0, swap_rb: false, prior: Prior::None }
 }
 
 /// The PNG writer's bytes (RGBA, alpha 255) for `img`.
@@ -162,4 +162,55 @@ fn presented_frames_accumulate_on_the_gpu_and_read_nothing_back() {
     let mut fresh = Renderer::new(&gpu, &scene).unwrap();
     fresh.set_light(0, p + Vec3::new(0.1, 0.0, 0.1), Vec3::from_slice(&scene.lights[0].intensity[..3]));
     assert_eq!(moved.radiance, fresh.render(&s).unwrap().radiance, "a reset mean is the frame itself");
+}
+
+/// A stop: the present pass keeps a real-time frame D (`Prior::Keep`); the still frames after it
+/// (`Prior::Use`) show (Σ_{k ≤ n} P_k + w_n D) / (n + w_n), the mean of `render`'s frames with D worth
+/// w_n frames, fading to nothing: from frame STOP_PRIOR_FADE + 1 on the plain mean (within f32
+/// rounding of the prior's additions, which sum to 0). D has other random numbers than every P_k, so
+/// a pass that dropped it, or kept it too long, is off by w (D − P) / (n + w).
+#[test]
+fn a_still_mean_after_a_move_carries_the_last_real_time_frame_then_lets_it_go() {
+    let gpu = TestGpu::new();
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let s = settings();
+    let n = STOP_PRIOR_FADE as u32 + 2;
+    let mut reference = Renderer::new(&gpu, &scene).unwrap();
+    let mut render = |seed: u64| reference.render(&FrameSettings { seed, ..s.clone() }).unwrap().radiance;
+    let prior = render(s.seed + 1000);
+    let frames: Vec<Vec<[f32; 4]>> = (0..n as u64).map(|k| render(s.seed + k)).collect();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let ldr = Present::ldr_image(&gpu, s.width, s.height).unwrap();
+    let kept = PresentParams { prior: Prior::Keep, ..params(1, true) };
+    let shown = r.present(&FrameSettings { seed: s.seed + 1000, ..s.clone() }, &ldr, kept, true).unwrap();
+    assert_eq!(shown.radiance, prior, "a real-time frame is shown alone");
+    let mut sum = vec![[0f64; 3]; prior.len()];
+    for k in 0..n {
+        for (a, p) in sum.iter_mut().zip(&frames[k as usize]) {
+            (0..3).for_each(|c| a[c] += p[c] as f64);
+        }
+        let (count, w) = (k + 1, stop_prior_weight(k + 1) as f64);
+        let read = [0, 1, 7, n - 2, n - 1].contains(&k);
+        let p = PresentParams { prior: Prior::Use, ..params(count, k == 0) };
+        let got = r.present(&FrameSettings { seed: s.seed + k as u64, ..s.clone() }, &ldr, p, read).unwrap();
+        if !read {
+            continue;
+        }
+        // What the picture shows, and the plain mean beside it.
+        let (mut worst, mut scale, mut off_plain) = (0f64, 0f64, 0f64);
+        for ((g, a), d) in got.radiance.iter().zip(&sum).zip(&prior) {
+            for c in 0..3 {
+                let want = (a[c] + w * d[c] as f64) / (count as f64 + w);
+                worst = worst.max((g[c] as f64 - want).abs());
+                scale = scale.max(want.abs());
+                off_plain = off_plain.max((g[c] as f64 - a[c] / count as f64).abs());
+            }
+        }
+        assert!(worst <= 1e-5 * scale, "frame {count}: {worst} from the blend (scale {scale})");
+        match w > 0.0 {
+            true => assert!(off_plain > 1e-3 * scale, "frame {count}: the prior left no trace ({off_plain})"),
+            false => assert!(off_plain <= 1e-5 * scale, "frame {count}: the prior stayed ({off_plain})"),
+        }
+    }
+    assert_eq!(stop_prior_weight(n - 1), 0.0, "the last frames read are past the fade");
 }

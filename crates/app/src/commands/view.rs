@@ -23,6 +23,11 @@
 //! `coherent` (the default) every frame after a change starts again from `--seed`, so a moving light's
 //! frames share their random numbers; `fresh` gives frame k of the run `--seed + k`.
 //!
+//! When the camera or a light stops, the still view's new mean carries the last real-time frame as one
+//! frame's worth, fading out over its first 32 frames (`Prior`, passes/present.rs): the picture goes on
+//! from the denoised frame instead of breaking into one still frame's noise, and is the plain mean after.
+//! A screenshot is what the picture shows (its EXR's `stop_prior_frames` names the prior's weight).
+//!
 //! A still view's frames move on to a new VPL set as `render --time-limit`'s do (`progressive::VplSets`:
 //! the light side at most 1/28 of the time), so that the mean converges to the one-bounce image, not
 //! to one set's VPL sum; a move goes on with the set the maps hold, and `--cdf-seed` keeps one set.
@@ -49,7 +54,7 @@ use bounce_graph::camera::Camera;
 use bounce_graph::frame::progressive::{frame_settings, VplSets};
 use bounce_graph::frame::{Component, FrameOutput, FrameSettings, Method, Renderer};
 use bounce_graph::graph::Persistent;
-use bounce_graph::passes::present::{Present, PresentParams};
+use bounce_graph::passes::present::{Present, PresentParams, Prior};
 use bounce_graph::scene::Scene;
 use glam::Vec3;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -164,6 +169,10 @@ struct State {
     total: u32,
     /// Frames rendered by `realtime` (while moving).
     realtime_frames: u32,
+    /// The last frame was a real-time one (the present pass kept it), and the running mean is a still
+    /// view's after such a frame (it carries it: passes/present.rs, a stop).
+    last_realtime: bool,
+    prior_running: bool,
     /// Copies to host memory before the first frame (the run's count is reported against it).
     readbacks: u64,
     accumulate: bool,
@@ -378,6 +387,8 @@ impl Viewer<'_> {
             vpl_sets: VplSets::new(&self.settings),
             total: 0,
             realtime_frames: 0,
+            last_realtime: false,
+            prior_running: false,
             accumulate: true,
             shot_requested: false,
             last: Instant::now(),
@@ -416,11 +427,23 @@ impl Viewer<'_> {
             true => FrameSettings { method: Method::Realtime, vpl_seed: still.vpl_seed, ..self.settings.clone() },
             false => still,
         };
+        // A real-time frame is kept; the still view's mean right after it carries it for its first frames,
+        // so that the picture does not break into one frame's noise when the view stops.
+        if !realtime && st.frames == 0 {
+            st.prior_running = st.last_realtime && st.accumulate;
+        }
+        let prior = match (realtime, st.prior_running) {
+            (true, _) => Prior::Keep,
+            (false, true) => Prior::Use,
+            (false, false) => Prior::None,
+        };
+        st.last_realtime = realtime;
         let params = PresentParams {
             frames: st.frames + 1,
             reset: st.frames == 0,
             exposure: 1.0,
             swap_rb: st.swapchain.format == vk::Format::B8G8R8A8_UNORM,
+            prior,
         };
         let t0 = Instant::now();
         let f = st.renderer.present(&s, &st.ldr, params, shot)?;
@@ -455,7 +478,7 @@ impl Viewer<'_> {
                     PathBuf::from(format!("bounce-screenshot-{}.png", st.shots))
                 }
             };
-            self.screenshot(&path, &f)?;
+            self.screenshot(&path, &f, params.prior_weight())?;
         }
         Ok(last)
     }
@@ -485,7 +508,8 @@ impl Viewer<'_> {
     }
 
     /// Writes the frame's read-back mean (`f.radiance`) as EXR and PNG.
-    fn screenshot(&mut self, png: &Path, f: &FrameOutput) -> Result<()> {
+    /// `prior`: the last real-time frame's weight in the mean (frames' worth; a stop's first frames).
+    fn screenshot(&mut self, png: &Path, f: &FrameOutput, prior: f32) -> Result<()> {
         let st = self.state.as_mut().expect("started");
         let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
         let exr = png.with_extension("exr");
@@ -495,6 +519,7 @@ impl Viewer<'_> {
             ("method", self.settings.method.name().to_string()),
             ("vpls", self.settings.vpls.to_string()),
             ("frames", st.frames.to_string()),
+            ("stop_prior_frames", prior.to_string()),
             ("seed", format!("{} ({})", self.settings.seed, self.args.animation.temporal().name())),
             ("light_path", self.args.animation.light_path.clone().unwrap_or_else(|| "none".into())),
             ("device", st.gpu.name.clone()),
@@ -505,11 +530,12 @@ impl Viewer<'_> {
         // A real-time frame is shown alone (`frames` is already 0 for the next still one).
         let mean = st.frames.max(1);
         self.log.push(format!(
-            "wrote {} and {} ({} frame{} in the mean, {} in all, {} real-time; {copies} cop{} to host memory)",
+            "wrote {} and {} ({} frame{} in the mean{}, {} in all, {} real-time; {copies} cop{} to host memory)",
             png.display(),
             exr.display(),
             mean,
             if mean == 1 { "" } else { "s" },
+            if prior > 0.0 { format!(" with the last real-time frame as {prior}") } else { String::new() },
             st.total,
             st.realtime_frames,
             if copies == 1 { "y" } else { "ies" }

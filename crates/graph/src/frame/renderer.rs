@@ -384,7 +384,7 @@ impl Renderer {
         state.realtime_frames += (s.method == Method::Realtime) as u64;
         let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
         if let Some(p) = &present {
-            let k = p.params.frames.max(1) as f32;
+            let k = p.params.weight();
             radiance.iter_mut().for_each(|px| *px = px.map(|c| c / k));
         }
         let stderr = read.second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
