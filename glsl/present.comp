@@ -1,10 +1,13 @@
 #version 460
 // present: the running mean of the frames, Reinhard 2002 (global operator) and sRGB, into an 8-bit
-// image. Three stages (PresentPush.stage), one dispatch each, serialized by the pass:
-//   PRESENT_ACCUMULATE  per pixel: sum += radiance (or sum = radiance on reset), plus the kept prior
-//                       times the change of its weight (prior_delta; a real-time frame is kept as
-//                       the prior with keep_prior); per workgroup, the
-//                       partial Σ ln(δ + L), the count of finite L ≥ 0, and max L of the mean image
+// image. Up to four stages (PresentPush.stage), one dispatch each, serialized by the pass:
+//   PRESENT_ACCUMULATE  per pixel: sum += radiance (or sum = radiance on reset); a real-time frame is
+//                       also kept as the prior (PRESENT_PRIOR_KEEP); with PRESENT_PRIOR_USE the moments
+//                       (mean, Σ (l − mean)²) of the frames' luminance; without it, per workgroup, the partial
+//                       Σ ln(δ + L), the count of finite L ≥ 0, and max L of the mean image
+//   PRESENT_WEIGHT      (PRESENT_PRIOR_USE only) per pixel: the prior's weight w from the 3 × 3 moments
+//                       and prior around it, the mean (sum + w D) / (n + w) into the mean image, and the
+//                       partials of that mean
 //   PRESENT_TOTAL       one workgroup: the partials' totals → stats[groups] = (a / L̄_w, L_white, n, 0)
 //   PRESENT_MAP         per pixel: L_d = L (1 + L / L_white²) / (1 + L) on the luminance, colour ratios
 //                       kept, clamped to [0, 1], sRGB-encoded and rounded as crates/app/src/output.rs does
@@ -19,8 +22,12 @@ layout(set = 0, binding = B_PRESENT_SUM, rgba32f) uniform image2D sum_image;
 layout(set = 0, binding = B_PRESENT_OUT, rgba8) uniform writeonly image2D out_image;
 // Per workgroup of the per-pixel stages: (Σ ln(δ + L), n, max L, 0); element `groups`: the totals.
 layout(std430, set = 0, binding = B_PRESENT_STATS) buffer Stats { vec4 stats[]; };
-// The last real-time frame, which a still view's first frames after a move carry (passes/present.rs).
+// The last real-time frame D, which a still view's first frames after a move carry (passes/present.rs);
+// the frames' luminance moments (mean, Σ (l − mean)²) since the mean began; the mean shown while D is
+// carried.
 layout(set = 0, binding = B_PRESENT_PRIOR, rgba32f) uniform image2D prior_image;
+layout(set = 0, binding = B_PRESENT_MOMENTS, rgba32f) uniform image2D moments_image;
+layout(set = 0, binding = B_PRESENT_MEAN, rgba32f) uniform image2D mean_image;
 
 const uint LANES = WG_2D * WG_2D;
 shared vec4 partial[LANES];
@@ -52,6 +59,40 @@ float srgb_byte(float c) {
     return clamp(floor(s * 255.0 + 0.5), 0.0, 255.0);
 }
 
+// Per workgroup: the partial Σ ln(δ + L), the count of finite L ≥ 0 and max L of the mean's pixels.
+void partials(uint lane, uint group, bool inside, vec3 mean) {
+    float l = luminance(mean);
+    partial[lane] = inside && usable(l) ? vec4(log(REINHARD_DELTA + l), 1.0, l, 0.0) : vec4(0.0);
+    vec4 total = reduce(lane);
+    if (lane == 0u) stats[group] = total;
+}
+
+// The prior D's weight, in frames, in pixel px's mean of n = pc.frames still frames: v / e², v one
+// frame's luminance variance and e² D's squared error, both over the 3 × 3 pixels around px (the frames'
+// sample variance; e² = mean (l_D − l̄)² less v / n, the running mean's own share), at most
+// STOP_PRIOR_MAX; at the first frame, where one frame shows no variance, STOP_PRIOR_FIRST; fading to 0
+// over STOP_PRIOR_FADE frames. (v / e² frames of D make the blend's error least where D's error is e².)
+float prior_weight(ivec2 px, ivec2 size) {
+    float n = pc.frames;
+    float fade = max(1.0 - (n - 1.0) / STOP_PRIOR_FADE, 0.0);
+    if (n <= 1.0) return STOP_PRIOR_FIRST * fade;
+    float v = 0.0, dev = 0.0, count = 0.0;
+    for (int dy = -1; dy <= 1; dy++) {
+        for (int dx = -1; dx <= 1; dx++) {
+            ivec2 q = px + ivec2(dx, dy);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
+            vec2 m = imageLoad(moments_image, q).xy;
+            v += m.y / (n - 1.0);
+            float d = luminance(imageLoad(prior_image, q).rgb) - m.x;
+            dev += d * d;
+            count += 1.0;
+        }
+    }
+    v /= count;
+    float e2 = max(dev / count - v / n, 1e-30);
+    return min(v / e2, STOP_PRIOR_MAX) * fade;
+}
+
 void main() {
     uint lane = gl_LocalInvocationIndex;
     ivec2 size = imageSize(sum_image);
@@ -63,15 +104,32 @@ void main() {
         if (inside) {
             vec4 l = texelFetch(radiance, px, 0);
             sum = pc.reset != 0u ? l : imageLoad(sum_image, px) + l;
-            // (Read only when its weight changes: a prior never kept is not read.)
-            if (pc.prior_delta != 0.0) sum += pc.prior_delta * imageLoad(prior_image, px);
             imageStore(sum_image, px, sum);
-            if (pc.keep_prior != 0u) imageStore(prior_image, px, l);
+            if (pc.prior == PRESENT_PRIOR_KEEP) imageStore(prior_image, px, l);
+            if (pc.prior == PRESENT_PRIOR_USE) {
+                // Welford's running mean and sum of squared deviations (no cancellation in f32).
+                float y = luminance(l.rgb);
+                vec2 m = vec2(y, 0.0);
+                if (pc.reset == 0u) {
+                    m = imageLoad(moments_image, px).xy;
+                    float d = y - m.x;
+                    m.x += d / pc.frames;
+                    m.y += d * (y - m.x);
+                }
+                imageStore(moments_image, px, vec4(m, 0.0, 0.0));
+            }
         }
-        float l = luminance(sum.rgb / pc.frames);
-        partial[lane] = inside && usable(l) ? vec4(log(REINHARD_DELTA + l), 1.0, l, 0.0) : vec4(0.0);
-        vec4 total = reduce(lane);
-        if (lane == 0u) stats[group] = total;
+        // (With the prior the weight stage takes the partials of the mean it makes.)
+        if (pc.prior == PRESENT_PRIOR_USE) return;
+        partials(lane, group, inside, sum.rgb / pc.frames);
+    } else if (pc.stage == PRESENT_WEIGHT) {
+        vec3 mean = vec3(0.0);
+        if (inside) {
+            float w = prior_weight(px, size);
+            mean = (imageLoad(sum_image, px).rgb + w * imageLoad(prior_image, px).rgb) / (pc.frames + w);
+            imageStore(mean_image, px, vec4(mean, w));
+        }
+        partials(lane, group, inside, mean);
     } else if (pc.stage == PRESENT_TOTAL) {
         vec4 acc = vec4(0.0);
         // Bounded by groups / LANES iterations (≈ 2000 at 4K), far under the loop limit.
@@ -91,7 +149,8 @@ void main() {
         }
     } else {
         if (!inside) return;
-        vec3 mean = imageLoad(sum_image, px).rgb / pc.frames;
+        vec3 mean = pc.prior == PRESENT_PRIOR_USE ? imageLoad(mean_image, px).rgb
+                                                  : imageLoad(sum_image, px).rgb / pc.frames;
         vec4 t = stats[pc.groups];
         float lw = luminance(mean);
         vec3 c = vec3(0.0);

@@ -245,10 +245,22 @@ const float DENOISE_GRADIENT_SIGMAS = 3.0;
 #define B_PRESENT_OUT 42
 #define B_PRESENT_STATS 43
 #define B_PRESENT_PRIOR 44
+#define B_PRESENT_MOMENTS 45
+#define B_PRESENT_MEAN 46
 // PresentPush.stage
 #define PRESENT_ACCUMULATE 0
-#define PRESENT_TOTAL 1
-#define PRESENT_MAP 2
+#define PRESENT_WEIGHT 1
+#define PRESENT_TOTAL 2
+#define PRESENT_MAP 3
+// PresentPush.prior: none; keep this frame (a real-time one) as the prior; the mean carries the prior.
+#define PRESENT_PRIOR_NONE 0
+#define PRESENT_PRIOR_KEEP 1
+#define PRESENT_PRIOR_USE 2
+// The prior's weight in a still view's mean after a move (present.comp's prior_weight; passes/present.rs
+// says how they were chosen): frames' worth at the first frame, at most, and the frames it fades over.
+const float STOP_PRIOR_FIRST = 1.0;
+const float STOP_PRIOR_MAX = 16.0;
+const float STOP_PRIOR_FADE = 32.0;
 // Reinhard 2002: the key value a, and the δ of the log-average luminance (crates/app/src/output.rs).
 const float REINHARD_KEY = 0.18;
 const float REINHARD_DELTA = 0.000001;

@@ -142,13 +142,13 @@ struct ParaboloidPush {
 // present push constants.
 struct PresentPush {
     uint stage;       // PRESENT_ACCUMULATE, PRESENT_TOTAL or PRESENT_MAP
-    float frames;     // the running mean's weight: its frames, this one included, and the kept prior's w_n
+    float frames;     // frames in the running mean, this one included
     uint reset;       // 1: the sum restarts at this frame's radiance
     uint swap_rb;     // 1: write B, G, R (a BGRA swapchain)
     float exposure;   // multiplies Reinhard's scale a / L̄_w (1: the PNG writer's mapping)
     uint groups;      // workgroups of the per-pixel stages (the stats buffer's partials)
-    float prior_delta;// w_n − w_{n−1}: the kept prior's weight added to the sum at this frame (0: none)
-    uint keep_prior;  // 1: this frame's radiance becomes the kept prior (a real-time frame)
+    uint prior;       // PRESENT_PRIOR_NONE, _KEEP or _USE: the last real-time frame's part
+    uint pad;
 };
 
 // reproject push constants.

@@ -62,7 +62,7 @@ void main() {
     words[k++] = floatBitsToUint(pp.offset.x);
     words[k++] = floatBitsToUint(pp.offset.y);
     put4u(uvec4(pr.stage, floatBitsToUint(pr.frames), pr.reset, pr.swap_rb));
-    put4u(uvec4(floatBitsToUint(pr.exposure), pr.groups, floatBitsToUint(pr.prior_delta), pr.keep_prior));
+    put4u(uvec4(floatBitsToUint(pr.exposure), pr.groups, pr.prior, pr.pad));
     put4u(uvec4(rp.history, floatBitsToUint(rp.plane), floatBitsToUint(rp.normal), rp.pad0));
     put4u(uvec4(dp.history, dp.step, dp.last, dp.add_direct));
     put4(vec4(dp.alpha, dp.sigma_l, dp.sigma_n, dp.sigma_z));

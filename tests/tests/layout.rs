@@ -79,8 +79,8 @@ fn shared_structs_have_the_same_layout_in_glsl_and_rust() {
         swap_rb: 9004,
         exposure: next(),
         groups: 9006,
-        prior_delta: next(),
-        keep_prior: 9008,
+        prior: 9007,
+        pad: 9008,
     };
     let rp = ReprojectPush { history: 9501, plane: next(), normal: next(), pad: 9504 };
     let dp = DenoisePush {

@@ -6,10 +6,11 @@
 use bounce::output::{linear_to_srgb8, tonemap_reinhard, RgbImage};
 use bounce_device::sync::Access;
 use bounce_device::{vk, Buffer, Image, ImageDesc};
+use bounce_graph::bindings::{STOP_PRIOR_FADE, STOP_PRIOR_FIRST, STOP_PRIOR_MAX};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
 use bounce_graph::graph::Graph;
 use bounce_graph::passes::direct::RADIANCE_FORMAT;
-use bounce_graph::passes::present::{stop_prior_weight, Present, PresentParams, Prior, STOP_PRIOR_FADE};
+use bounce_graph::passes::present::{Present, PresentParams, Prior};
 use bounce_graph::scene::Scene;
 use bounce_tests::TestGpu;
 use glam::Vec3;
@@ -164,17 +165,45 @@ fn presented_frames_accumulate_on_the_gpu_and_read_nothing_back() {
     assert_eq!(moved.radiance, fresh.render(&s).unwrap().radiance, "a reset mean is the frame itself");
 }
 
+/// present.comp's `prior_weight` on the host, in f64 with two-pass variances: the kept prior's weight in
+/// frames at pixel `i` of a `w`-wide image after the first `n` still `frames`.
+fn prior_weight(n: usize, frames: &[Vec<[f32; 4]>], prior: &[[f32; 4]], (w, h): (usize, usize), i: usize) -> f64 {
+    let fade = (1.0 - (n as f64 - 1.0) / STOP_PRIOR_FADE as f64).max(0.0);
+    if n == 1 {
+        return STOP_PRIOR_FIRST as f64 * fade;
+    }
+    let lum = |p: &[f32; 4]| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+    let (x, y) = ((i % w) as i64, (i / w) as i64);
+    let (mut v, mut dev, mut count) = (0.0, 0.0, 0.0);
+    for (dx, dy) in (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (dx, dy))) {
+        let (qx, qy) = (x + dx, y + dy);
+        if qx < 0 || qy < 0 || qx >= w as i64 || qy >= h as i64 {
+            continue;
+        }
+        let q = qy as usize * w + qx as usize;
+        let ls: Vec<f64> = frames[..n].iter().map(|f| lum(&f[q])).collect();
+        let mean = ls.iter().sum::<f64>() / n as f64;
+        v += ls.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / (n as f64 - 1.0);
+        dev += (lum(&prior[q]) - mean).powi(2);
+        count += 1.0;
+    }
+    v /= count;
+    let e2 = (dev / count - v / n as f64).max(1e-30);
+    (v / e2).min(STOP_PRIOR_MAX as f64) * fade
+}
+
 /// A stop: the present pass keeps a real-time frame D (`Prior::Keep`); the still frames after it
-/// (`Prior::Use`) show (Σ_{k ≤ n} P_k + w_n D) / (n + w_n), the mean of `render`'s frames with D worth
-/// w_n frames, fading to nothing: from frame STOP_PRIOR_FADE + 1 on the plain mean (within f32
-/// rounding of the prior's additions, which sum to 0). D has other random numbers than every P_k, so
-/// a pass that dropped it, or kept it too long, is off by w (D − P) / (n + w).
+/// (`Prior::Use`) show (Σ_{k ≤ n} P_k + w D) / (n + w), w per pixel by the rule of present.comp
+/// (against its host twin above), the mean of `render`'s frames with D worth w frames, and from frame
+/// STOP_PRIOR_FADE + 1 on the plain mean. D has other random numbers than every P_k, so a pass that
+/// dropped it, kept it too long, or weighed it alike everywhere (one frame's worth) is seen.
 #[test]
 fn a_still_mean_after_a_move_carries_the_last_real_time_frame_then_lets_it_go() {
     let gpu = TestGpu::new();
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let s = settings();
     let n = STOP_PRIOR_FADE as u32 + 2;
+    let size = (s.width as usize, s.height as usize);
     let mut reference = Renderer::new(&gpu, &scene).unwrap();
     let mut render = |seed: u64| reference.render(&FrameSettings { seed, ..s.clone() }).unwrap().radiance;
     let prior = render(s.seed + 1000);
@@ -185,32 +214,36 @@ fn a_still_mean_after_a_move_carries_the_last_real_time_frame_then_lets_it_go() 
     let shown = r.present(&FrameSettings { seed: s.seed + 1000, ..s.clone() }, &ldr, kept, true).unwrap();
     assert_eq!(shown.radiance, prior, "a real-time frame is shown alone");
     let mut sum = vec![[0f64; 3]; prior.len()];
-    for k in 0..n {
-        for (a, p) in sum.iter_mut().zip(&frames[k as usize]) {
+    for k in 0..n as usize {
+        for (a, p) in sum.iter_mut().zip(&frames[k]) {
             (0..3).for_each(|c| a[c] += p[c] as f64);
         }
-        let (count, w) = (k + 1, stop_prior_weight(k + 1) as f64);
-        let read = [0, 1, 7, n - 2, n - 1].contains(&k);
-        let p = PresentParams { prior: Prior::Use, ..params(count, k == 0) };
+        let count = k + 1;
+        let read = [0, 1, 7, n as usize - 2, n as usize - 1].contains(&k);
+        let p = PresentParams { prior: Prior::Use, ..params(count as u32, k == 0) };
         let got = r.present(&FrameSettings { seed: s.seed + k as u64, ..s.clone() }, &ldr, p, read).unwrap();
         if !read {
             continue;
         }
-        // What the picture shows, and the plain mean beside it.
-        let (mut worst, mut scale, mut off_plain) = (0f64, 0f64, 0f64);
-        for ((g, a), d) in got.radiance.iter().zip(&sum).zip(&prior) {
+        // What the picture shows, beside the plain mean and the mean with D as one frame everywhere.
+        let (mut worst, mut scale, mut off_plain, mut off_one) = (0f64, 0f64, 0f64, 0f64);
+        for (i, ((g, a), d)) in got.radiance.iter().zip(&sum).zip(&prior).enumerate() {
+            let w = prior_weight(count, &frames, &prior, size, i);
             for c in 0..3 {
                 let want = (a[c] + w * d[c] as f64) / (count as f64 + w);
                 worst = worst.max((g[c] as f64 - want).abs());
                 scale = scale.max(want.abs());
                 off_plain = off_plain.max((g[c] as f64 - a[c] / count as f64).abs());
+                off_one = off_one.max((g[c] as f64 - (a[c] + d[c] as f64) / (count as f64 + 1.0)).abs());
             }
         }
-        assert!(worst <= 1e-5 * scale, "frame {count}: {worst} from the blend (scale {scale})");
-        match w > 0.0 {
+        assert!(worst <= 1e-4 * scale, "frame {count}: {worst} from the blend (scale {scale})");
+        match (count as f32) < 1.0 + STOP_PRIOR_FADE {
             true => assert!(off_plain > 1e-3 * scale, "frame {count}: the prior left no trace ({off_plain})"),
             false => assert!(off_plain <= 1e-5 * scale, "frame {count}: the prior stayed ({off_plain})"),
         }
+        if count > 1 && (count as f32) < 1.0 + STOP_PRIOR_FADE {
+            assert!(off_one > 1e-3 * scale, "frame {count}: one weight everywhere ({off_one})");
+        }
     }
-    assert_eq!(stop_prior_weight(n - 1), 0.0, "the last frames read are past the fade");
 }

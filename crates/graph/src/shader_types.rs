@@ -209,7 +209,7 @@ const _: () = assert!(offset_of!(ParaboloidPush, offset) == 8);
 pub struct PresentPush {
     /// `PRESENT_ACCUMULATE`, `PRESENT_TOTAL` or `PRESENT_MAP`.
     pub stage: u32,
-    /// The running mean's weight: its frames, this one included, and the kept prior's w_n.
+    /// Frames in the running mean, this one included.
     pub frames: f32,
     /// 1: the sum restarts at this frame's radiance.
     pub reset: u32,
@@ -219,10 +219,9 @@ pub struct PresentPush {
     pub exposure: f32,
     /// Workgroups of the per-pixel stages.
     pub groups: u32,
-    /// w_n − w_{n−1}: the kept prior's weight added to the sum at this frame (0: none).
-    pub prior_delta: f32,
-    /// 1: this frame's radiance becomes the kept prior (a real-time frame).
-    pub keep_prior: u32,
+    /// `PRESENT_PRIOR_NONE`, `_KEEP` or `_USE`: the last real-time frame's part.
+    pub prior: u32,
+    pub pad: u32,
 }
 const _: () = assert!(size_of::<PresentPush>() == 32);
 const _: () = assert!(offset_of!(PresentPush, exposure) == 16);

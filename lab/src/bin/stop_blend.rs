@@ -2,11 +2,11 @@
 //! the last real-time (denoised) frame D kept in it as w_n frames' worth, (Σ P_k + w_n D) / (n + w_n),
 //! for prior weights w_n = W · max(0, 1 − (n − 1) / N0) (W = 0: the plain mean, as the viewer had it).
 //! Prints each schedule's relMSE against the truth after n still frames, and the stop's jump: the
-//! relMSE of the first still display against D. Rows `aWMAX`: a weight per pixel, not built (one still
-//! frame's luminance variance v over D's squared error e², both pooled over 3 × 3 pixels: the frames'
-//! sample variance from frame 2 on, e² = the pooled (l_D − l_mean)² less v / n; capped at WMAX, faded
-//! over 32 frames; the first frame takes W = 1, where one frame gives no variance). The figures of
-//! BENCHMARKS.md, "Real time under motion".
+//! relMSE of the first still display against D. Rows `aWMAX`: a weight per pixel, the present pass's
+//! rule at WMAX = 16 (one still frame's luminance variance v over D's squared error e², both pooled over
+//! 3 × 3 pixels: the frames' sample variance from frame 2 on, e² = the pooled (l_D − l_mean)² less v /
+//! n; capped at WMAX, faded over 32 frames; the first frame takes W = 1, where one frame gives no
+//! variance). The figures of BENCHMARKS.md, "Real time under motion".
 //!
 //!     cargo run --release -p bounce-lab --bin stop-blend PRIOR.exr FRAMES_DIR TRUTH.exr
 //!

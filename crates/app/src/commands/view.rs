@@ -23,10 +23,11 @@
 //! `coherent` (the default) every frame after a change starts again from `--seed`, so a moving light's
 //! frames share their random numbers; `fresh` gives frame k of the run `--seed + k`.
 //!
-//! When the camera or a light stops, the still view's new mean carries the last real-time frame as one
-//! frame's worth, fading out over its first 32 frames (`Prior`, passes/present.rs): the picture goes on
-//! from the denoised frame instead of breaking into one still frame's noise, and is the plain mean after.
-//! A screenshot is what the picture shows (its EXR's `stop_prior_frames` names the prior's weight).
+//! When the camera or a light stops, the still view's new mean carries the last real-time frame, per
+//! pixel as many frames' worth as its error against the still frames' noise warrants, fading out over
+//! its first 32 frames (`Prior`, passes/present.rs): the picture goes on from the denoised frame instead
+//! of breaking into one still frame's noise, and is the plain mean after. A screenshot is what the
+//! picture shows (its EXR's `carries_last_real_time_frame` says whether the prior was in it).
 //!
 //! A still view's frames move on to a new VPL set as `render --time-limit`'s do (`progressive::VplSets`:
 //! the light side at most 1/28 of the time), so that the mean converges to the one-bounce image, not
@@ -478,7 +479,7 @@ impl Viewer<'_> {
                     PathBuf::from(format!("bounce-screenshot-{}.png", st.shots))
                 }
             };
-            self.screenshot(&path, &f, params.prior_weight())?;
+            self.screenshot(&path, &f, params.carries_prior())?;
         }
         Ok(last)
     }
@@ -508,8 +509,8 @@ impl Viewer<'_> {
     }
 
     /// Writes the frame's read-back mean (`f.radiance`) as EXR and PNG.
-    /// `prior`: the last real-time frame's weight in the mean (frames' worth; a stop's first frames).
-    fn screenshot(&mut self, png: &Path, f: &FrameOutput, prior: f32) -> Result<()> {
+    /// `prior`: the mean carries the last real-time frame (a stop's first frames).
+    fn screenshot(&mut self, png: &Path, f: &FrameOutput, prior: bool) -> Result<()> {
         let st = self.state.as_mut().expect("started");
         let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
         let exr = png.with_extension("exr");
@@ -519,7 +520,7 @@ impl Viewer<'_> {
             ("method", self.settings.method.name().to_string()),
             ("vpls", self.settings.vpls.to_string()),
             ("frames", st.frames.to_string()),
-            ("stop_prior_frames", prior.to_string()),
+            ("carries_last_real_time_frame", prior.to_string()),
             ("seed", format!("{} ({})", self.settings.seed, self.args.animation.temporal().name())),
             ("light_path", self.args.animation.light_path.clone().unwrap_or_else(|| "none".into())),
             ("device", st.gpu.name.clone()),
@@ -535,7 +536,7 @@ impl Viewer<'_> {
             exr.display(),
             mean,
             if mean == 1 { "" } else { "s" },
-            if prior > 0.0 { format!(" with the last real-time frame as {prior}") } else { String::new() },
+            if prior { " with the last real-time frame" } else { "" },
             st.total,
             st.realtime_frames,
             if copies == 1 { "y" } else { "ies" }

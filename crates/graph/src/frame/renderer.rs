@@ -347,6 +347,8 @@ impl Renderer {
         let (total, per_chunk) = ctx.chunking(s, &i);
         let mut log = FrameLog::default();
         let mut read = Read::default();
+        // What the presented image read back is divided by for its mean (present's `add`).
+        let mut divide_by = 1.0f32;
         for_each_chunk(total, per_chunk, progress, |chunk, last| {
             let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
             let out = build_frame(&ctx.passes, &mut g, s, &i, chunk)?;
@@ -354,16 +356,19 @@ impl Renderer {
             let presented = match &present {
                 Some(p) if last => {
                     let mut ldr = g.import_image(p.ldr);
-                    let sum = ctx.passes.present.add(&mut g, &out.radiance, &mut ldr, s.width, s.height, p.params)?;
+                    let shown = ctx.passes.present.add(&mut g, &out.radiance, &mut ldr, s.width, s.height, p.params)?;
                     g.export(&ldr);
-                    Some(sum)
+                    Some(shown)
                 }
                 _ => None,
             };
             let done = g.execute()?;
             log.add(&done);
             match (&present, presented) {
-                (Some(p), Some(sum)) if p.read_mean => read.radiance = done.read_image(&sum)?,
+                (Some(p), Some((image, k))) if p.read_mean => {
+                    read.radiance = done.read_image(&image)?;
+                    divide_by = k;
+                }
                 (Some(_), _) => {}
                 (None, _) => {
                     if done.ran.contains(&"cdf_reduce") {
@@ -383,9 +388,8 @@ impl Renderer {
         state.previous_lights = Some(state.lights.clone());
         state.realtime_frames += (s.method == Method::Realtime) as u64;
         let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
-        if let Some(p) = &present {
-            let k = p.params.weight();
-            radiance.iter_mut().for_each(|px| *px = px.map(|c| c / k));
+        if present.is_some() {
+            radiance.iter_mut().for_each(|px| *px = px.map(|c| c / divide_by));
         }
         let stderr = read.second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
         log.warnings.extend(rsm_warning(s));
