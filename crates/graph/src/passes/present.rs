@@ -3,9 +3,10 @@
 //!
 //! Inputs: the frame's `radiance` (RGBA32F W×H). Kept: `present.sum` (RGBA32F W×H, a temporal image:
 //! the sum of the frames since the last reset), `present.prior` (the last real-time frame, kept by
-//! [`Prior::Keep`]) and `present.moments` (a stop's luminance moments). Output: an RGBA8 UNORM W×H image the caller owns
-//! ([`Present::ldr_image`], imported into the graph), sRGB-encoded bytes in the swapchain's channel
-//! order. Transient: `present.stats`, one vec4 per workgroup plus one.
+//! [`Prior::Keep`]) and `present.moments` (a stop's luminance moments). Output: an RGBA8 UNORM W×H
+//! image the caller owns ([`Present::ldr_image`], imported into the graph), sRGB-encoded bytes in the
+//! swapchain's channel order. Transient: `present.stats`, one vec4 per workgroup plus one, and
+//! `present.mean` (a stop's mean).
 //!
 //! **A stop** ([`Prior::Use`]): when the camera or a light stops, the viewer's still frames start a new
 //! mean, whose first frames can be far noisier than the denoised real-time frame shown while it moved
@@ -14,8 +15,8 @@
 //! as w frames' worth, per pixel: mean = (Σ_{k ≤ n} P_k + w D) / (n + w), shown and read back from
 //! `present.mean`. w = v / e², v one still frame's luminance variance and e² D's squared error, both
 //! over the 3 × 3 pixels around it (from the frames' luminance mean and squared deviations in
-//! `present.moments`, kept by Welford's update; e² = mean (l_D − l̄)² less v / n): the weight that makes the blend's error least, at most
-//! `STOP_PRIOR_MAX`. At the first frame, where one frame shows no variance, w = `STOP_PRIOR_FIRST`.
+//! `present.moments`, kept by Welford's update; e² = mean (l_D − l̄)² less v / n): the weight that
+//! makes the blend's error least, at most `STOP_PRIOR_MAX`. At the first frame, where one frame shows no variance, w = `STOP_PRIOR_FIRST`.
 //! It fades to 0 over `STOP_PRIOR_FADE` frames; from then on the picture is the plain unbiased mean.
 //! Chosen over 22 views stopping after a camera walk (the generated suite's scenes 0 and 2, Sibenik and
 //! the two rooms; BENCHMARKS.md, "Real time under motion"): the displayed error after 4 still frames
