@@ -129,7 +129,6 @@ impl Present {
         let prior_kept = g.temporal_image("present.prior", desc("present.prior"), &());
         let mut prior = prior_kept.handle;
         let mut moments = g.temporal_image("present.moments", desc("present.moments"), &()).handle;
-        let mut mean = g.create_image(desc("present.mean"));
         // A new sum image holds nothing to add to, and a prior never kept nothing to carry.
         let reset = p.reset || kept.fresh;
         let prior_mode = match p.prior {
@@ -137,6 +136,9 @@ impl Present {
             Prior::Use if !prior_kept.fresh && p.carries_prior() => PRESENT_PRIOR_USE,
             _ => PRESENT_PRIOR_NONE,
         };
+        // The blended mean, only while a stop carries the prior (otherwise the sum stands in at its binding,
+        // which nothing then reads through).
+        let mut mean = (prior_mode == PRESENT_PRIOR_USE).then(|| g.create_image(desc("present.mean")));
         let groups = width.div_ceil(WG_2D) * height.div_ceil(WG_2D);
         let mut stats = g.create_buffer(BufferDesc::storage("present.stats", 16 * (groups as u64 + 1)));
         let push = PresentPush {
@@ -149,43 +151,44 @@ impl Present {
             ..PresentPush::default()
         };
         let (radiance, o, s, st) = (*radiance, *out, sum, stats);
-        let (pr, mo, me) = (prior, moments, mean);
-        g.add_pass("present")
+        let (pr, mo, me) = (prior, moments, mean.unwrap_or(sum));
+        let mut b = g
+            .add_pass("present")
             .read(&radiance, Access::ComputeRead)
             .write(&mut sum, Access::ComputeWrite)
             .write(&mut prior, Access::ComputeWrite)
-            .write(&mut moments, Access::ComputeWrite)
-            .overwrite(&mut mean, Access::ComputeWrite)
-            .overwrite(&mut stats, Access::ComputeWrite)
-            .overwrite(out, Access::ComputeWrite)
-            .record(move |ctx| {
-                let writes = DescriptorWrites::new()
-                    .sampled_image(B_PRESENT_RADIANCE, ctx.image(&radiance), self.sampler.raw)
-                    .storage_image(B_PRESENT_SUM, ctx.image(&s))
-                    .storage_image(B_PRESENT_OUT, ctx.image(&o))
-                    .storage_buffer(B_PRESENT_STATS, ctx.buffer(&st))
-                    .storage_image(B_PRESENT_PRIOR, ctx.image(&pr))
-                    .storage_image(B_PRESENT_MOMENTS, ctx.image(&mo))
-                    .storage_image(B_PRESENT_MEAN, ctx.image(&me));
-                let grid = [width, height, 1];
-                let wg = [WG_2D, WG_2D, 1];
-                let stage = |stage| PresentPush { stage, ..push };
-                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_ACCUMULATE)), grid, wg);
-                ctx.serialize(&s);
-                if push.prior == PRESENT_PRIOR_USE {
-                    // The weights read the moments around each pixel.
-                    ctx.serialize(&mo);
-                    pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_WEIGHT)), grid, wg);
-                    ctx.serialize(&me);
-                }
-                ctx.serialize(&st);
-                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_TOTAL)), wg, wg);
-                ctx.serialize(&st);
-                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_MAP)), grid, wg);
-            });
-        Ok(match prior_mode {
-            PRESENT_PRIOR_USE => (mean, 1.0),
-            _ => (sum, push.frames),
+            .write(&mut moments, Access::ComputeWrite);
+        if let Some(m) = mean.as_mut() {
+            b = b.overwrite(m, Access::ComputeWrite);
+        }
+        b.overwrite(&mut stats, Access::ComputeWrite).overwrite(out, Access::ComputeWrite).record(move |ctx| {
+            let writes = DescriptorWrites::new()
+                .sampled_image(B_PRESENT_RADIANCE, ctx.image(&radiance), self.sampler.raw)
+                .storage_image(B_PRESENT_SUM, ctx.image(&s))
+                .storage_image(B_PRESENT_OUT, ctx.image(&o))
+                .storage_buffer(B_PRESENT_STATS, ctx.buffer(&st))
+                .storage_image(B_PRESENT_PRIOR, ctx.image(&pr))
+                .storage_image(B_PRESENT_MOMENTS, ctx.image(&mo))
+                .storage_image(B_PRESENT_MEAN, ctx.image(&me));
+            let grid = [width, height, 1];
+            let wg = [WG_2D, WG_2D, 1];
+            let stage = |stage| PresentPush { stage, ..push };
+            pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_ACCUMULATE)), grid, wg);
+            ctx.serialize(&s);
+            if push.prior == PRESENT_PRIOR_USE {
+                // The weights read the moments around each pixel.
+                ctx.serialize(&mo);
+                pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_WEIGHT)), grid, wg);
+                ctx.serialize(&me);
+            }
+            ctx.serialize(&st);
+            pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_TOTAL)), wg, wg);
+            ctx.serialize(&st);
+            pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&stage(PRESENT_MAP)), grid, wg);
+        });
+        Ok(match mean {
+            Some(m) => (m, 1.0),
+            None => (sum, push.frames),
         })
     }
 }
