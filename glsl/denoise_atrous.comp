@@ -5,13 +5,18 @@
 // variance; the variance filtered with the squared weights. The last iteration multiplies the
 // illumination by the albedo again and adds the direct light. Two forms (passes/denoise.rs says why):
 //
-// - gather, the first DENOISE_GATHER_ITERATIONS iterations (SVGF's): c_p ← Σ_q w_pq c_q / Σ_q w_pq, the
-//   stops p's own (its plane, its 3 × 3-blurred variance). A noisy pixel takes from its quiet neighbours
-//   without giving back, which is what removes a lone hit; what it held is lost.
+// - gather, the first DENOISE_GATHER_ITERATIONS iterations: the stops p's own (its plane, its 3 × 3-
+//   blurred variance), and the output the intercept a of the weighted least-squares plane through the
+//   taps, c(q) ≈ a + b · d_q (d_q the tap's offset in taps; a local linear regression), with a ridge of
+//   DENOISE_RIDGE · Σw on b, clamped into the taps' range. Where the taps are balanced around p (Σ w d =
+//   0) it is SVGF's weighted mean Σ w c / Σ w; where the stops cut the kernel on one side (a plane's edge,
+//   a bright neighbour rejected) the mean is pulled toward the other side's values, and the fit follows
+//   the slope instead. A noisy pixel still takes from its quiet neighbours without giving back, which is
+//   what removes a lone hit.
 // - exchange, the rest: c_p ← c_p + Σ_q w_pq (c_q − c_p) with w_pq = w_qp (h times symmetric stops: the
 //   larger of the two plane distances, the luminance against the geometric mean of the two pixels'
 //   standard deviations) and the weight that the stops reject left on c_p. Whatever q gives p, p gives q
-//   in return: the light is moved, never lost, so the wide taps keep a peak at a plane's edge.
+//   in return: the light is moved, never lost.
 #include "shared/denoise.glsl"
 
 layout(set = 0, binding = B_DENOISE_IN) uniform sampler2D ping;
@@ -34,8 +39,19 @@ vec4 gather(ivec2 px, Surface p, vec4 c) {
     }
     float sd = sqrt(max(var / wsum, 0.0));
     float lp = luminance(c.rgb);
-    vec3 sum_c = c.rgb * (KERNEL[0] * KERNEL[0]);
-    float sum_v = c.a * (KERNEL[0] * KERNEL[0]) * (KERNEL[0] * KERNEL[0]), sum_w = KERNEL[0] * KERNEL[0];
+    // The weighted sums of the plane's normal equations, [s0 s1ᵀ; s1 S2] [a; b] = [t0; T1] per channel
+    // (S2 as xx, xy, yy; T1 as tx, ty). The variance is filtered as the weighted mean's, Σ w² σ² / (Σ w)²
+    // (the next stops' scale): the intercept's own, Σ ℓ² σ² with ℓ_q = w_q (1 − k · d_q) / (s0 − k · s1),
+    // larger where the taps lie on one side, cost lavapipe 1.5–2× this stage's time for 0.96× the flicker
+    // and less of a corner's light kept (BENCHMARKS.md, "Things tried").
+    float w0 = KERNEL[0] * KERNEL[0];
+    float s0 = w0;
+    vec2 s1 = vec2(0.0);
+    vec3 s2 = vec3(0.0);
+    vec3 t0 = w0 * c.rgb;
+    vec3 tx = vec3(0.0), ty = vec3(0.0);
+    float v = w0 * w0 * c.a;
+    vec3 cmin = c.rgb, cmax = c.rgb;
     for (int dy = -2; dy <= 2; dy++) {
         for (int dx = -2; dx <= 2; dx++) {
             if (dx == 0 && dy == 0) continue;
@@ -45,12 +61,32 @@ vec4 gather(ivec2 px, Surface p, vec4 c) {
             float w = KERNEL[abs(dx)] * KERNEL[abs(dy)]
                 * geometry_weight(p, surface_at(q), length(vec2(dx, dy)) * float(pc.step))
                 * luminance_weight(lp, luminance(cq.rgb), sd);
-            sum_c += w * cq.rgb;
-            sum_v += w * w * cq.a;
-            sum_w += w;
+            if (!(w > 0.0)) continue;
+            vec2 d = vec2(dx, dy);
+            s0 += w;
+            s1 += w * d;
+            s2 += w * vec3(d.x * d.x, d.x * d.y, d.y * d.y);
+            t0 += w * cq.rgb;
+            tx += w * d.x * cq.rgb;
+            ty += w * d.y * cq.rgb;
+            v += w * w * cq.a;
+            cmin = min(cmin, cq.rgb);
+            cmax = max(cmax, cq.rgb);
         }
     }
-    return vec4(sum_c / sum_w, sum_v / (sum_w * sum_w));
+    // a = (t0 − k · T1) / (s0 − k · s1) with k = M⁻¹ s1, M = S2 + λ s0 I (the ridge: a fit over few or
+    // collinear taps stays near the mean; without taps, or nearly degenerate, the mean itself).
+    vec3 m = s2 + vec3(DENOISE_RIDGE * s0, 0.0, DENOISE_RIDGE * s0);
+    float det = m.x * m.z - m.y * m.y;
+    vec2 k = det > 0.0 ? vec2(m.z * s1.x - m.y * s1.y, m.x * s1.y - m.y * s1.x) / det : vec2(0.0);
+    float den = s0 - dot(k, s1);
+    if (!(den > 1e-3 * s0)) {
+        k = vec2(0.0);
+        den = s0;
+    }
+    vec3 a = (t0 - k.x * tx - k.y * ty) / den;
+    a = clamp(a, cmin, cmax);
+    return vec4(a, v / (s0 * s0));
 }
 
 vec4 exchange(ivec2 px, Surface p, vec4 c) {

@@ -221,12 +221,18 @@ const float END_BALL_MAX_RADIUS = 0.03;
 #define B_DENOISE_OUT 64
 // À-trous iterations (tap spacings 1, 2, 4, 8, 16: SVGF's five).
 #define DENOISE_ITERATIONS 5
-// The à-trous iterations that gather (SVGF's normalized average: a lone hit removed, light lost at a
-// plane's edge); the later ones exchange (light moved, never lost). Measured over the generated suite
-// under motion (BENCHMARKS.md, "Real time under motion"), against 5 (all gather): 2 gives 0.95× the
-// denoised relMSE, 0.97× the flicker and keeps more of a corner light (the lowest image mean 0.52 → 0.68
-// of the truth's); 1 keeps 0.80 for 1.06× the flicker, 3 0.58, 0 (all exchanging) 0.89 for 1.42×.
-#define DENOISE_GATHER_ITERATIONS 2
+// The à-trous iterations that gather (a lone hit removed; each fits a plane to its taps, a local linear
+// regression, so a ramp cut by a plane's edge keeps its slope); the later ones exchange (light moved,
+// never lost). Measured over the generated suite under motion (BENCHMARKS.md, "Real time under motion"),
+// against two gathering by weighted means (SVGF's) then three exchanging: with 2 / 3 / 4 / 5 fitting
+// gathers the denoised relMSE 0.94× / 0.90× / 0.88× / 0.88× (worst run 1.98× / 1.27× / 1.12× / 1.12×),
+// the flicker 1.03× / 0.97× / 0.94× / 0.94×, the lowest image mean (a corner light's) 0.68 → 0.83 /
+// 0.78 / 0.75 / 0.73; with 4, the 54 runs held out 0.91× / 0.94×, 0.74 → 0.79.
+#define DENOISE_GATHER_ITERATIONS 4
+// The gathers' ridge λ on the plane's slope, in units of the taps' weight sum: 0.05 / 0.1 / 0.2 gave
+// 0.89× / 0.88× / 0.89× the denoised relMSE (worst run 1.16× / 1.12× / 1.07×), 0.97× / 0.94× / 0.93× the
+// flicker and 0.78 / 0.75 / 0.70 of a corner light (the same runs).
+const float DENOISE_RIDGE = 0.1;
 // The temporal stage clamps the history into this many standard deviations around the mean of this
 // frame's 5 × 5 neighbourhood (per channel), so that lighting that changed is not dragged along.
 // Measured (BENCHMARKS.md, "Real time under motion"): 2 and 3 both halved the denoised error on Sibenik

@@ -23,30 +23,40 @@
 //!   h(k) with edge stops w = h · max(0, n_p · n_q)^σ_n · exp(−|n_p · (x_q − x_p)| / (σ_z θ_px |x_p − eye|
 //!   · |Δ|)) · exp(−|l_p − l_q| / (σ_l √(G₃ₓ₃ ∗ σ²)_p)); the variance is filtered with w². The plane
 //!   distance in pixel footprints makes the depth stop scale-free. The first `DENOISE_GATHER_ITERATIONS`
-//!   gather (SVGF's Ī_p ← Σ w Ī_q / Σ w); the rest exchange, Ī_p ← Ī_p + Σ w_pq (Ī_q − Ī_p), with
-//!   symmetric stops (the larger plane distance; the luminance against √(σ_p σ_q)) and the rejected
-//!   weight left on p. The last iteration writes ρ · Ī + L_direct.
+//!   (four) gather: Ī_p ← a, the intercept of the plane a + b · d fitted to the taps by weighted least
+//!   squares (d the tap's offset; a ridge `DENOISE_RIDGE` · Σ w on b; clamped into the taps' range),
+//!   which is SVGF's Ī_p ← Σ w Ī_q / Σ w wherever Σ w d = 0; the last exchanges, Ī_p ← Ī_p + Σ w_pq
+//!   (Ī_q − Ī_p), with symmetric stops (the larger plane distance; the luminance against √(σ_p σ_q)) and
+//!   the rejected weight left on p. The last iteration writes ρ · Ī + L_direct.
 //!
 //! Why the measured variance and not SVGF's: SVGF's σ² = E[l²] − E[l]² over the frames (over the 7 × 7
 //! neighbourhood for a young history) counts the signal's own variation as noise, so next to a bright
 //! peak (a light in a corner) every pixel's stop accepts everything and the à-trous, a normalized
 //! gather, averages the peak into its dim plane: the light-corner scenes' denoised images held 0.33–0.48
-//! of the truth's mean. With the measured variance they held 0.55–0.75 (0.68–0.83 since the wide
-//! iterations exchange), and the generated suite's denoised error fell by a fifth to a quarter (and by as
+//! of the truth's mean. With the measured variance they held 0.55–0.75 (0.75–0.86 as built now, the
+//! gathers fitting planes), and the generated suite's denoised error fell by a fifth to a quarter (and by as
 //! much again with the gradient test) (BENCHMARKS.md, "Real time under motion").
 //!
-//! Why the wide iterations exchange and the first two gather: a normalized gather loses light wherever the
-//! signal peaks at a plane's edge. Its weights sum to 1 over each output pixel, not over each input
-//! pixel: a pixel on the edge has fewer taps, so its own value counts for more in its own output and
-//! less in its neighbours', which normalize by their larger sums (in 1-D, a B3 tap row cut at the edge
-//! passes on 0.87 of the edge pixel's light). Every iteration loses that share again, and a corner's light
-//! sits on two edges: on the generated light-corner scenes under motion 1, 2, 3 and 5 gathering
-//! iterations kept 0.79–0.88, 0.68–0.83, 0.59–0.80 and 0.52–0.75 of the truth's image mean. An exchange
-//! with symmetric weights is a doubly stochastic filter: it keeps every constant and every sum, so it
-//! moves light along a plane and loses none. But it cannot take a lone hit away from where it fell (a
-//! pixel gives back what it takes), which the first, narrow gathers do: all five exchanging kept 0.89 of
-//! the corner's light for 1.42× the flicker; two gathers then three exchanges lower both the error and the
-//! flicker of five gathers (BENCHMARKS.md, "Real time under motion").
+//! Why the gathers fit planes: a weighted mean is pulled toward the taps that the stops keep, and at a
+//! plane's edge (or beside a neighbour the luminance stop rejects) those lie on one side: where the light
+//! rises toward the edge, as next to a light in a corner, the edge pixel takes the dimmer inside's values
+//! and the peak sinks, iteration by iteration. The intercept of a plane fitted to the same taps follows
+//! the slope to the edge, and is the weighted mean itself where the taps are balanced (Dammertz's and
+//! SVGF's filters are the zeroth-order case of this local regression). On the generated suite under motion
+//! four fitting gathers then one exchange had 0.88× the denoised relMSE and 0.94× the flicker of two
+//! gathers by weighted means then three exchanges, 0.91× and 0.94× on the scenes held out, and kept more
+//! of a corner light's (the lowest image mean 0.68 → 0.75) (BENCHMARKS.md, "Real time under motion").
+//!
+//! Why the last iteration exchanges: a gather, fitted or not, loses light wherever the signal peaks at a
+//! plane's edge. Its weights sum to 1 over each output pixel, not over each input pixel: a pixel on the
+//! edge has fewer taps, so its own value counts for more in its own output and less in its neighbours',
+//! which normalize by their larger sums (in 1-D, a B3 tap row cut at the edge passes on 0.87 of the edge
+//! pixel's light). An exchange with symmetric weights is a doubly stochastic filter: it keeps every
+//! constant and every sum, so it moves light along a plane and loses none. But it cannot take a lone hit
+//! away from where it fell (a pixel gives back what it takes), which the gathers do: with weighted means,
+//! all five exchanging kept 0.89 of a corner's light for 1.42× the flicker, two gathers then three
+//! exchanges lowered both the error and the flicker of five gathers; with fitted planes, four then one
+//! lowered both again (BENCHMARKS.md, "Real time under motion").
 //!
 //! Why the history is looked up bilinearly, and only where all four pixels saw the same surface: under a
 //! moving camera a point falls between last frame's pixel centres, and the pixel it fell in holds the
