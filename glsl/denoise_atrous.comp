@@ -25,6 +25,49 @@ layout(set = 0, binding = B_DENOISE_OUT, rgba32f) uniform writeonly image2D out_
 
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
 
+// A plane fitted to weighted samples c at offsets d by least squares, c ≈ a + b · d: the sums of its
+// normal equations [s0 s1ᵀ; s1 S2] [a; b] = [t0; T1] per channel (S2 as xx, xy, yy; T1 as tx, ty),
+// and the samples' range. The gathers keep its intercept a (passes/denoise.rs says why).
+struct PlaneFit {
+    float s0;
+    vec2 s1;
+    vec3 s2;
+    vec3 t0, tx, ty;
+    vec3 lo, hi;
+};
+
+PlaneFit plane_fit(float w, vec3 c) {
+    return PlaneFit(w, vec2(0.0), vec3(0.0), w * c, vec3(0.0), vec3(0.0), c, c);
+}
+
+void plane_add(inout PlaneFit f, vec2 d, float w, vec3 c) {
+    f.s0 += w;
+    f.s1 += w * d;
+    f.s2 += w * vec3(d.x * d.x, d.x * d.y, d.y * d.y);
+    f.t0 += w * c;
+    f.tx += w * d.x * c;
+    f.ty += w * d.y * c;
+    if (w > 0.0) {
+        f.lo = min(f.lo, c);
+        f.hi = max(f.hi, c);
+    }
+}
+
+// a = (t0 − k · T1) / (s0 − k · s1) with k = M⁻¹ s1, M = S2 + ridge · s0 · I (a fit over few or collinear
+// samples stays near their mean; nearly degenerate, the mean itself), clamped into the samples' range.
+vec3 plane_intercept(PlaneFit f, float ridge) {
+    vec3 m = f.s2 + vec3(ridge * f.s0, 0.0, ridge * f.s0);
+    float det = m.x * m.z - m.y * m.y;
+    vec2 k = det > 0.0 ? vec2(m.z * f.s1.x - m.y * f.s1.y, m.x * f.s1.y - m.y * f.s1.x) / det : vec2(0.0);
+    float den = f.s0 - dot(k, f.s1);
+    if (!(den > 1e-3 * f.s0)) {
+        k = vec2(0.0);
+        den = f.s0;
+    }
+    return clamp((f.t0 - k.x * f.tx - k.y * f.ty) / den, f.lo, f.hi);
+}
+
+
 vec4 gather(ivec2 px, Surface p, vec4 c) {
     // The variance blurred by a 3 × 3 Gaussian: the luminance stop's scale.
     float var = 0.0, wsum = 0.0;
@@ -39,19 +82,13 @@ vec4 gather(ivec2 px, Surface p, vec4 c) {
     }
     float sd = sqrt(max(var / wsum, 0.0));
     float lp = luminance(c.rgb);
-    // The weighted sums of the plane's normal equations, [s0 s1ᵀ; s1 S2] [a; b] = [t0; T1] per channel
-    // (S2 as xx, xy, yy; T1 as tx, ty). The variance is filtered as the weighted mean's, Σ w² σ² / (Σ w)²
-    // (the next stops' scale): the intercept's own, Σ ℓ² σ² with ℓ_q = w_q (1 − k · d_q) / (s0 − k · s1),
-    // larger where the taps lie on one side, cost lavapipe 1.5–2× this stage's time for 0.96× the flicker
-    // and less of a corner's light kept (BENCHMARKS.md, "Things tried").
+    // The variance is filtered as the weighted mean's, Σ w² σ² / (Σ w)² (the next stops' scale): the
+    // intercept's own, Σ ℓ² σ² with ℓ_q = w_q (1 − k · d_q) / (s0 − k · s1), larger where the taps lie on
+    // one side, cost lavapipe 1.5–2× this stage's time for 0.96× the flicker and less of a corner's light
+    // kept (BENCHMARKS.md, "Things tried").
     float w0 = KERNEL[0] * KERNEL[0];
-    float s0 = w0;
-    vec2 s1 = vec2(0.0);
-    vec3 s2 = vec3(0.0);
-    vec3 t0 = w0 * c.rgb;
-    vec3 tx = vec3(0.0), ty = vec3(0.0);
+    PlaneFit fit = plane_fit(w0, c.rgb);
     float v = w0 * w0 * c.a;
-    vec3 cmin = c.rgb, cmax = c.rgb;
     for (int dy = -2; dy <= 2; dy++) {
         for (int dx = -2; dx <= 2; dx++) {
             if (dx == 0 && dy == 0) continue;
@@ -61,32 +98,11 @@ vec4 gather(ivec2 px, Surface p, vec4 c) {
             float w = KERNEL[abs(dx)] * KERNEL[abs(dy)]
                 * geometry_weight(p, surface_at(q), length(vec2(dx, dy)) * float(pc.step))
                 * luminance_weight(lp, luminance(cq.rgb), sd);
-            if (!(w > 0.0)) continue;
-            vec2 d = vec2(dx, dy);
-            s0 += w;
-            s1 += w * d;
-            s2 += w * vec3(d.x * d.x, d.x * d.y, d.y * d.y);
-            t0 += w * cq.rgb;
-            tx += w * d.x * cq.rgb;
-            ty += w * d.y * cq.rgb;
+            plane_add(fit, vec2(dx, dy), w, cq.rgb);
             v += w * w * cq.a;
-            cmin = min(cmin, cq.rgb);
-            cmax = max(cmax, cq.rgb);
         }
     }
-    // a = (t0 − k · T1) / (s0 − k · s1) with k = M⁻¹ s1, M = S2 + λ s0 I (the ridge: a fit over few or
-    // collinear taps stays near the mean; without taps, or nearly degenerate, the mean itself).
-    vec3 m = s2 + vec3(DENOISE_RIDGE * s0, 0.0, DENOISE_RIDGE * s0);
-    float det = m.x * m.z - m.y * m.y;
-    vec2 k = det > 0.0 ? vec2(m.z * s1.x - m.y * s1.y, m.x * s1.y - m.y * s1.x) / det : vec2(0.0);
-    float den = s0 - dot(k, s1);
-    if (!(den > 1e-3 * s0)) {
-        k = vec2(0.0);
-        den = s0;
-    }
-    vec3 a = (t0 - k.x * tx - k.y * ty) / den;
-    a = clamp(a, cmin, cmax);
-    return vec4(a, v / (s0 * s0));
+    return vec4(plane_intercept(fit, DENOISE_RIDGE), v / (fit.s0 * fit.s0));
 }
 
 vec4 exchange(ivec2 px, Surface p, vec4 c) {
