@@ -67,7 +67,6 @@ vec3 plane_intercept(PlaneFit f, float ridge) {
     return clamp((f.t0 - k.x * f.tx - k.y * f.ty) / den, f.lo, f.hi);
 }
 
-
 vec4 gather(ivec2 px, Surface p, vec4 c) {
     // The variance blurred by a 3 × 3 Gaussian: the luminance stop's scale.
     float var = 0.0, wsum = 0.0;

@@ -45,7 +45,7 @@
 //! SVGF's filters are the zeroth-order case of this local regression). On the generated suite under motion
 //! four fitting gathers then one exchange had 0.88× the denoised relMSE and 0.94× the flicker of two
 //! gathers by weighted means then three exchanges, 0.91× and 0.94× on the scenes held out, and kept more
-//! of a corner light's (the lowest image mean 0.68 → 0.75) (BENCHMARKS.md, "Real time under motion").
+//! of the light next to a corner (the lowest image mean 0.68 → 0.75) (BENCHMARKS.md, "Real time under motion").
 //!
 //! Why the last iteration exchanges: a gather, fitted or not, loses light wherever the signal peaks at a
 //! plane's edge. Its weights sum to 1 over each output pixel, not over each input pixel: a pixel on the
