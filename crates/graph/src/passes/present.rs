@@ -20,10 +20,9 @@
 //! It fades to 0 over `STOP_PRIOR_FADE` frames; from then on the picture is the plain unbiased mean.
 //! Chosen over 22 views stopping after a camera walk (the generated suite's scenes 0 and 2, Sibenik and
 //! the two rooms; BENCHMARKS.md, "Real time under motion"): the displayed error after 4 still frames
-//! 0.63× the plain mean's (geomean; worst 0.92×), over the first 64 frames 0.80× (worst 1.00×); one
-//! frame's worth everywhere: 0.76× and 0.86×. At the first frame 0.44× (worst 1.18×, light-wall-0,
-//! whose denoised frame had 4× one still frame's error); w from that frame's neighbourhood variance
-//! there: worst 2.0×; W = 2: 0.41×, worst 1.79×.
+//! 0.61× the plain mean's (geomean; worst 0.91×), over the first 64 frames 0.80× (worst 1.00×); one
+//! frame's worth everywhere: 0.76× and 0.86×. At the first frame 0.43× (worst 0.81×, light-wall-0);
+//! w from that frame's neighbourhood variance there: worst 2.0×; W = 2: 0.38×, worst 1.11×.
 //!
 //! Mapping (the thesis's, and `crates/app/src/output.rs`'s for PNGs): mean = sum / frames; Reinhard et
 //! al. 2002's global operator with key a = 0.18 over the log-average luminance
