@@ -247,3 +247,39 @@ fn a_still_mean_after_a_move_carries_the_last_real_time_frame_then_lets_it_go() 
         }
     }
 }
+
+/// A stop finds the kept real-time frame only where a kept frame wrote it: after a resize (a real-time
+/// frame at one size, the still frames at another) there is none at the new size, and the still frames
+/// show the plain mean from the first on, not a blend with an image nothing wrote (which the stop's
+/// second frame read when its first one made the prior's image without writing it).
+#[test]
+fn a_stop_after_a_resize_shows_the_plain_mean() {
+    let gpu = TestGpu::new();
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let s = settings();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    let ldr = Present::ldr_image(&gpu, s.width, s.height).unwrap();
+    let kept = PresentParams { prior: Prior::Keep, ..params(1, true) };
+    r.present(&FrameSettings { seed: s.seed + 1000, ..s.clone() }, &ldr, kept, false).unwrap();
+    let resized = FrameSettings { width: s.width + 8, height: s.height + 4, ..s.clone() };
+    let ldr = Present::ldr_image(&gpu, resized.width, resized.height).unwrap();
+    let mut reference = Renderer::new(&gpu, &scene).unwrap();
+    let mut sum = vec![[0f64; 3]; (resized.width * resized.height) as usize];
+    for k in 0..3u64 {
+        let still = FrameSettings { seed: s.seed + k, ..resized.clone() };
+        for (a, p) in sum.iter_mut().zip(&reference.render(&still).unwrap().radiance) {
+            (0..3).for_each(|c| a[c] += p[c] as f64);
+        }
+        let p = PresentParams { prior: Prior::Use, ..params(k as u32 + 1, k == 0) };
+        let got = r.present(&still, &ldr, p, true).unwrap();
+        let n = (k + 1) as f64;
+        let (mut worst, mut scale) = (0f64, 0f64);
+        for (g, a) in got.radiance.iter().zip(&sum) {
+            for c in 0..3 {
+                worst = worst.max((g[c] as f64 - a[c] / n).abs());
+                scale = scale.max(a[c].abs() / n);
+            }
+        }
+        assert!(worst <= 1e-5 * scale, "still frame {}: {worst} from the plain mean (scale {scale})", k + 1);
+    }
+}

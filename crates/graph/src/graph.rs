@@ -507,6 +507,16 @@ impl<'a> Graph<'a> {
         Temporal { handle: Handle::new(id), fresh }
     }
 
+    /// The temporal image `name` (see [`Graph::temporal_image`]) where an earlier graph, or this one, made
+    /// it with this `desc` and `key`; `None` (and nothing made) otherwise. For state that only a writer
+    /// may create: a reader that made it would find undefined contents in the next frames.
+    pub fn existing_temporal_image(&mut self, name: &str, desc: &ImageDesc, key: &impl Hash) -> Option<Handle<Image>> {
+        let fp = fingerprint(&(format!("{desc:?}"), fingerprint(key)));
+        let here = self.resources.iter().any(|r| matches!(&r.home, Home::Temporal(n, f) if n == name && *f == fp));
+        let kept = self.retained.as_ref().and_then(|st| st.temporal.get(name)).is_some_and(|s| s.fingerprint == fp);
+        (here || kept).then(|| self.temporal_image(name, desc.clone(), key).handle)
+    }
+
     /// A buffer that lives across graphs under `name` (see [`Graph::temporal_image`]).
     pub fn temporal_buffer(&mut self, name: &str, desc: BufferDesc, key: &impl Hash) -> Temporal<Buffer> {
         let fp = fingerprint(&(format!("{desc:?}"), fingerprint(key)));

@@ -2,9 +2,9 @@
 //! tone-mapped and sRGB-encoded into an 8-bit image that the swapchain copies (no readback per frame).
 //!
 //! Inputs: the frame's `radiance` (RGBA32F W×H). Kept: `present.sum` (RGBA32F W×H, a temporal image:
-//! the sum of the frames since the last reset), `present.prior` (the last real-time frame, kept by
-//! [`Prior::Keep`]) and `present.moments` (a stop's luminance moments). Output: an RGBA8 UNORM W×H
-//! image the caller owns ([`Present::ldr_image`], imported into the graph), sRGB-encoded bytes in the
+//! the sum of the frames since the last reset), `present.prior` (the last real-time frame, made and
+//! written by [`Prior::Keep`]) and `present.moments` (a stop's luminance moments, made at its reset).
+//! Output: an RGBA8 UNORM W×H image the caller owns ([`Present::ldr_image`], imported into the graph), sRGB-encoded bytes in the
 //! swapchain's channel order. Transient: `present.stats`, one vec4 per workgroup plus one, and
 //! `present.mean` (a stop's mean).
 //!
@@ -55,7 +55,8 @@ pub enum Prior {
     None,
     /// This frame (a real-time one, shown alone) is kept as the prior.
     Keep,
-    /// The mean is a still view's after a move: it carries the kept prior (the module's "A stop").
+    /// The mean is a still view's after a move: it carries the kept prior (the module's "A stop"), from
+    /// the mean's first frame (a reset) on, where a kept frame of this size wrote one.
     Use,
 }
 
@@ -125,16 +126,9 @@ impl Present {
         let desc = |name| crate::frame::recipe::radiance_desc(name, width, height);
         let kept = g.temporal_image("present.sum", desc("present.sum"), &());
         let mut sum = kept.handle;
-        let prior_kept = g.temporal_image("present.prior", desc("present.prior"), &());
-        let mut prior = prior_kept.handle;
-        let mut moments = g.temporal_image("present.moments", desc("present.moments"), &()).handle;
-        // A new sum image holds nothing to add to, and a prior never kept nothing to carry.
+        // A new sum image holds nothing to add to.
         let reset = p.reset || kept.fresh;
-        let prior_mode = match p.prior {
-            Prior::Keep => PRESENT_PRIOR_KEEP,
-            Prior::Use if !prior_kept.fresh && p.carries_prior() => PRESENT_PRIOR_USE,
-            _ => PRESENT_PRIOR_NONE,
-        };
+        let (mut prior, mut moments, prior_mode) = stop_images(g, &p, reset, width, height);
         // The blended mean, only while a stop carries the prior (otherwise the sum stands in at its binding,
         // which nothing then reads through).
         let mut mean = (prior_mode == PRESENT_PRIOR_USE).then(|| g.create_image(desc("present.mean")));
@@ -150,13 +144,13 @@ impl Present {
             ..PresentPush::default()
         };
         let (radiance, o, s, st) = (*radiance, *out, sum, stats);
-        let (pr, mo, me) = (prior, moments, mean.unwrap_or(sum));
-        let mut b = g
-            .add_pass("present")
-            .read(&radiance, Access::ComputeRead)
-            .write(&mut sum, Access::ComputeWrite)
-            .write(&mut prior, Access::ComputeWrite)
-            .write(&mut moments, Access::ComputeWrite);
+        // Where the stop's images are not made, the sum stands in at their bindings (nothing reads or
+        // writes them there).
+        let (pr, mo, me) = (prior.unwrap_or(sum), moments.unwrap_or(sum), mean.unwrap_or(sum));
+        let mut b = g.add_pass("present").read(&radiance, Access::ComputeRead).write(&mut sum, Access::ComputeWrite);
+        for h in [prior.as_mut(), moments.as_mut()].into_iter().flatten() {
+            b = b.write(h, Access::ComputeWrite);
+        }
         if let Some(m) = mean.as_mut() {
             b = b.overwrite(m, Access::ComputeWrite);
         }
@@ -190,4 +184,36 @@ impl Present {
             None => (sum, push.frames),
         })
     }
+}
+
+/// The images of a stop (the module's "A stop") and the prior's mode for the shader. The last real-time
+/// frame is made by the frame that keeps it and only found by a stop's, so a stop after a resize, say,
+/// finds none rather than an image nothing wrote; its luminance moments are made at the stop's reset and
+/// only found after.
+fn stop_images<'a>(
+    g: &mut Graph<'a>,
+    p: &PresentParams,
+    reset: bool,
+    width: u32,
+    height: u32,
+) -> (Option<Handle<Image>>, Option<Handle<Image>>, u32) {
+    let desc = |name| crate::frame::recipe::radiance_desc(name, width, height);
+    let prior = match p.prior {
+        Prior::Keep => Some(g.temporal_image("present.prior", desc("present.prior"), &()).handle),
+        Prior::Use if p.carries_prior() => g.existing_temporal_image("present.prior", &desc("present.prior"), &()),
+        _ => None,
+    };
+    let moments = match (p.prior, prior) {
+        (Prior::Use, Some(_)) if reset => {
+            Some(g.temporal_image("present.moments", desc("present.moments"), &()).handle)
+        }
+        (Prior::Use, Some(_)) => g.existing_temporal_image("present.moments", &desc("present.moments"), &()),
+        _ => None,
+    };
+    let mode = match (p.prior, prior, moments) {
+        (Prior::Keep, _, _) => PRESENT_PRIOR_KEEP,
+        (Prior::Use, Some(_), Some(_)) => PRESENT_PRIOR_USE,
+        _ => PRESENT_PRIOR_NONE,
+    };
+    (prior, moments, mode)
 }
