@@ -9,7 +9,8 @@
 //! `auto` learns visibility only where visibility blocks nearly everything; the raw frame's alpha is its
 //! estimate's variance (against the spread of independent runs); the denoiser keeps most of a bright
 //! corner's light, follows a change of the lighting at once and keeps its history while the camera pans;
-//! and a real-time sequence does not depend on what the renderer drew before it.
+//! a real-time sequence does not depend on what the renderer drew before it; and the frame, raw and
+//! denoised, is linear in the light's intensity, bit for bit.
 
 use crate::vpl::{converges_to, indirect_with};
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
@@ -549,4 +550,43 @@ fn the_denoisers_gathers_follow_a_ramp_to_a_planes_edge() {
     let e = per_seed.iter().sum::<f64>() / per_seed.len() as f64;
     eprintln!("mean over the seeds: {e:.5}");
     assert!(e <= 0.00145, "the denoised corner: relMSE {e:.5}");
+}
+
+/// The real-time frame is linear in the light: every threshold of its reuse and its denoiser is relative
+/// (the luminance stop against the estimate's own noise, the clamp and the gradient test in standard
+/// deviations, the reuse's targets as ratios), so a light 2^20 times brighter or dimmer gives the same
+/// sequence, raw and denoised, scaled by exactly that power of two (bit for bit: multiplying by a power
+/// of two is exact in floating point), while the camera and the light move.
+#[test]
+fn the_realtime_frame_is_linear_in_the_lights_intensity() {
+    let scene = Scene::load(&bounce_tests::workspace().join("assets/two-rooms/scene.toml")).unwrap();
+    let gpu = TestGpu::new();
+    let (w, h, res, vox) = SIZE;
+    let s = FrameSettings { width: w, height: h, dprsm_res: res, voxels: vox, denoise: true, ..realtime(7) };
+    let s = FrameSettings { component: Component::Combined, clamp: 0.0, ..s };
+    let sequence = |scale: f32| {
+        let mut r = Renderer::new(&gpu, &scene).unwrap();
+        let light = r.lights()[0];
+        let (p, intensity) = (Vec3::from_slice(&light.position[..3]), Vec3::from_slice(&light.intensity[..3]));
+        (0..6)
+            .map(|k| {
+                r.set_camera(panned(&scene, 0.7 * k as f32, h));
+                r.set_light(0, p + Vec3::new(0.05, 0.0, 0.03) * k as f32, scale * intensity);
+                let f = r.render(&s).unwrap();
+                [f.raw.unwrap(), f.radiance]
+            })
+            .collect::<Vec<_>>()
+    };
+    let base = sequence(1.0);
+    let lit = base.iter().flatten().flatten().filter(|p| p[0] > 0.0).count();
+    assert!(lit > base.len() * 2 * (w * h) as usize / 4, "too few lit pixels: {lit}");
+    for k in [20, -20] {
+        let scale = 2f32.powi(k);
+        for (i, (a, b)) in base.iter().zip(sequence(scale)).enumerate() {
+            for (which, (a, b)) in ["raw", "denoised"].iter().zip(a.iter().zip(&b)) {
+                let off = a.iter().zip(b).filter(|(p, q)| (0..3).any(|c| p[c] * scale != q[c])).count();
+                assert_eq!(off, 0, "light × 2^{k}, frame {i}, {which}: {off} pixels are not the base scaled");
+            }
+        }
+    }
 }

@@ -2,7 +2,8 @@
 //! images with no validation message (the TestGpu), every sampling method must agree with `all` on
 //! them within Monte Carlo noise, and the CDF methods must fall back to uniform rather than fail when
 //! the importance is zero everywhere. Where a closed form exists (a sealed light, a sealed camera:
-//! black; scaling and translation: unchanged radiance) it is checked too.
+//! black; scaling and translation: unchanged radiance) it is checked too, and a real-time sequence under
+//! motion is the same, bit for bit, at every scale.
 
 use bounce_graph::camera::Camera;
 use bounce_graph::frame::{Component, FrameSettings, Method, Renderer};
@@ -335,5 +336,54 @@ fn a_1024_squared_dprsm_and_4096_vpls_per_pixel_agree_with_all() {
             t.elapsed().as_secs_f64()
         );
         assert!((m - all).abs() <= 4.0 * se, "{}: {m} ± {se} vs all {all}", method.name());
+    }
+}
+
+/// A real-time sequence (the camera and the light moving, reused across frames and pixels, denoised) is
+/// the same at every scale: the stress scene scaled by 2^-10 and 2^10 with the light's intensity by the
+/// square (radiance unchanged), its camera and light moving by the same scaled steps, gives the base
+/// sequence's raw and denoised frames. Every distance the frame compares (disocclusion, the reuse's and
+/// the denoiser's geometric stops, the rays' offsets) must be relative to the scene for that.
+#[test]
+fn a_realtime_sequence_is_the_same_at_every_scale() {
+    let gpu = TestGpu::new();
+    let sequence = |scale: f32| {
+        let s =
+            scene(&base_tris(scale, Vec3::ZERO), 0.6, scale, Vec3::ZERO, Vec3::new(0.0, 1.5, 0.5), 2.0 * scale * scale);
+        let mut r = Renderer::new(&gpu, &s).unwrap();
+        let fs = FrameSettings {
+            width: 24,
+            height: 24,
+            method: Method::Realtime,
+            vpls: 8,
+            dprsm_res: 16,
+            voxels: 16,
+            seed: 3,
+            ..FrameSettings::default()
+        };
+        (0..6)
+            .map(|k| {
+                let step = Vec3::new(0.04, 0.01, -0.02) * (k as f32 * scale);
+                r.set_camera(Camera { eye: s.camera.eye + step, target: s.camera.target + step, ..s.camera });
+                r.set_light(
+                    0,
+                    (Vec3::new(0.0, 1.5, 0.5) + Vec3::new(-0.03, 0.0, 0.02) * k as f32) * scale,
+                    Vec3::splat(2.0 * scale * scale),
+                );
+                let f = r.render(&fs).unwrap();
+                [f.raw.unwrap(), f.radiance]
+            })
+            .collect::<Vec<_>>()
+    };
+    let base = sequence(1.0);
+    let lit = base.iter().flatten().flatten().filter(|p| p[0] > 0.0).count();
+    assert!(lit > base.len() * 2 * 24 * 24 / 4, "too few lit pixels: {lit}");
+    for k in [-10, 10] {
+        for (i, (a, b)) in base.iter().zip(sequence(2f32.powi(k))).enumerate() {
+            for (which, (a, b)) in ["raw", "denoised"].iter().zip(a.iter().zip(&b)) {
+                let off = a.iter().zip(b).filter(|(p, q)| p != q).count();
+                assert_eq!(off, 0, "scale 2^{k}, frame {i}, {which}: {off} pixels differ from the base scene's");
+            }
+        }
     }
 }
