@@ -205,6 +205,50 @@ fn bench_writes_csv_markdown_and_a_plot() {
     assert!(error_lines(&bad).len() == 1 && bad.stderr.contains("is not a directory"), "{}", bad.stderr);
 }
 
+/// A cached ground truth is its scene's: edit the scene (here its light) and the next run renders the
+/// truth anew instead of measuring against the old scene's; the same scene takes the cache again.
+#[test]
+fn a_cached_reference_is_rendered_anew_when_the_scene_changes() {
+    let d = scratch("bench-edited");
+    let obj = "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 2 -1\nv 1 2 -1\nf 1 3 2\nf 1 4 3\nf 1 2 6\nf 1 6 5\n";
+    std::fs::write(d.join("m.obj"), obj).unwrap();
+    let toml = |i: f32| {
+        format!("mesh = \"m.obj\"\n[camera]\neye=[0,1,3]\ntarget=[0,0.5,0]\nup=[0,1,0]\nfov_y=50\n[[light]]\nposition=[0,1.5,0.5]\nintensity=[{i},{i},{i}]\n")
+    };
+    let scene = d.join("s.toml");
+    let out = d.join("out");
+    let run = || {
+        let args = ["bench", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--methods", "uniform"];
+        let small = [
+            "--vpls",
+            "2",
+            "--repeats",
+            "1",
+            "--reference-spp",
+            "4",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--dprsm-res",
+            "16",
+        ];
+        let r = bounce(&[&args[..], &small[..]].concat());
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        r.stderr
+    };
+    std::fs::write(&scene, toml(1.0)).unwrap();
+    assert!(run().contains("reference: rendering"));
+    assert!(run().contains("(cached)"));
+    std::fs::write(&scene, toml(2.0)).unwrap();
+    let edited = run();
+    assert!(
+        edited.contains("made for another version of the scene") && edited.contains("reference: rendering"),
+        "{edited}"
+    );
+    assert!(run().contains("(cached)"));
+}
+
 /// Broken inputs: each gives exit code 2, exactly one `error:` line naming what is wrong, no output file,
 /// and no panic (a panic would not return through `bounce::run` as a code at all).
 /// `bench --animate`: one CSV row per method, mode and frame; per-frame relMSE, flicker and mean ratio recomputed
@@ -441,6 +485,12 @@ fn bad_inputs_give_one_line_and_exit_2() {
         assert!(errs.len() == 1 && errs[0].contains(named), "{}", r.stderr);
         assert!(!Path::new(out).exists(), "{named}: an output file was written");
     }
+    // A missing argument is named on the one line (clap lists it below its first line).
+    let nowhere = d.join("nowhere");
+    expect_bad_input(&["bench", scene], "--out <OUT>", &nowhere);
+    // suite measures every method against uniform: uniform alone is nothing to compare.
+    let suite = ["suite", scene, "--out", nowhere.to_str().unwrap(), "--methods", "uniform"];
+    expect_bad_input(&suite, "another method", &nowhere);
 }
 
 /// `bounce view` as its own process under Xvfb (`xvfb-run`, installed by scripts/setup.sh). One at a
@@ -697,8 +747,9 @@ fn camera_paths_move_the_camera_frame_by_frame() {
     let still = read_exr(&still).unwrap().0.pixels;
     assert!(frame(0) == still, "frame 0 is not the scene's own view");
     assert!(frame(1) != still && frame(2) != frame(1), "the camera did not move");
-    // Keys that hold the scene's view (the Cornell box's camera) render it at every frame.
-    let keys = d.join("keys.toml");
+    // Keys that hold the scene's view (the Cornell box's camera) render it at every frame (a keyframe
+    // file whose name begins with "orbit" is a file, not an orbit).
+    let keys = d.join("orbit-keys.toml");
     let key = |f: u32| format!("[[key]]\nframe = {f}\neye = [0.0, 1.0, 3.9]\ntarget = [0.0, 1.0, 0.0]\n");
     std::fs::write(&keys, key(0) + &key(5)).unwrap();
     let held = d.join("held");
@@ -733,12 +784,19 @@ fn camera_paths_move_the_camera_frame_by_frame() {
     let on_target = bad("on.toml", "[[key]]\nframe = 0\neye = [0, 1, 0]\ntarget = [0, 1, 0]\n");
     let wide = bad("wide.toml", "[[key]]\nframe = 0\neye = [0, 1, 3]\ntarget = [0, 1, 0]\nfov_y = 180\n");
     let typo = bad("typo.toml", "[[key]]\nframe = 0\neye = [0, 1, 3]\ntraget = [0, 1, 0]\n");
+    // Straight down along the scene's up: no view (black frames, exit 0, before it was checked).
+    let down = bad("down.toml", "[[key]]\nframe = 0\neye = [0, 1.5, 0]\ntarget = [0, 0, 0]\n");
+    // Eye and target trade places over four frames: at frame 2 they coincide.
+    let swap = "[[key]]\nframe = 0\neye = [0, 1, 3]\ntarget = [0, 1, 1]\n[[key]]\nframe = 4\neye = [0, 1, 1]\ntarget = [0, 1, 3]\n";
+    let swap = bad("swap.toml", swap);
     let out = d.join("bad-frames");
     for (path, named) in [
         ("orbit:0", "orbit:PERIOD"),
         (on_target.as_str(), "away from its target"),
         (wide.as_str(), "fov_y"),
         (typo.as_str(), "typo.toml:4"),
+        (down.as_str(), "parallel to the view direction"),
+        (swap.as_str(), "between the keys at frames 0 and 4"),
     ] {
         let mut args = vec!["render", scene.to_str().unwrap(), "--frames", "2", "--out-dir", out.to_str().unwrap()];
         args.extend(["--camera-path", path, "--width", "8", "--height", "8"]);
@@ -906,6 +964,18 @@ fn time_limits_render_progressive_frames_and_bench_at_equal_time() {
     }
     let md = std::fs::read_to_string(bench_dir.join("bench.md")).unwrap();
     assert!(md.contains("0.3 s: frames") && md.contains("0.6 s: frames"), "{md}");
+
+    // Budgets no `Duration` holds (bench panicked after its reference, before), and a budget with an
+    // animation, whatever else is given.
+    let huge = d.join("huge");
+    let mut args = vec!["bench", s, "--out", huge.to_str().unwrap(), "--methods", "uniform", "--time-limits", "1e20"];
+    args.extend(small);
+    expect_bad_input(&args, "--time-limits", &huge.join("bench.csv"));
+    let suite = d.join("suite");
+    expect_bad_input(&["suite", s, "--out", suite.to_str().unwrap(), "--time-limit", "inf"], "--time-limit", &suite);
+    let mut args = vec!["render", s, "--frames", "2", "--timings", "--time-limit", "1"];
+    args.extend(small);
+    expect_bad_input(&args, "--time-limit and --frames", &out.with_file_name("none"));
 }
 
 /// `docs/cli.md` is the command line's reference: every command's `--help` as clap prints it. It must

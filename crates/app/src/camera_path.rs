@@ -121,12 +121,36 @@ fn read_keys(path: &Path, scene: &Scene) -> Result<Vec<(u32, Camera)>> {
         if keys.last().is_some_and(|(f, _)| *f == e.frame) {
             return Err(fail("a second key for the same frame"));
         }
-        keys.push((e.frame, Camera { eye, target, fov_y_deg: fov, ..scene.camera }));
+        let camera = Camera { eye, target, fov_y_deg: fov, ..scene.camera };
+        camera.validate().map_err(|m| fail(&m))?;
+        if let Some(&(f0, a)) = keys.last() {
+            between(a, camera).map_err(|m| {
+                bad(anyhow::anyhow!("{}: between the keys at frames {f0} and {}: {m}", path.display(), e.frame))
+            })?;
+        }
+        keys.push((e.frame, camera));
     }
     if keys.is_empty() {
         return Err(bad(anyhow::anyhow!("{}: no [[key]]", path.display())));
     }
     Ok(keys)
+}
+
+/// Whether the cameras interpolated between keys `a` and `b` all have a view: the view direction
+/// d(t) = (1 − t) d_a + t d_b is never zero nor along `up`. Its part across `up` is linear in t, so its
+/// shortest (the camera nearest to looking straight up or down) is the closest point of a segment to
+/// the origin; that camera is checked as a key is.
+fn between(a: Camera, b: Camera) -> Result<(), String> {
+    let up = a.up.normalize();
+    let across = |c: &Camera| {
+        let d = c.target - c.eye;
+        d - up * d.dot(up)
+    };
+    let (pa, pb) = (across(&a), across(&b));
+    let step = pb - pa;
+    let t = if step.length_squared() > 0.0 { (-pa.dot(step) / step.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+    let c = Camera { eye: lerp(a.eye, b.eye, t), target: lerp(a.target, b.target, t), ..a };
+    c.validate().map_err(|m| format!("at {:.0} % of the way, {m}", 100.0 * t))
 }
 
 #[cfg(test)]
@@ -144,6 +168,21 @@ mod tests {
         assert_eq!(p.at(15).eye, cam(2.0).eye);
         assert_eq!(p.at(15).fov_y_deg, 42.0);
         assert_eq!(p.at(99).target, cam(3.0).target);
+    }
+
+    #[test]
+    fn the_cameras_between_keys_must_have_a_view() {
+        let look = |eye: Vec3, target: Vec3| Camera { eye, target, up: Vec3::Y, fov_y_deg: 40.0 };
+        let (a, b) = (look(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0)), look(Vec3::X, Vec3::new(1.0, 0.5, -1.0)));
+        assert_eq!(between(a, b), Ok(()));
+        // Eye and target trade places: halfway they coincide.
+        let swapped = look(Vec3::new(0.0, 0.0, -1.0), Vec3::ZERO);
+        assert!(between(a, swapped).unwrap_err().contains("coincide"), "{:?}", between(a, swapped));
+        // Looking ahead and down, then back and down: halfway straight down, along up.
+        let (ahead, back) = (look(Vec3::ZERO, Vec3::new(0.0, -1.0, -1.0)), look(Vec3::ZERO, Vec3::new(0.0, -1.0, 1.0)));
+        assert!(between(ahead, back).unwrap_err().contains("parallel"), "{:?}", between(ahead, back));
+        // A quarter turn passes nowhere near it.
+        assert_eq!(between(ahead, look(Vec3::ZERO, Vec3::new(1.0, -1.0, 0.0))), Ok(()));
     }
 
     #[test]

@@ -513,7 +513,7 @@ pub struct RenderArgs {
     /// sequence) for this many seconds of wall time and write their mean: equal-time comparisons in one
     /// flag. Without --method (and --vpls), the path tracer (the lowest error at equal time). Not for
     /// `all` (the same every frame).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limit: Option<f64>,
     /// Render an animation of this many frames (with --light-path) into --out-dir: frame_0000.exr and
     /// .png, … (with --timings and no --out-dir: time the frames, back to back, and write nothing)
@@ -532,7 +532,7 @@ pub struct RenderArgs {
 #[command(mut_arg("width", |a| a.help("Window width in pixels (default: the scene's [render] width, else 384)")))]
 #[command(mut_arg("height", |a| a.help("Window height in pixels (default: the scene's [render] height, else 384)")))]
 #[command(mut_arg("vpls", |a| a.default_value("16").help("VPLs per pixel per frame (+/− double and halve it)")))]
-#[command(mut_arg("method", |a| a.help("The sampling method (M cycles through the sampled ones)")))]
+#[command(mut_arg("method", |a| a.help("The method (M cycles through the sampled ones, ris and reference)")))]
 #[command(mut_arg("seed", |a| a.help("Seed of the first frame; frame k uses seed + k")))]
 #[command(mut_arg("dprsm_res", |a| a.default_value("256")))]
 pub struct ViewArgs {
@@ -643,7 +643,7 @@ pub struct BenchArgs {
     /// Wall-time budgets in seconds, comma-separated: instead of one frame per VPL count, each method
     /// renders progressive frames for each budget (`render --time-limit`), so every column is an
     /// equal-time comparison.
-    #[arg(long, value_delimiter = ',', value_name = "SECONDS")]
+    #[arg(long, value_delimiter = ',', value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limits: Vec<f64>,
     /// Runs per method and VPL count (each its own seed); medians are reported.
     #[arg(long, default_value_t = 3)]
@@ -708,7 +708,7 @@ pub struct SuiteArgs {
     #[arg(long, default_value_t = 4)]
     pub seeds: u32,
     /// Wall-time budget of progressive frames per method, seed and scene (equal time).
-    #[arg(long, value_name = "SECONDS", default_value_t = 1.0)]
+    #[arg(long, value_name = "SECONDS", default_value_t = 1.0, value_parser = parse_seconds)]
     pub time_limit: f64,
     /// One frame of --vpls VPLs per pixel per method and seed (equal VPL count, the thesis's comparison)
     /// instead of --time-limit's equal time.
@@ -773,22 +773,12 @@ impl Learn {
     }
 }
 
+// The value parsers of the flags above.
+#[path = "cli_values.rs"]
+mod values;
 #[cfg(feature = "lab")]
-fn parse_learn(s: &str) -> Result<Learn, String> {
-    match s {
-        "auto" => Ok(Learn::Auto),
-        "off" => Ok(Learn::Floor(0.0)),
-        _ => s.parse::<f32>().map(Learn::Floor).map_err(|_| format!("expected auto, off or a number, got {s:?}")),
-    }
-}
-
-fn parse_on_off(s: &str) -> Result<bool, String> {
-    match s {
-        "on" => Ok(true),
-        "off" => Ok(false),
-        _ => Err(format!("expected on or off, got {s:?}")),
-    }
-}
+use values::parse_learn;
+use values::{parse_on_off, parse_seconds};
 
 #[cfg(test)]
 #[path = "cli_tests.rs"]

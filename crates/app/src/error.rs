@@ -104,8 +104,11 @@ pub fn report_usage(e: &clap::Error, out: &mut dyn Write, err: &mut dyn Write) -
         let _ = write!(out, "{text}");
         return SUCCESS;
     }
-    // clap's message is several lines; the first names the problem. One line, like every error.
-    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+    // clap's message is several paragraphs; the first names the problem (and, for missing arguments,
+    // lists them on its following lines). One line, like every error.
+    let lines = text.lines().skip_while(|l| l.trim().is_empty());
+    let first: Vec<&str> = lines.take_while(|l| !l.trim().is_empty()).map(str::trim).collect();
+    let first = if first.is_empty() { "invalid arguments".to_string() } else { first.join(" ") };
     let _ = writeln!(err, "error: {} (see `bounce --help`)", first.trim_start_matches("error: ").trim());
     BAD_INPUT
 }

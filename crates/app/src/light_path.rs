@@ -134,17 +134,24 @@ pub(crate) fn lerp(a: Vec3, b: Vec3, t: f32) -> Vec3 {
     a + (b - a) * t
 }
 
-/// `Some(PERIOD)` for `orbit` (PERIOD [`ORBIT_PERIOD`]) or `orbit:PERIOD`, `None` for anything else (a
-/// keyframe file); a malformed orbit is a [`bad`] error naming `flag`. Shared with `crate::camera_path`.
+/// `Some(PERIOD)` for `orbit` (PERIOD [`ORBIT_PERIOD`]) or `orbit:PERIOD`, `None` for a keyframe file
+/// (whose name may well begin with "orbit"); a malformed orbit, or neither, is a [`bad`] error naming
+/// `flag`. Shared with `crate::camera_path`.
 pub(crate) fn orbit_period(arg: &str, flag: &str) -> Result<Option<u32>> {
-    let Some(rest) = arg.strip_prefix("orbit") else { return Ok(None) };
-    match rest.strip_prefix(':') {
-        None if rest.is_empty() => Ok(Some(ORBIT_PERIOD)),
-        Some(p) => p.parse::<u32>().ok().filter(|p| *p > 0).map(Some).ok_or_else(|| {
-            bad(anyhow::anyhow!("{flag} orbit:PERIOD needs a positive whole number of frames (got `{p}`)"))
-        }),
-        None => Err(bad(anyhow::anyhow!("{flag}: `{arg}` is neither `orbit[:PERIOD]` nor a .toml file"))),
+    if arg == "orbit" {
+        return Ok(Some(ORBIT_PERIOD));
     }
+    let Some(p) = arg.strip_prefix("orbit:") else {
+        if !Path::new(arg).is_file() {
+            return Err(bad(anyhow::anyhow!("{flag}: `{arg}` is neither `orbit[:PERIOD]` nor a keyframe file")));
+        }
+        return Ok(None);
+    };
+    p.parse::<u32>()
+        .ok()
+        .filter(|p| *p > 0)
+        .map(Some)
+        .ok_or_else(|| bad(anyhow::anyhow!("{flag} orbit:PERIOD needs a positive whole number of frames (got `{p}`)")))
 }
 
 /// A keyframe file read as `T`: a missing file or a TOML error is a [`bad`] error naming the file (and the

@@ -28,13 +28,19 @@ fn png(
     register_font();
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
-    {
+    let drawn = (|| {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
         draw(&root)?;
-        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+        root.present().map_err(|e| anyhow!("plot: {e}"))
+    })();
+    let done =
+        drawn.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display())));
+    if done.is_err() {
+        // No half-drawn temporary is left beside the outputs.
+        let _ = std::fs::remove_file(&tmp);
     }
-    std::fs::rename(&tmp, path).map_err(|e| anyhow!("renaming into {}: {e}", path.display()))
+    done
 }
 
 /// What the two axes show (the error axis names what the error is measured against).
@@ -139,11 +145,9 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
 /// The suite's plot (`bounce suite`): for each method its per-scene relMSE over `uniform`'s, sorted,
 /// against the share of scenes (x from 0 to 1, y log), with the line y = 1 where a method ties `uniform`.
 pub fn sorted_ratios(path: &Path, series: &[(String, Vec<f64>)], subtitle: &str) -> Result<()> {
+    // With no finite positive ratio (every scene dark) the plot keeps its y = 1 line and axes.
     let all: Vec<f64> =
         series.iter().flat_map(|(_, v)| v.iter().copied()).filter(|v| v.is_finite() && *v > 0.0).collect();
-    if all.is_empty() {
-        return Err(anyhow!("no finite positive ratio to plot"));
-    }
     let lo = all.iter().copied().fold(1.0f64, f64::min) / 1.5;
     let hi = all.iter().copied().fold(1.0f64, f64::max) * 1.5;
     png(path, (900, 640), |root| {

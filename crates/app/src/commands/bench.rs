@@ -66,9 +66,6 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         animation::run(a, &scene, &mut renderer, &base, out, err)?;
         return super::check_validation(&gpu, a.frame.validation);
     }
-    if a.time_limits.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
-        return Err(bad(anyhow::anyhow!("--time-limits must be positive numbers of seconds")));
-    }
     let columns = match a.time_limits.is_empty() {
         true => vpl_counts.iter().map(|&vpls| Column { vpls, seconds: None }).collect(),
         false => a.time_limits.iter().map(|&t| Column { vpls: vpl_counts[0], seconds: Some(t) }).collect(),
@@ -87,6 +84,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             ReferenceArg::All => Reference::All,
         },
         ris_budget,
+        scene_fingerprint: scene.fingerprint(),
     };
     plan.check(&mut renderer)?;
     renderer.check(&plan.reference.settings(&plan.base))?;
@@ -151,6 +149,8 @@ struct BenchPlan {
     /// ris's settings in the equal-time columns where it takes `render --time-limit`'s per-view budget
     /// (without --vpls: [`ris_budget`]), in place of the base and the column's VPLs.
     ris_budget: Option<FrameSettings>,
+    /// The scene's [`bounce_graph::scene::Scene::fingerprint`]: the cached reference is this scene's.
+    scene_fingerprint: u64,
 }
 
 impl BenchPlan {
@@ -188,8 +188,10 @@ fn ris_budget(
     Ok(s)
 }
 
+/// The median of the values present: NaN is a value not measured (a GPU time without timestamps) and is
+/// left out; an infinite error (a frame with a non-finite pixel, `Metrics::of`) counts, as the largest.
 fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
+    v.retain(|x| !x.is_nan());
     if v.is_empty() {
         return f64::NAN;
     }
@@ -282,12 +284,9 @@ fn reference(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: 
     let b = &plan.base;
     let name = plan.reference.file_name(b, scene);
     let path = dir.join(name);
-    if path.exists() {
-        let (img, _) = output::read_exr(&path)?;
-        if (img.width, img.height) == (b.width, b.height) {
-            writeln!(err, "reference: {} (cached)", path.display())?;
-            return Ok(img);
-        }
+    if let Some(img) = cached_truth(&path, (b.width, b.height), plan.scene_fingerprint, err)? {
+        writeln!(err, "reference: {} (cached)", path.display())?;
+        return Ok(img);
     }
     let s = plan.reference.settings(b);
     writeln!(err, "reference: rendering {} into {}", plan.reference.kind(), path.display())?;
@@ -298,8 +297,32 @@ fn reference(r: &mut Renderer, plan: &BenchPlan, scene: &Path, dir: &Path, err: 
     })?;
     bar.finish_and_clear();
     let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
-    output::write_exr(&path, &img, &[("component", "indirect".into()), ("method", s.method.name().into())])?;
+    let meta =
+        [("component", "indirect".into()), ("method", s.method.name().into()), fingerprint(plan.scene_fingerprint)];
+    output::write_exr(&path, &img, &meta)?;
     Ok(img)
+}
+
+/// The metadata entry that ties a cached ground truth to its scene.
+fn fingerprint(scene: u64) -> (&'static str, String) {
+    ("scene_fingerprint", format!("{scene:016x}"))
+}
+
+/// The ground truth cached at `path`, if one of `size` is there and was made for the scene of
+/// fingerprint `scene` (or before fingerprints were written: such a file has none and is taken as it
+/// is). One made for another scene (the scene's files edited since) is said and left to be rendered anew.
+fn cached_truth(path: &Path, size: (u32, u32), scene: u64, err: &mut dyn Write) -> Result<Option<RgbImage>> {
+    if !path.exists() {
+        return Ok(None);
+    }
+    let (img, meta) = output::read_exr(path)?;
+    let (key, want) = fingerprint(scene);
+    let made_for = meta.iter().find(|(k, _)| k.strip_prefix("bounce.") == Some(key)).map(|(_, v)| v.as_str());
+    if made_for.is_some_and(|v| v != want) {
+        writeln!(err, "reference: {} was made for another version of the scene", path.display())?;
+        return Ok(None);
+    }
+    Ok(((img.width, img.height) == size).then_some(img))
 }
 
 /// Renders and measures every frame of the plan.

@@ -70,9 +70,17 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-/// The sampled methods M cycles through.
-const CYCLE: [Method; 6] =
-    [Method::Uniform, Method::Global, Method::Stratified, Method::Local, Method::Gbg, Method::Mis];
+/// The methods M cycles through: the sampled ones, back to ris (the default), then the path tracer.
+const CYCLE: [Method; 8] = [
+    Method::Uniform,
+    Method::Global,
+    Method::Stratified,
+    Method::Local,
+    Method::Gbg,
+    Method::Mis,
+    Method::Ris,
+    Method::Reference,
+];
 
 pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     if a.frames == Some(0) {
@@ -187,15 +195,17 @@ struct State {
 }
 
 /// Moves the camera and the lights for a frame `dt` seconds after the last (their paths, else the keys
-/// held down); whether either moved. A path restarts the mean every frame, as a move does.
+/// held down); whether either moved. A move restarts the mean, whether a path or a key made it.
 fn step_motion(camera: Option<&CameraPath>, path: Option<&LightPath>, st: &mut State, dt: f32) -> bool {
     let mut moved = false;
     match camera {
         Some(c) => {
             let before = st.renderer.camera();
             c.apply(&mut st.renderer, st.total);
-            moved |= st.renderer.camera() != before;
-            st.frames = 0;
+            // Past its last key the path holds the camera still: the mean goes on.
+            if st.renderer.camera() != before {
+                (st.frames, moved) = (0, true);
+            }
         }
         None if st.fly.step(dt) => {
             st.renderer.set_camera(st.fly.camera());
@@ -462,6 +472,8 @@ impl Viewer<'_> {
             st.frames = 0;
             st.realtime_frames += 1;
         }
+        // What this frame's picture is: a real-time frame alone, or the mean of st.frames still frames.
+        let shown = (s.method, if realtime { 1 } else { st.frames });
         let (presented, access) =
             st.swapchain.present_image(&st.ldr.res, st.ldr.last_access()).map_err(error::device)?;
         st.ldr.set_last_access(access);
@@ -479,7 +491,7 @@ impl Viewer<'_> {
                     PathBuf::from(format!("bounce-screenshot-{}.png", st.shots))
                 }
             };
-            self.screenshot(&path, &f, params.carries_prior())?;
+            self.screenshot(&path, &f, shown, params.carries_prior())?;
         }
         Ok(last)
     }
@@ -509,20 +521,22 @@ impl Viewer<'_> {
     }
 
     /// Writes the frame's read-back mean (`f.radiance`) as EXR and PNG.
-    /// `prior`: the mean carries the last real-time frame (a stop's first frames).
-    fn screenshot(&mut self, png: &Path, f: &FrameOutput, prior: bool) -> Result<()> {
+    /// `shown`: the frame's method and how many frames its picture averages; `prior`: the mean carries the
+    /// last real-time frame (a stop's first frames).
+    fn screenshot(&mut self, png: &Path, f: &FrameOutput, shown: (Method, u32), prior: bool) -> Result<()> {
         let st = self.state.as_mut().expect("started");
         let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
         let exr = png.with_extension("exr");
         let meta = vec![
             ("scene", self.args.scene.display().to_string()),
             ("component", self.settings.component.name().to_string()),
-            ("method", self.settings.method.name().to_string()),
+            ("method", shown.0.name().to_string()),
             ("vpls", self.settings.vpls.to_string()),
-            ("frames", st.frames.to_string()),
+            ("frames", shown.1.to_string()),
             ("carries_last_real_time_frame", prior.to_string()),
             ("seed", format!("{} ({})", self.settings.seed, self.args.animation.temporal().name())),
             ("light_path", self.args.animation.light_path.clone().unwrap_or_else(|| "none".into())),
+            ("camera_path", self.args.animation.camera_path.clone().unwrap_or_else(|| "none".into())),
             ("device", st.gpu.name.clone()),
             ("non_finite_pixels", img.non_finite_count().to_string()),
         ];

@@ -337,6 +337,34 @@ impl Scene {
         scene
     }
 
+    /// A fingerprint of what the scene renders: its triangles, materials, textures, lights, camera and
+    /// origin, not the files' names; results cached for a scene (a ground truth) carry it, so an edited
+    /// scene is never measured against its old self. FNV-1a over the bytes: stable across builds and
+    /// platforms, unlike `std`'s hashers.
+    pub fn fingerprint(&self) -> u64 {
+        let c = &self.camera;
+        let camera = [c.eye.to_array(), c.target.to_array(), c.up.to_array(), [c.fov_y_deg, 0.0, 0.0]];
+        let origin = self.origin.to_array();
+        let parts: [&[u8]; 8] = [
+            bytemuck::cast_slice(&self.vertices),
+            bytemuck::cast_slice(&self.tri_material),
+            bytemuck::cast_slice(&self.materials),
+            bytemuck::cast_slice(&self.textures),
+            bytemuck::cast_slice(&self.texels),
+            bytemuck::cast_slice(&self.lights),
+            bytemuck::cast_slice(&camera),
+            bytemuck::cast_slice(&origin),
+        ];
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        for part in parts {
+            // Each part's length first, so that bytes moved from one part to the next change the result.
+            for b in (part.len() as u64).to_le_bytes().iter().chain(part) {
+                h = (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        }
+        h
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.tri_material.len()
     }

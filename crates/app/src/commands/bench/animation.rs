@@ -120,7 +120,7 @@ pub(super) fn run(
     let reference = Reference::Path { spp: a.reference_spp };
     r.check(&reference.settings(base))?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let truth = references(r, &motion, reference, base, &a.scene, &a.out, a.frames, err)?;
+    let truth = references(r, &motion, (reference, scene.fingerprint()), base, &a.scene, &a.out, a.frames, err)?;
     let mut samples = vec![];
     let bar = indicatif::ProgressBar::new((a.methods.len() * a.temporal.len()) as u64 * a.frames as u64);
     for &method in &a.methods {
@@ -189,7 +189,7 @@ fn image_mean(p: &[[f32; 3]]) -> f64 {
 fn references(
     r: &mut Renderer,
     motion: &Motion,
-    reference: Reference,
+    (reference, fingerprint): (Reference, u64),
     base: &FrameSettings,
     scene: &Path,
     dir: &Path,
@@ -203,17 +203,20 @@ fn references(
     let mut truth = vec![];
     for k in 0..frames {
         let file = dir.join(format!("{stem}-path{key:016x}-frame{k:04}.exr"));
-        if let Ok((img, _)) = output::read_exr(&file) {
-            if (img.width, img.height) == (base.width, base.height) {
-                truth.push(img);
-                continue;
-            }
+        if let Ok(Some(img)) = super::cached_truth(&file, (base.width, base.height), fingerprint, err) {
+            truth.push(img);
+            continue;
         }
         writeln!(err, "reference: frame {k} into {}", file.display())?;
         motion.apply(r, k);
         let f = r.render(&s)?;
         let img = RgbImage::from_rgba(f.width, f.height, &f.radiance);
-        let meta = [("component", "indirect".into()), ("method", "reference".into()), ("frame", k.to_string())];
+        let meta = [
+            ("component", "indirect".into()),
+            ("method", "reference".into()),
+            ("frame", k.to_string()),
+            super::fingerprint(fingerprint),
+        ];
         output::write_exr(&file, &img, &meta)?;
         truth.push(img);
     }
@@ -256,7 +259,8 @@ fn csv(samples: &[FrameSample]) -> String {
     for (m, t) in modes {
         let of = || samples.iter().filter(move |s| s.method.name() == m && s.temporal.name() == t);
         let later = || of().filter(|s| s.frame > 0);
-        let finite = |x: f64| x.is_finite().then_some(x);
+        // Absent (no denoised frames) is an empty field; an infinite error is printed as such.
+        let finite = |x: f64| (!x.is_nan()).then_some(x);
         csv.push_str(&format!(
             "{m},{t},mean,{:.4},{:.4},{:.6e},{:.6e},{},{},{:.4},{:.6},{}\n",
             mean(later().map(|s| s.gpu_ms)),
@@ -276,11 +280,11 @@ fn csv(samples: &[FrameSample]) -> String {
 }
 
 /// Frames' image-mean ratios (where present) weighted by their truth's mean: Σ image means over Σ truth
-/// means.
+/// means (NaN where no frame has one; a frame whose image mean is not finite makes it so).
 fn weighted_ratio(v: impl Iterator<Item = (Option<f64>, f64)>) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for (ratio, truth) in v {
-        if let Some(r) = ratio.filter(|r| r.is_finite()) {
+        if let Some(r) = ratio {
             num += r * truth;
             den += truth;
         }
@@ -292,9 +296,10 @@ fn weighted_ratio(v: impl Iterator<Item = (Option<f64>, f64)>) -> f64 {
     }
 }
 
-/// Mean of the finite values.
+/// The mean of the values present: NaN is a value not measured (a GPU time without timestamps) and is
+/// left out; an infinite error (a frame with a non-finite pixel, `Metrics::of`) makes the mean infinite.
 fn mean(v: impl Iterator<Item = f64>) -> f64 {
-    let v: Vec<f64> = v.filter(|x| x.is_finite()).collect();
+    let v: Vec<f64> = v.filter(|x| !x.is_nan()).collect();
     if v.is_empty() {
         f64::NAN
     } else {
@@ -334,7 +339,7 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
     for &m in &a.methods {
         for &t in &a.temporal {
             let later = || of(samples, m, t).filter(|s| s.frame > 0);
-            let num = |x: f64, digits: usize| if x.is_finite() { format!("{x:.digits$}") } else { "–".into() };
+            let num = |x: f64, digits: usize| if x.is_nan() { "–".into() } else { format!("{x:.digits$}") };
             md.push_str(&format!(
                 "| {} | {} | {:.2} | {:.2} | {} | {:.4} | {:.4} | {} | {} | {:.3} | {} | {:.4} | {:.4} |\n",
                 m.name(),

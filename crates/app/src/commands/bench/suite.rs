@@ -42,14 +42,16 @@ struct Row {
 pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     crate::output::check_folder(&a.out).map_err(bad)?;
     let scenes = scene_files(&a.scenes).map_err(bad)?;
-    if !a.methods.contains(&Method::Uniform) {
-        return Err(bad(anyhow::anyhow!("--methods must include uniform: every method is measured against it")));
+    if !a.methods.contains(&Method::Uniform) || a.methods.iter().all(|m| *m == Method::Uniform) {
+        return Err(bad(anyhow::anyhow!(
+            "--methods must include uniform and another method: every method is measured against uniform"
+        )));
     }
     if a.methods.contains(&Method::All) {
         return Err(bad(anyhow::anyhow!("`all` is not a method to sweep (the ground truth is path traced)")));
     }
-    if a.seeds == 0 || !(a.time_limit.is_finite() && a.time_limit > 0.0) {
-        return Err(bad(anyhow::anyhow!("--seeds must be at least 1 and --time-limit a positive number of seconds")));
+    if a.seeds == 0 {
+        return Err(bad(anyhow::anyhow!("--seeds must be at least 1")));
     }
     let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
@@ -74,6 +76,7 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
             base: base.clone(),
             reference: Reference::Path { spp: a.reference_spp },
             ris_budget,
+            scene_fingerprint: scene.fingerprint(),
         };
         plan.check(&mut renderer)?;
         for sample in sweep(&mut renderer, &plan, path, &a.out.join(&name), err)? {
@@ -120,6 +123,17 @@ fn scene_files(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
         }
     }
     anyhow::ensure!(!files.is_empty(), "no scene given");
+    // Each scene's outputs and caches go to OUT/NAME: two scenes of one name would share them.
+    for (i, f) in files.iter().enumerate() {
+        if let Some(g) = files[..i].iter().find(|g| scene_name(g) == scene_name(f)) {
+            anyhow::bail!(
+                "{} and {} are both named {}: their outputs would share a folder",
+                g.display(),
+                f.display(),
+                scene_name(f)
+            );
+        }
+    }
     Ok(files)
 }
 
