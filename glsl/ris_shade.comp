@@ -5,7 +5,9 @@
 // channel holds the estimate's variance, from its R reservoirs' own estimates L_r (independent given the
 // frame's inputs): with l_r the luminance of L_r demodulated by the albedo (the denoiser's signal),
 // σ² = Σ_r (l_r − l̄)² / (R (R − 1)), the variance of their mean; 0 with one reservoir, or where one
-// dispatch does not hold all R (then nothing reads it).
+// dispatch does not hold all R. The real-time frame's denoiser reads it, and its R = 2 reservoirs are
+// split only where lavapipe's loop limit leaves fewer than 2 a dispatch (`vpls_per_dispatch`: a per-VPL
+// bound over 32k iterations, thousands of lights); its luminance stop then sees no noise.
 #include "shared/ris.glsl"
 
 layout(set = 0, binding = B_GATHER_DIRECT) uniform sampler2D direct_radiance;
