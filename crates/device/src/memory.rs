@@ -132,13 +132,17 @@ impl Buffer {
                 },
             )?;
             staging.mapped_mut().expect("CpuToGpu memory is mapped")[..data.len()].copy_from_slice(data);
-            // SAFETY: `cmd` is `submit`'s command buffer, recording. `staging` (TRANSFER_SRC) and `dst`
-            // (TRANSFER_DST) are live buffers of this device holding at least `data.len()` bytes, and both
-            // outlive the submission (`submit` waits for its fence). The host write above is visible to the
-            // copy: the memory is host-coherent and submission orders earlier host writes.
-            gpu.submit(|cmd| unsafe {
+            gpu.submit(|cmd| {
                 let region = vk::BufferCopy::default().size(data.len() as u64);
-                gpu.device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[region]);
+                // SAFETY: `cmd` is `submit`'s command buffer, recording. `staging` (TRANSFER_SRC) and `dst`
+                // (TRANSFER_DST) are live buffers of this device holding at least `data.len()` bytes, and
+                // both outlive the submission (`submit` waits for its fence). The host write above is
+                // visible to the copy: the memory is host-coherent and submission orders earlier host writes.
+                unsafe { gpu.device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[region]) };
+                // Such buffers are bound without the graph's tracking, read by any shader of later
+                // submissions: the copy is made visible to them here (a fence wait alone does not).
+                let mut state = Tracked::after(Access::TransferWrite, false);
+                sync::transition(gpu, cmd, Target::Buffer(dst.raw), &mut state, Access::ShaderRead);
             })?;
         }
         Ok(dst)
@@ -159,7 +163,7 @@ impl Buffer {
             },
         )?;
         gpu.submit(|cmd| {
-            let mut state = Tracked::after(current, false);
+            let mut state = Tracked::resumed(current, false);
             sync::transition(gpu, cmd, Target::Buffer(self.raw), &mut state, Access::TransferRead);
             let region = vk::BufferCopy::default().size(self.size);
             // SAFETY: `cmd` is `submit`'s command buffer, recording. `self` and `staging` are live buffers of
@@ -433,7 +437,7 @@ impl Image {
             },
         )?;
         gpu.submit(|cmd| {
-            let mut state = Tracked::after(current, self.desc.is_depth());
+            let mut state = Tracked::resumed(current, self.desc.is_depth());
             sync::transition(gpu, cmd, Target::Image(self), &mut state, Access::TransferRead);
             let region = vk::BufferImageCopy::default()
                 .image_subresource(

@@ -202,7 +202,7 @@ impl Swapchain {
         });
         let d = self.gpu.device.clone();
         self.submit_and_present(index, |gpu, cmd| {
-            let mut from = Tracked::after(last, false);
+            let mut from = Tracked::resumed(last, false);
             sync::transition(gpu, cmd, Target::Image(src), &mut from, Access::TransferRead);
             let target = Target::External { image, range: color_range() };
             let mut state = Tracked::after(Access::Acquired, false);

@@ -39,6 +39,8 @@ pub enum Access {
     /// A swapchain image just acquired: its acquire semaphore is waited at the transfer stage, which
     /// this access names so that the first barrier chains after the wait; old contents are discarded.
     Acquired,
+    /// Written by an earlier submission, at a stage no longer known ([`Tracked::resumed`]): any write.
+    Earlier,
 }
 
 /// What an access means to Vulkan.
@@ -97,6 +99,7 @@ impl Access {
             Access::TransferRead => (S::ALL_TRANSFER, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL, false),
             Access::TransferWrite => (S::ALL_TRANSFER, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL, true),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, false),
+            Access::Earlier => (S::ALL_COMMANDS, A::MEMORY_WRITE, L::GENERAL, true),
             Access::Present => (S::NONE, A::NONE, L::PRESENT_SRC_KHR, false),
             Access::Acquired => (S::ALL_TRANSFER, A::NONE, L::UNDEFINED, false),
         };
@@ -155,6 +158,21 @@ impl Tracked {
             visible: vk::AccessFlags2::NONE,
             visible_stages: vk::PipelineStageFlags2::NONE,
             last: a,
+        }
+    }
+
+    /// The state of a resource resumed in a new submission after its last use `a` in an earlier one
+    /// (a kept or persistent resource). A fence wait between them orders the submissions but makes no
+    /// device write visible to the next one's device reads, and after a read `a` the write it read is no
+    /// longer known: so the first access here waits for any earlier write ([`Access::Earlier`]) and
+    /// makes it visible, unless `a` is itself the write (then as [`Tracked::after`]) or nothing the
+    /// device wrote can be pending (unused, presented, just acquired).
+    pub fn resumed(a: Access, depth: bool) -> Tracked {
+        let t = Tracked::after(a, depth);
+        match a {
+            Access::Nothing | Access::Present | Access::Acquired => t,
+            _ if t.last_write.is_some() => t,
+            _ => Tracked { last_write: Some(Access::Earlier), ..t },
         }
     }
 }
@@ -295,6 +313,22 @@ mod tests {
 
     fn buf(a: Access) -> Tracked {
         Tracked::after(a, false)
+    }
+
+    /// A resource read last in an earlier submission, read now by another stage: the write it read must
+    /// be made visible again (a fence wait does not); read by the same access, or resumed after its
+    /// write, as within one submission.
+    #[test]
+    fn a_resumed_resource_makes_earlier_writes_visible_to_its_next_reads() {
+        let (b, _) = plan(&Tracked::resumed(Access::ComputeRead, false), Access::TransferRead, None);
+        let b = b.expect("a barrier before the transfer read");
+        assert_eq!((b.src.stage, b.src.access), (S::ALL_COMMANDS, A::MEMORY_WRITE));
+        let (b, _) = plan(&Tracked::resumed(Access::ComputeWrite, false), Access::ComputeRead, None);
+        assert_eq!(b.map(|b| b.src.stage), Some(S::COMPUTE_SHADER));
+        assert_eq!(plan(&Tracked::resumed(Access::Nothing, false), Access::ComputeRead, None).0, None);
+        // Within one submission, read after read needs nothing (the write was made visible to it).
+        let (_, t) = plan(&buf(Access::ComputeWrite), Access::ComputeRead, None);
+        assert_eq!(plan(&t, Access::ComputeRead, None).0, None);
     }
 
     #[test]

@@ -413,11 +413,11 @@ impl<'a> Graph<'a> {
         ))
     }
     pub fn import_buffer(&mut self, p: &'a Persistent<Buffer>) -> Handle<Buffer> {
-        let state = Tracked::after(p.last.get(), false);
+        let state = Tracked::resumed(p.last.get(), false);
         Handle::new(self.push(p.res.name.clone(), Storage::ExternalBuffer(p), state, Home::Frame))
     }
     pub fn import_image(&mut self, p: &'a Persistent<Image>) -> Handle<Image> {
-        let state = Tracked::after(p.last.get(), p.res.desc.is_depth());
+        let state = Tracked::resumed(p.last.get(), p.res.desc.is_depth());
         Handle::new(self.push(p.res.desc.name.clone(), Storage::ExternalImage(p), state, Home::Frame))
     }
 
@@ -488,7 +488,7 @@ impl<'a> Graph<'a> {
 
     fn lend(&mut self, name: &str, k: Kept) -> RawHandle {
         let image = matches!(k.res, Res::Image(_));
-        let state = Tracked::after(k.last, k.res.depth());
+        let state = Tracked::resumed(k.last, k.res.depth());
         let res_name = match &k.res {
             Res::Image(i) => i.desc.name.clone(),
             Res::Buffer(b) => b.name.clone(),
@@ -508,7 +508,7 @@ impl<'a> Graph<'a> {
         let slot = self.retained.as_mut().and_then(|st| st.temporal.remove(name));
         match slot {
             Some(s) if s.fingerprint == fingerprint => {
-                let state = Tracked::after(s.kept.last, s.kept.res.depth());
+                let state = Tracked::resumed(s.kept.last, s.kept.res.depth());
                 let home = Home::Temporal(name.to_string(), fingerprint, Some(s.frame));
                 (self.push(name.to_string(), Storage::Lent(s.kept.res), state, home), Some(s.frame), false)
             }
