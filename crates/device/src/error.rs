@@ -22,6 +22,8 @@ pub enum Error {
     Alloc { name: String, source: gpu_allocator::AllocationError },
     #[error("{what} exceeds the device limit {limit} ({value} > {max})")]
     Limit { what: String, limit: &'static str, value: u64, max: u64 },
+    #[error("the window has no area to present to (its surface reports 0×0)")]
+    NoWindowArea,
 }
 
 /// Attach the Vulkan call's name to a failing `vk::Result`.

@@ -83,13 +83,16 @@ impl Swapchain {
             copied: vec![],
             staging: None,
         };
-        s.recreate(width, height)?;
+        if !s.recreate(width, height)? {
+            return Err(Error::NoWindowArea);
+        }
         Ok(s)
     }
 
     /// (Re)creates the swapchain for a window of `width` × `height` (the surface's own extent wins
-    /// where it fixes one).
-    pub fn recreate(&mut self, width: u32, height: u32) -> Result<()> {
+    /// where it fixes one). `false` where that extent has no area (a minimised window, or one whose
+    /// resize the surface reports before the window does): nothing is made and the old swapchain stays.
+    pub fn recreate(&mut self, width: u32, height: u32) -> Result<bool> {
         let d = &self.gpu.device;
         // SAFETY: `d` is alive (this `Gpu` clone). NOTE: vkDeviceWaitIdle needs the queue externally
         // synchronised, which holds only while no other thread submits on a clone of this `Gpu` (not
@@ -137,6 +140,9 @@ impl Swapchain {
                 height: height.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
             }
         };
+        if extent.width == 0 || extent.height == 0 {
+            return Ok(false);
+        }
         let mut count = caps.min_image_count + 1;
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
@@ -159,8 +165,8 @@ impl Swapchain {
         // format, usage (TRANSFER_DST, checked), extent (the surface's, or clamped into its range), image count
         // and present mode (listed, or FIFO, always supported) come from the surface's own queries;
         // `old_swapchain` is null or this surface's current swapchain. NOTE, not checked: the device must
-        // have VK_KHR_swapchain enabled (`GpuOptions::swapchain`; `Gpu` does not record it), and the extent
-        // must be non-zero (a minimised window can report 0×0).
+        // have VK_KHR_swapchain enabled (`GpuOptions::swapchain`; `Gpu` does not record it). The extent is
+        // non-zero (checked above).
         let raw = unsafe { self.swapchain_fn.create_swapchain(&info, None) }.vk("vkCreateSwapchainKHR")?;
         if self.raw != vk::SwapchainKHR::null() {
             // SAFETY: the old swapchain was retired by the create above and the device is idle (waited above),
@@ -184,7 +190,7 @@ impl Swapchain {
         self.format = format.format;
         self.extent = extent;
         self.present_mode = present_mode;
-        Ok(())
+        Ok(true)
     }
 
     /// Copies `src` (an RGBA8 UNORM image, already sRGB-encoded and in the swapchain's channel order,

@@ -560,11 +560,11 @@ impl Viewer<'_> {
 
     fn resize(&mut self, width: u32, height: u32) -> Result<()> {
         let st = self.state.as_mut().expect("started");
-        st.minimized = width == 0 || height == 0;
+        // A window with no area (minimised), or one whose surface has none yet: no frames until it has.
+        st.minimized = width == 0 || height == 0 || !st.swapchain.recreate(width, height).map_err(error::device)?;
         if st.minimized {
             return Ok(());
         }
-        st.swapchain.recreate(width, height).map_err(error::device)?;
         self.settings.width = st.swapchain.extent.width;
         self.settings.height = st.swapchain.extent.height;
         st.ldr = Present::ldr_image(&st.gpu, self.settings.width, self.settings.height)?;
@@ -691,7 +691,15 @@ impl ApplicationHandler for Viewer<'_> {
         }
     }
 
-    fn about_to_wait(&mut self, _el: &ActiveEventLoop) {
+    fn about_to_wait(&mut self, el: &ActiveEventLoop) {
+        let Some(st) = &self.state else { return };
+        // A window whose surface had no area while the window had: try again (no Resized may follow).
+        let size = st.window.inner_size();
+        if st.minimized && size.width > 0 && size.height > 0 {
+            if let Err(e) = self.resize(size.width, size.height) {
+                return self.fail(el, e);
+            }
+        }
         // Progressive: keep drawing while the window is visible.
         if let Some(st) = &self.state {
             if !st.minimized {
