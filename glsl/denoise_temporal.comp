@@ -28,7 +28,7 @@ const float MAX_HISTORY = 255.0;
 
 // The raw estimate's indirect light at p, demodulated by the albedo, clipped at 0. The control variate
 // makes single estimates negative where the kept VPL is occluded, and clipping them adds light (where it
-// learns visibility, 2–4 % of the image's mean); unclipped, the generated suite measured 0.99× the
+// learns visibility, 1–5 % of the image's mean); unclipped, the generated suite measured 0.99× the
 // denoised error, the dark rooms 1.02× with that light lost (BENCHMARKS.md, "Things tried").
 vec3 illumination(ivec2 p) {
     vec3 c = texelFetch(raw, p, 0).rgb;
