@@ -6,7 +6,9 @@
 //! - read after write: wait for the writer and make its writes visible, unless this read's stages and
 //!   accesses were already made visible since that write (read after read needs nothing more);
 //! - write after read / write after write: wait for every reader since the last write and for the writer;
-//! - a layout change is a write: it waits like one, and afterwards only the new access is visible.
+//! - a layout change is a write: it waits like one, and afterwards only the new access is visible;
+//! - a resource resumed in a new submission after a read ([`Tracked::resumed`]) waits for any earlier
+//!   write and makes it visible before its next read (a fence wait does not make device writes visible).
 
 use crate::gpu::Gpu;
 use crate::memory::Image;
