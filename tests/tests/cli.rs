@@ -357,6 +357,21 @@ fn bad_inputs_give_one_line_and_exit_2() {
             "m.obj:2",
         ),
         (
+            "a vertex beyond f32 by its w",
+            vec![("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0 1e-300\nf 1 2 3\n".into()), ("s.toml", toml("m.obj", ""))],
+            vec![],
+            "beyond f32",
+        ),
+        (
+            "a light beyond f32",
+            vec![
+                ("m.obj", good_obj.into()),
+                ("s.toml", toml("m.obj", "").replace("position=[0,0.5,1]", "position=[1e39,0.5,1]")),
+            ],
+            vec![],
+            "light[0].position",
+        ),
+        (
             "index out of range",
             vec![("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n".into()), ("s.toml", toml("m.obj", ""))],
             vec![],

@@ -25,6 +25,15 @@ pub fn run(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {
             r.height
         )));
     }
+    // The test's non-finite pixels are counted (and make its errors infinite); the reference's would make
+    // every error NaN: it is no reference.
+    let bad_pixels = r.non_finite_count();
+    if bad_pixels > 0 {
+        return Err(bad(anyhow::anyhow!(
+            "{} has {bad_pixels} non-finite pixels: not a reference",
+            a.reference.display()
+        )));
+    }
     let m = Metrics::with_flip(&t, &r);
     if let Some(h) = &a.heatmap {
         let (_, map) = output::flip(&t, &r);

@@ -214,8 +214,13 @@ impl Scene {
         let local = |p: DVec3| (p - mesh.origin).as_vec3();
         scene.camera.eye = local(desc.world.eye);
         scene.camera.target = local(desc.world.target);
-        for (light, &p) in scene.lights.iter_mut().zip(&desc.world.lights) {
-            light.position = local(p).extend(1.0).to_array();
+        for (k, (light, &p)) in scene.lights.iter_mut().zip(&desc.world.lights).enumerate() {
+            let at = local(p);
+            if !at.is_finite() {
+                let msg = format!("light[{k}].position lies beyond f32's range from the mesh (at {:?})", p.to_array());
+                return Err(invalid(&desc.path, msg));
+            }
+            light.position = at.extend(1.0).to_array();
         }
         scene.camera.validate().map_err(|m| invalid(&desc.path, format!("[camera]: {m}")))?;
         scene.path = desc.path;

@@ -356,7 +356,12 @@ fn flatten(
                 } else {
                     [0.0, 0.0]
                 };
-                flat.vertices.push(make_vertex((p[c] - origin).as_vec3(), normals[c], uv));
+                let at = (p[c] - origin).as_vec3();
+                if !at.is_finite() {
+                    // tobj divides by a fourth coordinate (w): `v 0 1 0 1e-300` passes the f32 prescan.
+                    return Err(mesh_err(obj_path, None, "a vertex lies beyond f32's range (a tiny w coordinate?)"));
+                }
+                flat.vertices.push(make_vertex(at, normals[c], uv));
             }
             flat.tri_material.push(mat);
         }

@@ -79,13 +79,19 @@ pub fn parse_desc(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         msg: one_line(e.message()),
     })?;
 
+    let (eye, target) = (DVec3::from_array(raw.camera.eye), DVec3::from_array(raw.camera.target));
     let camera = Camera {
-        eye: DVec3::from_array(raw.camera.eye).as_vec3(),
-        target: DVec3::from_array(raw.camera.target).as_vec3(),
+        eye: eye.as_vec3(),
+        target: target.as_vec3(),
         up: Vec3::from_array(raw.camera.up),
         fov_y_deg: raw.camera.fov_y,
     };
-    camera.validate().map_err(|m| invalid(path, format!("[camera]: {m}")))?;
+    // Checked from the eye (in f64, then f32): far from the world's origin the f32 world copies cannot tell
+    // a near target from the eye. The local camera is checked again once the scene is rebased.
+    let from_eye = Camera { eye: Vec3::ZERO, target: (target - eye).as_vec3(), ..camera };
+    let finite = eye.is_finite() && target.is_finite();
+    let checked = if finite { from_eye.validate() } else { camera.validate() };
+    checked.map_err(|m| invalid(path, format!("[camera]: {m}")))?;
 
     if raw.light.is_empty() {
         return Err(invalid(path, "at least one [[light]] is required"));
@@ -157,6 +163,19 @@ mod tests {
         assert_eq!(d.lights.len(), 2);
         assert_eq!(d.camera.eye.z, 4.0);
         assert_eq!(d.mesh_path, Path::new("room.obj"));
+    }
+
+    /// A camera far from the world's origin (UTM-like coordinates) whose target is 4 units off: its f32
+    /// world copies are 0.5 apart per unit of 5e6, which a check relative to the coordinates took for
+    /// coinciding points; checked from the eye it is valid. Eye on target still is not.
+    #[test]
+    fn a_camera_far_from_the_origin_is_checked_from_its_eye() {
+        let far = replace(EXAMPLE, "eye    = [0.0, 1.0, 3.9]", "eye    = [500000.0, 100.0, 5000000.0]");
+        let far = replace(&far, "target = [0.0, 1.0, 0.0]", "target = [500000.0, 100.0, 4999996.0]");
+        parse_desc(&far, Path::new("s.toml")).expect("a valid far camera");
+        let on = replace(&far, "target = [500000.0, 100.0, 4999996.0]", "target = [500000.0, 100.0, 5000000.0]");
+        let err = parse_desc(&on, Path::new("s.toml")).expect_err("eye on target");
+        assert!(err.to_string().contains("coincide"), "{err}");
     }
 
     #[test]

@@ -90,9 +90,12 @@ struct FrameSample {
     /// that drops a bright feature's light shows here, where relMSE barely does).
     mean_ratio: f64,
     denoised_mean_ratio: Option<f64>,
-    /// The ground truth's image mean: the weight of the frame's ratio in the mean row (a frame whose
-    /// truth is nearly dark has a ratio of noise over nothing).
+    /// The ground truth's image mean, and the raw and denoised images': the mean row's ratio is Σ image
+    /// means over Σ truth means (a frame whose truth is nearly dark has a ratio of noise over nothing,
+    /// and one whose truth is black an infinite one, which must not rule the run).
     truth_mean: f64,
+    image_mean: f64,
+    denoised_image_mean: Option<f64>,
 }
 
 /// The animated sweep: settings checked, references rendered or read, every method × mode rendered.
@@ -113,11 +116,10 @@ pub(super) fn run(
     if a.reference != crate::cli::ReferenceArg::Path {
         return Err(bad(anyhow::anyhow!("--animate measures against the path-traced ground truth (--reference path)")));
     }
-    let vpls = a.vpl_counts()[0];
+    let (vpls, reference) = (a.vpl_counts()[0], Reference::Path { spp: a.reference_spp });
     for &method in &a.methods {
         r.check(&FrameSettings { method, vpls, ..base.clone() })?;
     }
-    let reference = Reference::Path { spp: a.reference_spp };
     r.check(&reference.settings(base))?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let truth = references(r, &motion, (reference, scene.fingerprint()), base, &a.scene, &a.out, a.frames, err)?;
@@ -162,6 +164,8 @@ pub(super) fn run(
                     mean_ratio,
                     denoised_mean_ratio: denoised_score.map(|d| d.2),
                     truth_mean: image_mean(t),
+                    image_mean: image_mean(&img.pixels),
+                    denoised_image_mean: denoised.as_ref().map(|d| image_mean(&d.pixels)),
                 });
                 previous = Some((img, denoised));
                 bar.inc(1);
@@ -270,8 +274,8 @@ fn csv(samples: &[FrameSample]) -> String {
             e(finite(mean(of().filter_map(|s| s.denoised.map(|d| d.0))))),
             e(finite(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))))),
             mean(later().map(|s| s.raw_ms)),
-            weighted_ratio(of().map(|s| (Some(s.mean_ratio), s.truth_mean))),
-            finite(weighted_ratio(of().map(|s| (s.denoised_mean_ratio, s.truth_mean))))
+            weighted_ratio(of().map(|s| (Some(s.image_mean), s.truth_mean))),
+            finite(weighted_ratio(of().map(|s| (s.denoised_image_mean, s.truth_mean))))
                 .map(|v| format!("{v:.6}"))
                 .unwrap_or_default(),
         ));
@@ -279,13 +283,13 @@ fn csv(samples: &[FrameSample]) -> String {
     csv
 }
 
-/// Frames' image-mean ratios (where present) weighted by their truth's mean: Σ image means over Σ truth
-/// means (NaN where no frame has one; a frame whose image mean is not finite makes it so).
+/// The frames' image means (where present) over their truths': Σ image means / Σ truth means (NaN where
+/// no frame has one; a frame whose image mean is not finite makes it so).
 fn weighted_ratio(v: impl Iterator<Item = (Option<f64>, f64)>) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
-    for (ratio, truth) in v {
-        if let Some(r) = ratio {
-            num += r * truth;
+    for (image, truth) in v {
+        if let Some(m) = image {
+            num += m;
             den += truth;
         }
     }
@@ -351,8 +355,8 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
                 mean(later().filter_map(|s| s.flicker)),
                 num(mean(of(samples, m, t).filter_map(|s| s.denoised.map(|d| d.0))), 4),
                 num(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))), 4),
-                weighted_ratio(of(samples, m, t).map(|s| (Some(s.mean_ratio), s.truth_mean))),
-                num(weighted_ratio(of(samples, m, t).map(|s| (s.denoised_mean_ratio, s.truth_mean))), 3),
+                weighted_ratio(of(samples, m, t).map(|s| (Some(s.image_mean), s.truth_mean))),
+                num(weighted_ratio(of(samples, m, t).map(|s| (s.denoised_image_mean, s.truth_mean))), 3),
                 super::median(of(samples, m, t).map(|s| s.rel_mse).collect()),
                 super::median(later().filter_map(|s| s.flicker).collect()),
             ));

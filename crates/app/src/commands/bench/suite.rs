@@ -205,9 +205,12 @@ fn means(rows: &[Row], method: Method) -> BTreeMap<String, (f64, f64)> {
         .collect()
 }
 
+/// The geometric mean of the ratios present (NaN: undefined, left out). An infinite ratio (a method
+/// with error where `uniform` has none, or with a non-finite image) makes it infinite, and a 0 (exact
+/// where `uniform` is not) makes it 0: the headline never hides the scene that rules it.
 fn geomean(v: impl IntoIterator<Item = f64>) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
-    for x in v.into_iter().filter(|x| x.is_finite() && *x > 0.0) {
+    for x in v.into_iter().filter(|x| !x.is_nan()) {
         s += x.ln();
         n += 1;
     }
@@ -355,6 +358,10 @@ mod tests {
         assert_eq!(family("cornell-box"), "cornell-box");
         assert!((geomean([2.0, 8.0]) - 4.0).abs() < 1e-12);
         assert!(geomean([]).is_nan());
+        // An infinitely worse scene rules the headline; an undefined one is left out.
+        assert_eq!(geomean([2.0, f64::INFINITY]), f64::INFINITY);
+        assert_eq!(geomean([2.0, 0.0]), 0.0);
+        assert!((geomean([2.0, f64::NAN, 8.0]) - 4.0).abs() < 1e-12);
         let m: BTreeMap<String, f64> = [("a".to_string(), 1.0), ("b".to_string(), 3.0)].into();
         assert_eq!(worst(&m), ("b".to_string(), 3.0));
         assert_eq!(scene_name(Path::new("x/boxes-1/scene.toml")), "boxes-1");
