@@ -1,6 +1,6 @@
 #version 460
 // cdf_reduce: importance per texel → a two-level CDF (per-row inclusive prefixes, then a prefix over the
-// row totals). Stage CDF_ROWS: one invocation per row; stage CDF_TOTALS: one invocation. See
+// row totals). Stage CDF_ROWS: one invocation per row; CDF_TOTALS: one per face; CDF_TOTAL: one. See
 // crates/graph/src/passes/cdf_reduce.rs for why two levels.
 #include "shared/types.glsl"
 #include "shared/bindings.glsl"
@@ -26,21 +26,24 @@ void main() {
             cdf[base + i] = acc;
         }
         cdf[out_base + CDF_HEADER + r] = acc; // the row total, turned into a prefix by CDF_TOTALS
-    } else {
-        if (gl_GlobalInvocationID.x != 0u) return;
+    } else if (pc.stage == CDF_TOTALS) {
         // The prefix over row totals restarts at each face (every `len` rows): a face's rows are then
-        // resolved against the face's own total, not against everything before it. The total is the sum
-        // of the face totals, in face order.
-        float acc = 0.0, total = 0.0;
-        for (uint r = 0u; r < rows; r++) {
-            if (r % len == 0u) {
-                total += acc;
-                acc = 0.0;
-            }
+        // resolved against the face's own total, not against everything before it. One invocation a face
+        // keeps each loop to `len` iterations (one invocation over all rows passed lavapipe's loop limit
+        // with many lights' cube maps, which cut it silently: workarounds.rs).
+        uint first = gl_GlobalInvocationID.x * len;
+        if (first >= rows) return;
+        float acc = 0.0;
+        for (uint r = first; r < min(first + len, rows); r++) {
             acc += cdf[out_base + CDF_HEADER + r];
             cdf[out_base + CDF_HEADER + r] = acc;
         }
-        total += acc;
+    } else {
+        if (gl_GlobalInvocationID.x != 0u) return;
+        // The total is the sum of the face totals (each face's last prefix), in face order (a last face may
+        // be short: a CDF of fewer rows than a row's length).
+        float total = 0.0;
+        for (uint start = 0u; start < rows; start += len) total += cdf[out_base + CDF_HEADER + min(start + len, rows) - 1u];
         cdf[out_base] = total;
         cdf[out_base + 1u] = uintBitsToFloat(rows);
         cdf[out_base + 2u] = uintBitsToFloat(len);

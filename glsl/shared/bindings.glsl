@@ -94,6 +94,7 @@ const float VOXEL_NEVER = 3.0e38;
 // CdfPush.stage
 #define CDF_ROWS 0
 #define CDF_TOTALS 1
+#define CDF_TOTAL 2
 // Floats before a CDF section's prefixes: the total, the rows (uint bits), the row length (uint bits) and
 // one unused (shared/cdf.glsl; crates/graph/src/cpu_cdf.rs).
 const uint CDF_HEADER = 4u;

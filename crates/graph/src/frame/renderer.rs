@@ -393,6 +393,7 @@ impl Renderer {
         }
         let stderr = read.second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
         log.warnings.extend(rsm_warning(s));
+        log.warnings.extend(defensive_warning(s));
         Ok(FrameOutput {
             width: s.width,
             height: s.height,
@@ -462,6 +463,15 @@ fn reference_stderr(s: &FrameSettings, mean: &[[f32; 4]], second: &[[f32; 4]]) -
         }
     }
     (count > 0).then(|| (se2 / count as f64).sqrt())
+}
+
+/// `--defensive 0` with a CDF: a VPL the CDF gives no importance is never drawn, yet the estimator counts
+/// only what it draws. Allowed (the thesis's CDFs have no defensive share), said once per frame.
+fn defensive_warning(s: &FrameSettings) -> Option<String> {
+    let cdf = !matches!(s.sampling_method(), Method::Uniform | Method::All | Method::Reference);
+    (s.defensive == 0.0 && cdf && s.component != Component::Direct).then(|| {
+        "--defensive 0: a VPL its CDF gives no importance (no gather point's importance reaches it) is never drawn, so its light is missing: the estimate is biased (as the thesis's CDFs are)".to_string()
+    })
 }
 
 /// What an `rsm` light map cannot see: said once per frame.

@@ -4,7 +4,8 @@
 //! `rows = 2 · lights · res`). Output: `cdf`, floats laid out as `glsl/shared/cdf.glsl` reads them:
 //! a `CDF_HEADER`-float header (total, rows, row length), the inclusive prefix over row totals (`rows` floats),
 //! then each row's inclusive prefix (`rows × row_length` floats). Dispatch: ⌈rows/64⌉ groups for the
-//! row prefixes (one invocation per row), then one invocation for the prefix over row totals, each dispatch serialized after the previous one
+//! row prefixes (one invocation per row), then one invocation per face for the prefix over its row totals,
+//! then one for the sum of the face totals, each dispatch serialized after the previous one
 //! by the graph ([`crate::graph::PassContext::serialize`]).
 //!
 //! **Why two levels (and not one flat float32 prefix).** A flat prefix over 2 × 1024² texels adds
@@ -80,9 +81,14 @@ impl CdfReduce {
                     self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [rows, 1, 1], [WG_1D, 1, 1]);
                 }
                 for section in 0..sections {
-                    // The totals stage reads the row totals the rows stage wrote.
+                    // The faces' prefixes read the row totals the rows stage wrote; the total reads the
+                    // faces' totals.
                     ctx.serialize(&out);
                     let p = push(CDF_TOTALS, section);
+                    let faces = rows.div_ceil(row_length.max(1));
+                    self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [faces, 1, 1], [WG_1D, 1, 1]);
+                    ctx.serialize(&out);
+                    let p = push(CDF_TOTAL, section);
                     self.pipeline.dispatch(ctx.cmd, &writes, bytemuck::bytes_of(&p), [1, 1, 1], [WG_1D, 1, 1]);
                 }
             },
