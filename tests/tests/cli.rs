@@ -249,6 +249,54 @@ fn a_cached_reference_is_rendered_anew_when_the_scene_changes() {
     assert!(run().contains("(cached)"));
 }
 
+/// `compare`: relMSE and the mean ratio of a test EXR against a reference by their closed forms (one
+/// pixel off by 1 of four, all channels: relMSE = ¼ · 1 / (1 + 0.01)); a reference with a non-finite
+/// pixel, or of another size, is one error line and exit 2.
+#[test]
+fn compare_measures_an_exr_against_a_reference() {
+    use bounce::output::{write_exr, RgbImage};
+    let d = scratch("compare");
+    let img = |pixels: Vec<[f32; 3]>| RgbImage { width: 2, height: 2, pixels };
+    let path = |name: &str| d.join(name).to_str().unwrap().to_string();
+    write_exr(Path::new(&path("ref.exr")), &img(vec![[1.0; 3]; 4]), &[]).unwrap();
+    write_exr(Path::new(&path("test.exr")), &img(vec![[2.0; 3], [1.0; 3], [1.0; 3], [1.0; 3]]), &[]).unwrap();
+    let r = bounce(&["compare", &path("test.exr"), &path("ref.exr"), "--json"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let field = |k: &str| -> f64 {
+        let at = r.stdout.find(&format!("\"{k}\": ")).unwrap() + k.len() + 4;
+        r.stdout[at..].split([',', '}']).next().unwrap().trim().parse().unwrap()
+    };
+    assert!((field("rel_mse") - 0.25 / 1.01).abs() < 1e-9, "{}", r.stdout);
+    assert!((field("mean_ratio") - 1.25).abs() < 1e-9, "{}", r.stdout);
+    write_exr(Path::new(&path("nan.exr")), &img(vec![[1.0; 3], [f32::NAN, 1.0, 1.0], [1.0; 3], [1.0; 3]]), &[])
+        .unwrap();
+    expect_bad_input(&["compare", &path("test.exr"), &path("nan.exr")], "non-finite", &d.join("none"));
+    let wide = RgbImage { width: 4, height: 1, pixels: vec![[1.0; 3]; 4] };
+    write_exr(Path::new(&path("wide.exr")), &wide, &[]).unwrap();
+    expect_bad_input(&["compare", &path("test.exr"), &path("wide.exr")], "2x2", &d.join("none"));
+}
+
+/// `--defensive 0` (the thesis's CDFs, without a defensive share) renders, and says it is biased; with a
+/// share, or with `uniform`, nothing is said.
+#[test]
+fn a_cdf_without_a_defensive_share_is_said_to_be_biased() {
+    let d = scratch("defensive");
+    let scene = bounce_tests::default_scene();
+    let out = d.join("g.exr");
+    let run = |method: &str, share: &str| {
+        let args = ["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--method", method];
+        let r = bounce(
+            &[&args[..], &["--defensive", share, "--vpls", "2", "--width", "8", "--height", "8", "--dprsm-res", "16"]]
+                .concat(),
+        );
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        r.stderr.contains("--defensive 0: ")
+    };
+    assert!(run("global", "0"));
+    assert!(!run("global", "0.5"));
+    assert!(!run("uniform", "0"));
+}
+
 /// Broken inputs: each gives exit code 2, exactly one `error:` line naming what is wrong, no output file,
 /// and no panic (a panic would not return through `bounce::run` as a code at all).
 /// `bench --animate`: one CSV row per method, mode and frame; per-frame relMSE, flicker and mean ratio recomputed
