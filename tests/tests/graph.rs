@@ -387,8 +387,8 @@ fn cached_products_are_kept_across_graphs_until_their_key_changes() {
 }
 
 /// A temporal image (or buffer) keeps its contents across graphs and says when they are undefined (first
-/// use, a new key); a history image gives last frame's version after `next_frame`, and none where the
-/// last frame did not ask for it.
+/// use, a new key); a history image gives the version of the last frame that used it (frames between
+/// that did not are skipped), and none once the histories are forgotten.
 #[test]
 fn temporal_and_history_images_live_across_graphs() {
     use bounce_graph::graph::Retained;
@@ -428,16 +428,22 @@ fn temporal_and_history_images_live_across_graphs() {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&done.read_buffer(&h).unwrap());
         assert!(words.iter().all(|&w| w == 7), "{words:?}");
     }
-    // Frame 3 does not ask for the history (a frame of another method in the viewer): frame 4 has no
-    // last frame's version (the other slot holds frame 2's, two frames old, which it was given before).
-    for frame in 0..6u32 {
+    // Frame 3 does not ask for the history (a frame of another method in the viewer): frame 4 finds the
+    // last use's version, frame 2's (swapping at every frame gave it frame 1's, two uses old). Frame 6
+    // comes after the histories were forgotten: it has none.
+    let mut last_use = None;
+    for frame in 0..8u32 {
         if frame == 3 {
             kept.next_frame();
             continue;
         }
+        if frame == 6 {
+            kept.forget_histories();
+            last_use = None;
+        }
         let mut g = Graph::with_retained(&gpu, &mut kept);
         let hist = g.history_image("hist", desc.clone(), &());
-        assert_eq!(hist.previous.is_some(), frame > 0 && frame != 4, "frame {frame}");
+        assert_eq!(hist.previous.is_some(), last_use.is_some(), "frame {frame}");
         let mut cur = hist.current;
         let hc = cur;
         g.add_pass("write").overwrite(&mut cur, Access::TransferWrite).record(move |ctx| clear(ctx, &hc, frame as f32));
@@ -452,10 +458,11 @@ fn temporal_and_history_images_live_across_graphs() {
             g.export(&prev_copy);
         }
         let done = g.execute().unwrap();
-        if hist.previous.is_some() {
-            assert!(read(&done, &prev_copy).iter().all(|&v| v == frame as f32 - 1.0), "frame {frame}");
+        if let Some(before) = last_use.filter(|_| hist.previous.is_some()) {
+            assert!(read(&done, &prev_copy).iter().all(|&v| v == before as f32), "frame {frame}");
         }
         drop(done);
+        last_use = Some(frame);
         kept.next_frame();
     }
 }

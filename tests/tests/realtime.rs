@@ -590,3 +590,38 @@ fn the_realtime_frame_is_linear_in_the_lights_intensity() {
         }
     }
 }
+
+/// The viewer renders real-time frames while anything moves and progressive ris frames while nothing
+/// does. A still frame between two real-time frames leaves their state alone: the real-time frame after it
+/// is bit for bit the one without it (raw and denoised: the reservoirs, the surfaces and the denoiser's
+/// history are the last real-time frame's, the motion against its camera). Before, the still frame
+/// remade the reservoirs, and the histories swapped at every frame, so the next real-time frame found its
+/// history two frames old (or none).
+#[test]
+fn a_still_frame_between_real_time_frames_keeps_their_history() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let (w, h, res, vox) = SIZE;
+    let s = FrameSettings { width: w, height: h, dprsm_res: res, voxels: vox, denoise: true, ..realtime(9) };
+    let still = FrameSettings { method: Method::Ris, denoise: false, ..s.clone() };
+    let sequence = |between: bool| {
+        let mut r = Renderer::new(&gpu, &scene).unwrap();
+        let mut out = vec![];
+        for k in 0..6 {
+            // The still frame sees frame 3's view: nothing moved for it.
+            if k == 4 && between {
+                r.render(&still).unwrap();
+            }
+            r.set_camera(panned(&scene, 0.4 * k as f32, h));
+            let f = r.render(&s).unwrap();
+            out.push((f.radiance, f.raw));
+        }
+        out
+    };
+    let (plain, with_still) = (sequence(false), sequence(true));
+    assert!(
+        plain[4] == with_still[4] && plain[5] == with_still[5],
+        "a still frame between changed the real-time frames"
+    );
+    assert!(plain[3] != plain[4], "the frames repeat");
+}

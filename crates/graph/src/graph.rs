@@ -109,12 +109,10 @@ struct Product {
     resources: Vec<Kept>,
 }
 
-/// A temporal resource: what it was made for (description and key), the resource, and the frame of the
-/// last graph that held it ([`Retained::next_frame`]'s count).
+/// A temporal resource: what it was made for (description and key) and the resource.
 struct TemporalSlot {
     fingerprint: u64,
     kept: Kept,
-    frame: u64,
 }
 
 /// What the graph keeps across frames: cached products by name and temporal resources by name. Owned by
@@ -123,6 +121,9 @@ struct TemporalSlot {
 pub struct Retained {
     products: HashMap<&'static str, Product>,
     temporal: HashMap<String, TemporalSlot>,
+    /// Per history name: how many frames have used it (its two slots swap at each), and the last frame
+    /// that did.
+    histories: HashMap<String, (u64, u64)>,
     frame: u64,
 }
 
@@ -131,8 +132,18 @@ impl Retained {
     pub fn clear(&mut self) {
         self.products.clear();
         self.temporal.clear();
+        self.histories.clear();
     }
-    /// Start a new frame: [`Graph::history_image`]'s current and previous versions swap.
+    /// Forget every history ([`Graph::history_image`], [`Graph::history_buffer`]): the next frame that uses
+    /// one starts it anew. For a view changed by frames that kept none (their motion is not the histories').
+    pub fn forget_histories(&mut self) {
+        for name in std::mem::take(&mut self.histories).into_keys() {
+            for k in 0..2 {
+                self.temporal.remove(&format!("{name}#{k}"));
+            }
+        }
+    }
+    /// Start a new frame.
     pub fn next_frame(&mut self) {
         self.frame += 1;
     }
@@ -159,17 +170,6 @@ pub struct Temporal<T> {
     /// The contents are undefined (just made, or its description or key changed): the first pass must
     /// overwrite rather than add to it.
     pub fresh: bool,
-    /// The frame ([`Retained::next_frame`]'s count) of the last graph before this one that held it; None
-    /// when this graph made it.
-    pub held: Option<u64>,
-}
-
-impl<T> Temporal<T> {
-    /// The handle, if the resource is what a graph of the frame before `frame` held (and so wrote, for a
-    /// history's version of that frame).
-    fn last_frames(&self, frame: u64) -> Option<Handle<T>> {
-        (self.held.is_some() && self.held == frame.checked_sub(1)).then_some(self.handle)
-    }
 }
 
 /// This frame's and last frame's version of a temporal image.
@@ -232,9 +232,8 @@ impl Storage<'_> {
 enum Home {
     /// Dropped with the frame (or, if a cached product claims it, kept with that product).
     Frame,
-    /// Back to the store's temporal slot of this name, made for this fingerprint; the frame of the last
-    /// graph that held it before this one (None: made by this one).
-    Temporal(String, u64, Option<u64>),
+    /// Back to the store's temporal slot of this name, made for this fingerprint.
+    Temporal(String, u64),
 }
 
 struct ResourceEntry<'a> {
@@ -492,27 +491,20 @@ impl<'a> Graph<'a> {
         RawHandle { id: self.push(format!("{res_name} ({name})"), Storage::Lent(k.res), state, Home::Frame), image }
     }
 
-    /// The temporal resource `name`: its id, the frame of the last graph before this one that held it
-    /// (None: made by this one), and whether its contents are undefined (made by this ask).
-    fn temporal(&mut self, name: &str, fingerprint: u64, fresh_storage: Storage<'a>) -> (usize, Option<u64>, bool) {
-        // Asked twice in one graph: the same resource, which the first asker writes.
-        let same = |r: &ResourceEntry| matches!(&r.home, Home::Temporal(n, f, _) if n == name && *f == fingerprint);
+    fn temporal(&mut self, name: &str, fingerprint: u64, fresh_storage: Storage<'a>) -> (usize, bool) {
+        // Asked twice in one graph: the same resource.
+        let same = |r: &ResourceEntry| matches!(&r.home, Home::Temporal(n, f) if n == name && *f == fingerprint);
         if let Some(id) = self.resources.iter().position(same) {
-            let Home::Temporal(_, _, held) = self.resources[id].home else { unreachable!("matched above") };
-            return (id, held, false);
+            return (id, false);
         }
         let slot = self.retained.as_mut().and_then(|st| st.temporal.remove(name));
+        let home = Home::Temporal(name.to_string(), fingerprint);
         match slot {
             Some(s) if s.fingerprint == fingerprint => {
                 let state = Tracked::resumed(s.kept.last, s.kept.res.depth());
-                let home = Home::Temporal(name.to_string(), fingerprint, Some(s.frame));
-                (self.push(name.to_string(), Storage::Lent(s.kept.res), state, home), Some(s.frame), false)
+                (self.push(name.to_string(), Storage::Lent(s.kept.res), state, home), false)
             }
-            _ => {
-                let (state, home) =
-                    (Tracked::after(Access::Nothing, false), Home::Temporal(name.to_string(), fingerprint, None));
-                (self.push(name.to_string(), fresh_storage, state, home), None, true)
-            }
+            _ => (self.push(name.to_string(), fresh_storage, Tracked::after(Access::Nothing, false), home), true),
         }
     }
 
@@ -520,8 +512,8 @@ impl<'a> Graph<'a> {
     /// when `desc` or `key` changes. Without a [`Retained`] store it lives for this frame only.
     pub fn temporal_image(&mut self, name: &str, desc: ImageDesc, key: &impl Hash) -> Temporal<Image> {
         let fp = fingerprint(&(format!("{desc:?}"), fingerprint(key)));
-        let (id, held, fresh) = self.temporal(name, fp, Storage::TransientImage(desc, None));
-        Temporal { handle: Handle::new(id), fresh, held }
+        let (id, fresh) = self.temporal(name, fp, Storage::TransientImage(desc, None));
+        Temporal { handle: Handle::new(id), fresh }
     }
 
     /// The temporal image `name` (see [`Graph::temporal_image`]) where an earlier graph, or this one, made
@@ -529,7 +521,7 @@ impl<'a> Graph<'a> {
     /// may create: a reader that made it would find undefined contents in the next frames.
     pub fn existing_temporal_image(&mut self, name: &str, desc: &ImageDesc, key: &impl Hash) -> Option<Handle<Image>> {
         let fp = fingerprint(&(format!("{desc:?}"), fingerprint(key)));
-        let here = self.resources.iter().any(|r| matches!(&r.home, Home::Temporal(n, f, _) if n == name && *f == fp));
+        let here = self.resources.iter().any(|r| matches!(&r.home, Home::Temporal(n, f) if n == name && *f == fp));
         let kept = self.retained.as_ref().and_then(|st| st.temporal.get(name)).is_some_and(|s| s.fingerprint == fp);
         (here || kept).then(|| self.temporal_image(name, desc.clone(), key).handle)
     }
@@ -537,34 +529,50 @@ impl<'a> Graph<'a> {
     /// A buffer that lives across graphs under `name` (see [`Graph::temporal_image`]).
     pub fn temporal_buffer(&mut self, name: &str, desc: BufferDesc, key: &impl Hash) -> Temporal<Buffer> {
         let fp = fingerprint(&(format!("{desc:?}"), fingerprint(key)));
-        let (id, held, fresh) = self.temporal(name, fp, Storage::TransientBuffer(desc, None));
-        Temporal { handle: Handle::new(id), fresh, held }
+        let (id, fresh) = self.temporal(name, fp, Storage::TransientBuffer(desc, None));
+        Temporal { handle: Handle::new(id), fresh }
     }
 
-    /// This frame's and last frame's version of an image (two temporal images that swap roles at each
-    /// [`Retained::next_frame`]). `previous` is `None` when last frame's has another description or key,
-    /// or was never written, or when last frame did not ask for this history (a frame of another method
-    /// between two that use it: the other slot then holds the frame before that, whose motion is not the
-    /// last frame's). This frame's version is exported: the passes that write it run even where nothing
-    /// later in the frame reads it (the next frame does).
+    /// The slots of history `name` for this frame: (current, previous). They swap at each frame that uses
+    /// the history, not at each frame: a frame of another method between two that use it (the viewer's
+    /// still frame) leaves it as it was, so the next use finds the last use's version, not the one before.
+    fn history_slots(&mut self, name: &str) -> (String, String) {
+        let uses = match self.retained.as_mut() {
+            Some(st) => {
+                let frame = st.frame;
+                let e = st.histories.entry(name.to_string()).or_insert((0, frame));
+                if e.1 != frame {
+                    *e = (e.0 + 1, frame);
+                }
+                e.0
+            }
+            None => 0,
+        };
+        (format!("{name}#{}", uses % 2), format!("{name}#{}", (uses + 1) % 2))
+    }
+
+    /// This frame's and the last use's version of an image (two temporal images that swap roles at each
+    /// frame that uses them). `previous` is `None` when that version has another description or key, or
+    /// was never written. The frames between two uses must not have moved what the history follows (the
+    /// camera, the lights): the renderer forgets the histories where they did
+    /// ([`Retained::forget_histories`]). This frame's version is exported: the passes that write it run
+    /// even where nothing later in the frame reads it (the next use does).
     pub fn history_image(&mut self, name: &str, desc: ImageDesc, key: &impl Hash) -> History {
-        let frame = self.retained.as_ref().map_or(0, |st| st.frame);
-        let slot = |parity: u64| format!("{name}#{}", parity % 2);
-        let current = self.temporal_image(&slot(frame), desc.clone(), key).handle;
-        let previous = self.temporal_image(&slot(frame + 1), desc, key);
-        // What writes this frame's version is live whether or not this frame reads it: the next frame does.
+        let (now, before) = self.history_slots(name);
+        let current = self.temporal_image(&now, desc.clone(), key).handle;
+        let previous = self.temporal_image(&before, desc, key);
+        // What writes this frame's version is live whether or not this frame reads it: the next use does.
         self.export(&current);
-        History { current, previous: previous.last_frames(frame) }
+        History { current, previous: (!previous.fresh).then_some(previous.handle) }
     }
 
-    /// This frame's and last frame's version of a buffer (see [`Graph::history_image`]).
+    /// This frame's and the last use's version of a buffer (see [`Graph::history_image`]).
     pub fn history_buffer(&mut self, name: &str, desc: BufferDesc, key: &impl Hash) -> History<Buffer> {
-        let frame = self.retained.as_ref().map_or(0, |st| st.frame);
-        let slot = |parity: u64| format!("{name}#{}", parity % 2);
-        let current = self.temporal_buffer(&slot(frame), desc.clone(), key).handle;
-        let previous = self.temporal_buffer(&slot(frame + 1), desc, key);
+        let (now, before) = self.history_slots(name);
+        let current = self.temporal_buffer(&now, desc.clone(), key).handle;
+        let previous = self.temporal_buffer(&before, desc, key);
         self.export(&current);
-        History { current, previous: previous.last_frames(frame) }
+        History { current, previous: (!previous.fresh).then_some(previous.handle) }
     }
 
     /// Start declaring a pass. `name` is the pass's file stem: labels, timing rows and tests use it.
@@ -770,10 +778,10 @@ impl Drop for Executed<'_> {
             store.products.insert(name, Product { key: req.key, resources });
         }
         for r in &mut self.resources {
-            if let Home::Temporal(name, fingerprint, _) = r.home.clone() {
+            if let Home::Temporal(name, fingerprint) = r.home.clone() {
                 if let Some(res) = r.storage.take() {
                     let kept = Kept { last: r.state.get().last, res };
-                    store.temporal.insert(name, TemporalSlot { fingerprint, kept, frame: store.frame });
+                    store.temporal.insert(name, TemporalSlot { fingerprint, kept });
                 }
             }
         }

@@ -62,6 +62,10 @@ pub struct FrameState {
     pub previous_camera: Option<Camera>,
     /// The lights of the last frame rendered.
     pub previous_lights: Option<Vec<Light>>,
+    /// The camera and lights of the last frame that kept the histories (ran `reproject`): frames between
+    /// it and the next that keeps them (the viewer's still frames) must not have moved either, or the
+    /// histories are forgotten (`Retained::forget_histories`).
+    pub history_view: Option<(Camera, Vec<Light>)>,
     /// `Method::Realtime` frames rendered since the renderer began or its frame cache was cleared: each
     /// draws its random numbers from it and the seed, so the frames whose reservoirs it reuses are
     /// independent draws. Only realtime frames count, so that a sequence's images do not depend on what
@@ -135,6 +139,7 @@ impl Renderer {
             retained: Retained::default(),
             previous_camera: None,
             previous_lights: None,
+            history_view: None,
             realtime_frames: 0,
         };
         Ok(Renderer { ctx, state })
@@ -167,6 +172,7 @@ impl Renderer {
         self.state.retained.clear();
         self.state.previous_camera = None;
         self.state.previous_lights = None;
+        self.state.history_view = None;
         self.state.realtime_frames = 0;
         self.ctx.realtime_learns = None;
     }
@@ -343,12 +349,20 @@ impl Renderer {
         self.ctx.max_intensity = max_intensity(&self.state.lights);
         let uniforms = self.uniform_buffer(s)?;
         let (ctx, state) = (&self.ctx, &mut self.state);
+        // A frame that kept no history moved the view since the last that did: the histories' motion
+        // (last frame's camera against theirs) would be wrong.
+        let last_view = state.previous_camera.zip(state.previous_lights.clone());
+        if state.history_view.is_some() && state.history_view != last_view {
+            state.retained.forget_histories();
+            state.history_view = None;
+        }
         let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
         let (total, per_chunk) = ctx.chunking(s, &i);
         let mut log = FrameLog::default();
         let mut read = Read::default();
         // What the presented image read back is divided by for its mean (present's `add`).
         let mut divide_by = 1.0f32;
+        let mut kept_histories = false;
         for_each_chunk(total, per_chunk, progress, |chunk, last| {
             let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
             let out = build_frame(&ctx.passes, &mut g, s, &i, chunk)?;
@@ -364,6 +378,7 @@ impl Renderer {
             };
             let done = g.execute()?;
             log.add(&done);
+            kept_histories |= done.ran.contains(&"reproject");
             match (&present, presented) {
                 (Some(p), Some((image, k))) if p.read_mean => {
                     read.radiance = done.read_image(&image)?;
@@ -384,6 +399,9 @@ impl Renderer {
             Ok(())
         })?;
         state.retained.next_frame();
+        if kept_histories {
+            state.history_view = Some((state.camera, state.lights.clone()));
+        }
         state.previous_camera = Some(state.camera);
         state.previous_lights = Some(state.lights.clone());
         state.realtime_frames += (s.method == Method::Realtime) as u64;
@@ -717,15 +735,19 @@ impl RenderContext {
             );
         }
         let max_range = self.gpu.limits().max_storage_buffer_range as u64;
-        let cdf_bytes = 4
-            * (s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2)
-                + s.light_map.faces() as u64 * self.scene.light_count as u64 * s.dprsm_res as u64
-                + 4);
-        if cdf_bytes > max_range {
-            reject!("the CDF would take {cdf_bytes} bytes, over the device limit maxStorageBufferRange ({max_range}); lower --dprsm-res");
+        let texels = s.light_map.faces() as u64 * self.scene.light_count as u64 * (s.dprsm_res as u64).pow(2);
+        let cdf_bytes =
+            4 * (texels + s.light_map.faces() as u64 * self.scene.light_count as u64 * s.dprsm_res as u64 + 4);
+        // cdf_reduce binds the whole CDF, and the importance passes and the samplers the whole importance,
+        // every section, as storage buffers.
+        let sections = 1 + self.importance_params(s).kind.method_sections() as u64;
+        for (what, bytes) in [("CDF", cdf_bytes * sections), ("importance", 4 * texels * sections)] {
+            if bytes > max_range {
+                reject!("the {what} would take {bytes} bytes, over the device limit maxStorageBufferRange ({max_range}); lower --dprsm-res or --regions");
+            }
         }
         // The samplers read the CDF (every section) through a texel view.
-        let cdf_texels = cdf_bytes / 4 * (1 + self.importance_params(s).kind.method_sections() as u64);
+        let cdf_texels = cdf_bytes / 4 * sections;
         let max_texels = self.gpu.limits().max_texel_buffer_elements as u64;
         if cdf_texels > max_texels {
             reject!("the CDF would take {cdf_texels} texels, over the device limit maxTexelBufferElements ({max_texels}); lower --dprsm-res or --regions");

@@ -132,7 +132,7 @@ use super::reproject::Motion;
 use super::FrameInputs;
 use crate::bindings::*;
 use crate::frame::Visibility;
-use crate::graph::{Graph, Handle, PassBuilder, PassContext};
+use crate::graph::{Graph, Handle, History, PassBuilder, PassContext};
 use crate::pipelines::Lazy;
 use crate::shader_types::{GatherPush, Reservoir, RisPush, RisPushBlock};
 use crate::shaders;
@@ -399,10 +399,18 @@ impl Ris {
     ) -> Result<Handle<Buffer>> {
         let reservoirs = r.push.reservoirs;
         let desc = |name: &str| BufferDesc::storage(name, Self::layer_bytes(f.width, f.height) * reservoirs as u64);
-        let history = g.history_buffer("ris.reservoirs", desc("ris.reservoirs"), &r.key);
-        // Last frame's reservoirs, with where each pixel was (and last frame's surface), when both were kept.
+        // Frames with temporal reuse (realtime) keep their reservoirs as a history; the others (progressive
+        // ris) keep none and use names of their own for what they keep across frames, so that the viewer's
+        // still frames and its moving ones never remake each other's state.
+        let temporal = r.push.history_cap > 0.0;
+        let kept = |what: &str| if temporal { what.to_string() } else { format!("{what} (progressive)") };
+        let history = match temporal {
+            true => g.history_buffer("ris.reservoirs", desc("ris.reservoirs"), &r.key),
+            false => History { current: g.create_buffer(desc("ris.reservoirs")), previous: None },
+        };
+        // The last use's reservoirs, with where each pixel was (and that frame's surface), when both were kept.
         let previous = match (history.previous, last) {
-            (Some(p), Some(l)) if r.push.history_cap > 0.0 && l.motion.history => Some((p, l)),
+            (Some(p), Some(l)) if l.motion.history => Some((p, l)),
             _ => None,
         };
         // Stage s (0: initial, 1..=P: spatial) writes the history's current buffer when P − s is even, so
@@ -412,7 +420,7 @@ impl Ris {
         let target = |s: u32| (r.spatial_passes - s).is_multiple_of(2);
         let pool =
             (r.push.pool_tiles > 0).then(|| self.add_presample(g, f, i, push, r.push, r.uniform_source)).transpose()?;
-        let mut vis = Self::learned_counts(g, f, &r);
+        let mut vis = Self::learned_counts(g, f, &r, &kept("ris.visibility"));
         // The control variate's U_g per reservoir (this frame's), and its per-pixel shadow-ray counts, kept
         // across the frames of one view like the learned visibility (stand-ins, never touched, when off).
         let mut unshadowed = if r.push.control != 0 {
@@ -422,7 +430,7 @@ impl Ris {
         };
         let mut cv = if r.push.control != 0 {
             let t = g.temporal_buffer(
-                "ris.cv",
+                &kept("ris.cv"),
                 BufferDesc::storage("ris.cv", 16 * f.width as u64 * f.height as u64),
                 &r.key,
             );
@@ -464,13 +472,13 @@ impl Ris {
     /// The learned visibility's counts: kept across the frames of one view (the history's key; realtime's
     /// across moves), zeroed when new; off, a stand-in that the shade never writes and the reuse stages,
     /// which bind it as a texel buffer either way, never read.
-    fn learned_counts<'a>(g: &mut Graph<'a>, f: FrameInputs<'a>, r: &RisFrame) -> Handle<Buffer> {
+    fn learned_counts<'a>(g: &mut Graph<'a>, f: FrameInputs<'a>, r: &RisFrame, name: &str) -> Handle<Buffer> {
         if r.push.learned > 0.0 {
             let faces = f.vpl_faces * f.scene.light_count;
             let bytes = vis_bytes(f.width, f.height, r.push.vis_tile, f.dprsm_res, faces);
             let mut desc = BufferDesc::storage("ris.visibility", bytes);
             desc.usage |= vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
-            let t = g.temporal_buffer("ris.visibility", desc, &r.key);
+            let t = g.temporal_buffer(name, desc, &r.key);
             let mut h = t.handle;
             if t.fresh {
                 g.add_clear("ris_visibility_clear", &mut [&mut h]);
