@@ -9,11 +9,13 @@ pub mod progressive;
 pub mod recipe;
 pub mod renderer;
 pub mod settings;
+pub mod state;
 
 pub use recipe::build_frame;
-pub use renderer::{FrameOutput, FrameState, RenderContext, Renderer};
+pub use renderer::{FrameOutput, RenderContext, Renderer};
 pub use settings::{
     Component, FaceMode, FrameSettings, LightMap, Method, MisWeights, RisSettings, RisSource, SettingsError,
     Visibility, VplKernel, REALTIME_LEARN_BLOCKED, REALTIME_LEARN_EVERY, REALTIME_LEARN_HYSTERESIS,
     REALTIME_RESERVOIRS,
 };
+pub use state::FrameState;

@@ -15,6 +15,7 @@ use super::settings::{
     reject, Component, FrameSettings, LightMap, Method, RisSettings, SettingsError, Visibility, REALTIME_LEARN_BLOCKED,
     REALTIME_LEARN_EVERY, REALTIME_LEARN_HYSTERESIS,
 };
+use super::state::FrameState;
 use crate::camera::Camera;
 use crate::gpu_bvh::GpuBvh;
 use crate::gpu_scene::GpuScene;
@@ -49,28 +50,6 @@ pub struct RenderContext {
     blocked: Option<(u64, Option<f32>)>,
     /// A real-time frame's learning decision under `auto`: (the frame it was made at, on).
     realtime_learns: Option<(u64, bool)>,
-}
-
-/// What changes from frame to frame: the camera, the lights, and the resources the graph keeps across
-/// frames.
-pub struct FrameState {
-    pub camera: Camera,
-    /// The point lights, in the scene's local coordinates (as `Scene::lights`).
-    pub lights: Vec<Light>,
-    pub retained: Retained,
-    /// The camera of the last frame rendered (reprojection's `FrameUniforms::prev_view_proj`).
-    pub previous_camera: Option<Camera>,
-    /// The lights of the last frame rendered.
-    pub previous_lights: Option<Vec<Light>>,
-    /// The camera and lights of the last frame that kept the histories (ran `reproject`): frames between
-    /// it and the next that keeps them (the viewer's still frames) must not have moved either, or the
-    /// histories are forgotten (`Retained::forget_histories`).
-    pub history_view: Option<(Camera, Vec<Light>)>,
-    /// `Method::Realtime` frames rendered since the renderer began or its frame cache was cleared: each
-    /// draws its random numbers from it and the seed, so the frames whose reservoirs it reuses are
-    /// independent draws. Only realtime frames count, so that a sequence's images do not depend on what
-    /// else the renderer drew before (`bench` renders the ground truth first, or reads it from disk).
-    pub realtime_frames: u64,
 }
 
 /// Renders frames of one scene. Derefs to its [`RenderContext`] (the read-only part).
@@ -348,14 +327,8 @@ impl Renderer {
         self.ctx.scene.write_lights(&self.state.lights)?;
         self.ctx.max_intensity = max_intensity(&self.state.lights);
         let uniforms = self.uniform_buffer(s)?;
+        self.state.forget_moved_histories();
         let (ctx, state) = (&self.ctx, &mut self.state);
-        // A frame that kept no history moved the view since the last that did: the histories' motion
-        // (last frame's camera against theirs) would be wrong.
-        let last_view = state.previous_camera.zip(state.previous_lights.clone());
-        if state.history_view.is_some() && state.history_view != last_view {
-            state.retained.forget_histories();
-            state.history_view = None;
-        }
         let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
         let (total, per_chunk) = ctx.chunking(s, &i);
         let mut log = FrameLog::default();
@@ -398,12 +371,7 @@ impl Renderer {
             }
             Ok(())
         })?;
-        state.retained.next_frame();
-        if kept_histories {
-            state.history_view = Some((state.camera, state.lights.clone()));
-        }
-        state.previous_camera = Some(state.camera);
-        state.previous_lights = Some(state.lights.clone());
+        state.frame_done(kept_histories);
         state.realtime_frames += (s.method == Method::Realtime) as u64;
         let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
         if present.is_some() {
