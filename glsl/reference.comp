@@ -3,7 +3,8 @@
 // G-buffer's (the contract's pixel-centre ray, rasterized exactly); x's bounce light is
 //   L_ind(x) = ∫_A albedo(x)/π · L_direct(y → x) · G(x, y) · V(x, y) dA(y),  G = cos θ_x cos θ_y / |x − y|²,
 // where L_direct(y → x) is y's direct light toward x (two-sided Lambertian: the normal flipped toward x,
-// exact shadow rays). Two strategies draw y (x stands for the lifted origin o below):
+// exact shadow rays; a light lights only the face of y's triangle on its side). Two strategies draw y (x
+// stands for the lifted origin o below):
 //  (a) cosine: a cosine-distributed direction at x, y its first hit (BVH);
 //      p_cos(y) = cos θ_x/π · cos θ_y/|x − y|²                                   (area measure at y)
 //  (b) light side: a light l with probability P(l) ∝ the luminance of its intensity, a uniform direction
@@ -13,8 +14,7 @@
 //      geometric normal, the measure's own).
 // The default estimator (MIS) takes one sample of each strategy per sample index k and combines them by the
 // balance heuristic over n_cos = n_light = N: with f = albedo(x)/π · L_direct · G · V, each sample adds
-// f/(p_cos + p_light) = albedo(x) · L_direct · p_cos/(p_cos + p_light) (· V(x, y) for (b)). COSINE_ONLY
-// (`reference.cosine.comp`) takes strategy (a) alone, f/p_cos = albedo(x) · L_direct. The points are
+// f/(p_cos + p_light) = albedo(x) · L_direct · p_cos/(p_cos + p_light) (· V(x, y) for (b)). The points are
 // Owen-scrambled Sobol (shared/owen_sobol.glsl), one 2D set per strategy per pixel and seed, indexed by the
 // global sample index k, so the image does not depend on how [0, N) is split into dispatches: each
 // dispatch takes samples [first, last), and every sample is added to the running image in order k, so
@@ -39,6 +39,8 @@ struct Hit {
     vec3 ns;
     vec3 ng;
     vec3 albedo;
+    // The side of y's triangle x lies on: the sign of ng · (x − y).
+    float x_side;
 };
 
 Hit hit_at(uint tri, vec2 bary, vec3 x) {
@@ -49,6 +51,7 @@ Hit hit_at(uint tri, vec2 bary, vec3 x) {
     h.ns = normalize(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz);
     if (dot(h.ns, x - h.y) < 0.0) h.ns = -h.ns;
     h.ng = normalize(cross(v1.position_u.xyz - v0.position_u.xyz, v2.position_u.xyz - v0.position_u.xyz));
+    h.x_side = sign(dot(h.ng, x - h.y));
     vec2 uv = w0 * vec2(v0.position_u.w, v0.normal_v.w) + bary.x * vec2(v1.position_u.w, v1.normal_v.w)
             + bary.y * vec2(v2.position_u.w, v2.normal_v.w);
     h.albedo = albedo_at(tri, uv);
@@ -81,7 +84,12 @@ vec3 light_side(Hit h, uint known, float inv_power, out float p_light) {
         // surface the ray needs bvh_occluded's 1e-4 relative window, and a wall within it (a floor point at
         // the foot of a wall between it and the light) did not count: light leaked under walls.
         if (l != known && bvh_occluded_lifted(lifted_origin(h.y, dot(h.ng, to) >= 0.0 ? h.ng : -h.ng), lp)) continue;
-        if (c > 0.0) l_sum += h.albedo / PI * lights[l].intensity.rgb * c / d2;
+        // Light reaches the face of y that x sees only from that face's side of the triangle: where a mesh's
+        // shading normal tilts far from its face it can face a light behind the surface, whose shadow ray
+        // (from the light's side) the surface itself does not block. The VPLs on that face are the light's
+        // side's, and no VPL method lights x through it.
+        bool same_face = dot(h.ng, to) * h.x_side > 0.0;
+        if (c > 0.0 && same_face) l_sum += h.albedo / PI * lights[l].intensity.rgb * c / d2;
         p_light += p;
     }
     return l_sum;
