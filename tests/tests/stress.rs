@@ -387,3 +387,31 @@ fn a_realtime_sequence_is_the_same_at_every_scale() {
         }
     }
 }
+
+/// A light moved outside the bounds the scene was loaded with (an orbit near a wall): the light maps'
+/// rays, whose far distance the bounds' diagonal set, still reach the scene. The stress scene's light
+/// moved 5 units out of its 2-unit box, 5–7 units from every surface: `all`'s indirect mean against the
+/// reference's (which traces to any distance) is 1 within 5 % (measured 0.991 at 512² maps; 1.07, 1.02,
+/// 0.91 and 1.00 at 64², 128², 256² and 1024²: the few texels that see the box from there); it was 0,
+/// every light-map ray stopping short.
+#[test]
+fn a_light_moved_outside_the_bounds_still_lights_the_scene() {
+    let s = scene(&base_tris(1.0, Vec3::ZERO), 0.6, 1.0, Vec3::ZERO, Vec3::new(0.0, 1.5, 0.5), 2.0);
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &s).unwrap();
+    r.set_light(0, Vec3::new(0.0, 1.0, 6.0), Vec3::splat(50.0));
+    let base = FrameSettings {
+        width: 24,
+        height: 24,
+        component: Component::Indirect,
+        dprsm_res: 512,
+        voxels: 32,
+        ..FrameSettings::default()
+    };
+    let mean =
+        |f: &bounce_graph::frame::FrameOutput| f.radiance.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+    let all = mean(&r.render(&FrameSettings { method: Method::All, ..base.clone() }).unwrap());
+    let reference = mean(&r.render(&FrameSettings { method: Method::Reference, spp: 256, ..base }).unwrap());
+    eprintln!("light outside the bounds: all {all:.4}, reference {reference:.4}, ratio {:.4}", all / reference);
+    assert!(reference > 0.0 && (all / reference - 1.0).abs() < 0.05, "all {all} against the reference {reference}");
+}

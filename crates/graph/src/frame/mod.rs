@@ -10,6 +10,7 @@ pub mod recipe;
 pub mod renderer;
 pub mod settings;
 pub mod state;
+mod warnings;
 
 pub use recipe::build_frame;
 pub use renderer::{FrameOutput, RenderContext, Renderer};

@@ -41,6 +41,8 @@ pub struct RenderContext {
     /// The largest intensity component of any light (for the gbg fixed-point scale): the current
     /// lights', set before each frame.
     max_intensity: f32,
+    /// The light maps' far distance for the current lights, set before each frame ([`far_light`]).
+    far_light: f32,
     bvh: GpuBvh,
     /// The BVH's triangles in its leaf order, kept for the host's ray queries.
     bvh_tris: Vec<crate::bvh::GpuBvhTri>,
@@ -101,11 +103,14 @@ impl FrameOutput {
 impl Renderer {
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<Self> {
         let flat = crate::bvh::FlatBvh::new(&crate::bvh::Bvh::from_vertices(&scene.vertices), &scene.vertices);
+        let uploaded = GpuScene::upload(gpu, scene).context("uploading the scene")?;
+        let far = far_light(uploaded.bounds_min, uploaded.bounds_max, &scene.lights);
         let ctx = RenderContext {
             gpu: gpu.clone(),
-            scene: GpuScene::upload(gpu, scene).context("uploading the scene")?,
+            scene: uploaded,
             passes: Passes::new(gpu, !scene.textures.is_empty())?,
             max_intensity: max_intensity(&scene.lights),
+            far_light: far,
             bvh: GpuBvh::upload(gpu, &flat).context("uploading the BVH")?,
             bvh_tris: flat.tris,
             bvh_nodes: flat.nodes,
@@ -324,8 +329,7 @@ impl Renderer {
         self.check(s)?;
         let effective = self.effective(s)?;
         let s = effective.as_ref().unwrap_or(s);
-        self.ctx.scene.write_lights(&self.state.lights)?;
-        self.ctx.max_intensity = max_intensity(&self.state.lights);
+        self.ctx.set_lights(&self.state.lights)?;
         let uniforms = self.uniform_buffer(s)?;
         self.state.forget_moved_histories();
         let (ctx, state) = (&self.ctx, &mut self.state);
@@ -378,8 +382,8 @@ impl Renderer {
             radiance.iter_mut().for_each(|px| *px = px.map(|c| c / divide_by));
         }
         let stderr = read.second.and_then(|sq| reference_stderr(s, &radiance, &bytemuck::pod_collect_to_vec(&sq)));
-        log.warnings.extend(rsm_warning(s));
-        log.warnings.extend(defensive_warning(s));
+        log.warnings.extend(super::warnings::rsm_warning(s));
+        log.warnings.extend(super::warnings::defensive_warning(s));
         Ok(FrameOutput {
             width: s.width,
             height: s.height,
@@ -426,6 +430,18 @@ struct PresentTo<'p> {
     read_mean: bool,
 }
 
+/// The light maps' far distance (their rays' and the paraboloid shadow maps' depth range): the diagonal of
+/// the bounds, which at load hold the geometry and the lights, or, for a light moved outside them (an
+/// orbit near a wall), its distance to their farthest corner; 1 % beyond either. A light inside the
+/// bounds is never farther than the diagonal from any surface.
+fn far_light(lo: Vec3, hi: Vec3, lights: &[Light]) -> f32 {
+    let corners =
+        (0..8).map(|k| Vec3::new([lo.x, hi.x][k & 1], [lo.y, hi.y][(k >> 1) & 1], [lo.z, hi.z][(k >> 2) & 1]));
+    let farthest = |p: Vec3| corners.clone().map(|c| (c - p).length()).fold(0.0f32, f32::max);
+    let beyond = lights.iter().map(|l| farthest(Vec3::from_slice(&l.position[..3]))).fold(0.0f32, f32::max);
+    (hi - lo).length().max(beyond) * 1.01
+}
+
 /// The largest intensity component of any of `lights`.
 fn max_intensity(lights: &[Light]) -> f32 {
     lights.iter().flat_map(|l| l.intensity[..3].to_vec()).fold(0.0, f32::max)
@@ -451,28 +467,15 @@ fn reference_stderr(s: &FrameSettings, mean: &[[f32; 4]], second: &[[f32; 4]]) -
     (count > 0).then(|| (se2 / count as f64).sqrt())
 }
 
-/// `--defensive 0` with a CDF: a VPL the CDF gives no importance is never drawn, yet the estimator counts
-/// only what it draws. Allowed (the thesis's CDFs have no defensive share), said once per frame.
-fn defensive_warning(s: &FrameSettings) -> Option<String> {
-    let cdf = !matches!(s.sampling_method(), Method::Uniform | Method::All | Method::Reference);
-    (s.defensive == 0.0 && cdf && s.component != Component::Direct).then(|| {
-        "--defensive 0: a VPL its CDF gives no importance (no gather point's importance reaches it) is never drawn, so its light is missing: the estimate is biased (as the thesis's CDFs are)".to_string()
-    })
-}
-
-/// What an `rsm` light map cannot see: said once per frame.
-fn rsm_warning(s: &FrameSettings) -> Option<String> {
-    let LightMap::Rsm { fov_deg } = s.light_map else { return None };
-    let omega = s.light_map.solid_angle();
-    let missing = 1.0 - omega / (4.0 * std::f64::consts::PI);
-    Some(format!(
-        "rsm ({fov_deg}° field of view): the map covers {omega:.3} sr around each light, so {:.1} % of each light's emitted flux (I · (4π − Ω) = {:.3} W per W/sr) reaches no VPL",
-        100.0 * missing,
-        4.0 * std::f64::consts::PI - omega
-    ))
-}
-
 impl RenderContext {
+    /// The frame's lights: uploaded, and what depends on them (the gbg scale, the light maps' far).
+    fn set_lights(&mut self, lights: &[Light]) -> Result<()> {
+        self.scene.write_lights(lights)?;
+        self.max_intensity = max_intensity(lights);
+        self.far_light = far_light(self.scene.bounds_min, self.scene.bounds_max, lights);
+        Ok(())
+    }
+
     /// VPLs per gather dispatch under the device's loop iteration limit. Per VPL an invocation loops at
     /// most: the visibility's (the march's steps, ≤ dims.x + dims.y + dims.z + 3, or a trace's bound),
     /// the CDF's two binary searches (≤ 32 each), the sections and faces, plus 64 for the rest; another
@@ -620,8 +623,6 @@ impl RenderContext {
         }
         let far_cam = far_cam.max(diag) * 1.01;
         let near = far_cam * 1e-5;
-        // Paraboloid far: no light-to-surface distance exceeds the diagonal of bounds that hold both.
-        let far_light = diag * 1.01;
         let (voxel_origin, voxel_dims) = self.voxel_spec(s).uniforms_fields();
         let vpl_slots = s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res;
         let view_proj = camera.view_proj(s.width, s.height, far_cam, near).to_cols_array_2d();
@@ -632,7 +633,7 @@ impl RenderContext {
             camera: [2.0 * camera.tan_half_fov() / s.height as f32, 0.0, 0.0, 0.0],
             eye: [eye.x, eye.y, eye.z, 0.0],
             scene_min: [lo.x, lo.y, lo.z, diag],
-            scene_max: [hi.x, hi.y, hi.z, far_light],
+            scene_max: [hi.x, hi.y, hi.z, self.far_light],
             size: [s.width, s.height, self.scene.light_count, s.dprsm_res],
             maps: [0, vpl_slots, s.psm_res, s.vpls],
             light_map: [
