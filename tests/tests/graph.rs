@@ -386,6 +386,21 @@ fn cached_products_are_kept_across_graphs_until_their_key_changes() {
     assert_eq!(kept.product_names(), ["x"]);
 }
 
+/// A cached product that names one resource twice is refused where it is declared (it would be taken twice
+/// when the frame hands its resources back, inside a drop).
+#[test]
+#[should_panic(expected = "names a resource twice")]
+fn a_cached_product_naming_a_resource_twice_is_refused() {
+    use bounce_graph::graph::Retained;
+    let gpu = TestGpu::new();
+    let mut kept = Retained::default();
+    let mut g = Graph::with_retained(&gpu, &mut kept);
+    g.cached("twice", &0, |g| {
+        let x = make(g, 1.0);
+        (x, x)
+    });
+}
+
 /// A temporal image (or buffer) keeps its contents across graphs and says when they are undefined (first
 /// use, a new key); a history image gives the version of the last frame that used it (frames between
 /// that did not are skipped), and none once the histories are forgotten.

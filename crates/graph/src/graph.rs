@@ -467,6 +467,13 @@ impl<'a> Graph<'a> {
         };
         let mut handles = vec![];
         p.handles(&mut handles);
+        // Each resource is kept once: a product naming one twice (or a temporal resource, which has its
+        // own slot) would be taken twice when the frame hands them back.
+        let own = |h: &RawHandle| matches!(self.resources[h.id].home, Home::Frame);
+        assert!(
+            handles.iter().enumerate().all(|(i, h)| own(h) && handles[..i].iter().all(|g| g.id != h.id)),
+            "cached product `{name}` names a resource twice, or a temporal one"
+        );
         self.requests.push((name, Request { key, handles }));
         Ok(p)
     }
