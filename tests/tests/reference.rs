@@ -112,6 +112,18 @@ fn the_reference_matches_the_cpu_tracer_in_the_cornell_box() {
     }
 }
 
+/// A closed box split in two by a wall at x = 0, the light in the +x half; the camera at `eye` in the
+/// sealed −x half, looking at `target`. No light reaches the sealed half in one bounce.
+fn sealed_half(eye: Vec3, target: Vec3, fov_y_deg: f32) -> Scene {
+    let mut tris = bounce_tests::closed_box(Vec3::ZERO, 1.0);
+    let (a, b) = (Vec3::new(0.0, -1.0, -1.0), Vec3::new(0.0, 1.0, -1.0));
+    let (c, d) = (Vec3::new(0.0, 1.0, 1.0), Vec3::new(0.0, -1.0, 1.0));
+    tris.extend([[a, b, c], [a, c, d]]);
+    let camera = bounce_graph::camera::Camera { eye, target, up: Vec3::Y, fov_y_deg };
+    let light = point_light(Vec3::new(0.4, 0.2, 0.1), Vec3::splat(3.0));
+    Scene::from_triangles(&tris, &vec![Vec3::splat(0.7); tris.len()], camera, &[light])
+}
+
 /// Light does not leak under a wall. A closed room split in two by a zero-thickness wall, the light in one
 /// half, the camera in the other looking at the wall's foot from close by: nothing the camera sees is lit,
 /// directly or by one bounce, so every pixel is exactly 0. The light side's shadow rays from a bounce point
@@ -121,22 +133,7 @@ fn the_reference_matches_the_cpu_tracer_in_the_cornell_box() {
 /// suite scene read 0.018 at any spp where every VPL method read 0).
 #[test]
 fn light_does_not_leak_under_a_wall() {
-    let mut tris = bounce_tests::closed_box(Vec3::ZERO, 1.0);
-    let q = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| [[a, b, c], [a, c, d]];
-    tris.extend(q(
-        Vec3::new(0.0, -1.0, -1.0),
-        Vec3::new(0.0, 1.0, -1.0),
-        Vec3::new(0.0, 1.0, 1.0),
-        Vec3::new(0.0, -1.0, 1.0),
-    ));
-    let camera = bounce_graph::camera::Camera {
-        eye: Vec3::new(-0.3, -0.75, 0.05),
-        target: Vec3::new(0.0, -1.0, 0.0),
-        up: Vec3::Y,
-        fov_y_deg: 70.0,
-    };
-    let light = point_light(Vec3::new(0.4, 0.2, 0.1), Vec3::splat(3.0));
-    let scene = Scene::from_triangles(&tris, &vec![Vec3::splat(0.7); tris.len()], camera, &[light]);
+    let scene = sealed_half(Vec3::new(-0.3, -0.75, 0.05), Vec3::new(0.0, -1.0, 0.0), 70.0);
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let img = reference(&mut r, 256, 1, 24, 24);
@@ -161,22 +158,7 @@ fn light_does_not_leak_under_a_wall() {
 /// light the wall's own pixels, whose shading normal reaches through it: README, "Known limits".)
 #[test]
 fn light_does_not_reach_a_wall_face_from_behind_it() {
-    let mut tris = bounce_tests::closed_box(Vec3::ZERO, 1.0);
-    let q = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| [[a, b, c], [a, c, d]];
-    tris.extend(q(
-        Vec3::new(0.0, -1.0, -1.0),
-        Vec3::new(0.0, 1.0, -1.0),
-        Vec3::new(0.0, 1.0, 1.0),
-        Vec3::new(0.0, -1.0, 1.0),
-    ));
-    let camera = bounce_graph::camera::Camera {
-        eye: Vec3::new(-0.6, -0.5, 0.05),
-        target: Vec3::new(0.0, -0.8, 0.0),
-        up: Vec3::Y,
-        fov_y_deg: 80.0,
-    };
-    let light = point_light(Vec3::new(0.4, 0.2, 0.1), Vec3::splat(3.0));
-    let mut scene = Scene::from_triangles(&tris, &vec![Vec3::splat(0.7); tris.len()], camera, &[light]);
+    let mut scene = sealed_half(Vec3::new(-0.6, -0.5, 0.05), Vec3::new(0.0, -0.8, 0.0), 80.0);
     let n = scene.vertices.len();
     for v in &mut scene.vertices[n - 6..] {
         let tilted = (0.5 * Vec3::from_slice(&v.normal_v[..3]) + 0.866 * Vec3::Y).normalize();

@@ -138,10 +138,12 @@ impl Retained {
     /// one starts it anew. For a view changed by frames that kept none (their motion is not the histories').
     pub fn forget_histories(&mut self) {
         for name in std::mem::take(&mut self.histories).into_keys() {
-            for k in 0..2 {
-                self.temporal.remove(&format!("{name}#{k}"));
-            }
+            (0..2).for_each(|k| _ = self.temporal.remove(&format!("{name}#{k}")));
         }
+    }
+    /// Whether the current frame (since the last [`Retained::next_frame`]) used a history.
+    pub fn histories_used(&self) -> bool {
+        self.histories.values().any(|&(_, frame)| frame == self.frame)
     }
     /// Start a new frame.
     pub fn next_frame(&mut self) {

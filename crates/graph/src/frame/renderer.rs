@@ -339,7 +339,6 @@ impl Renderer {
         let mut read = Read::default();
         // What the presented image read back is divided by for its mean (present's `add`).
         let mut divide_by = 1.0f32;
-        let mut kept_histories = false;
         for_each_chunk(total, per_chunk, progress, |chunk, last| {
             let mut g = Graph::with_retained(&ctx.gpu, &mut state.retained);
             let out = build_frame(&ctx.passes, &mut g, s, &i, chunk)?;
@@ -355,7 +354,6 @@ impl Renderer {
             };
             let done = g.execute()?;
             log.add(&done);
-            kept_histories |= done.ran.contains(&"reproject");
             match (&present, presented) {
                 (Some(p), Some((image, k))) if p.read_mean => {
                     read.radiance = done.read_image(&image)?;
@@ -375,7 +373,7 @@ impl Renderer {
             }
             Ok(())
         })?;
-        state.frame_done(kept_histories);
+        state.frame_done();
         state.realtime_frames += (s.method == Method::Realtime) as u64;
         let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
         if present.is_some() {
@@ -435,11 +433,14 @@ struct PresentTo<'p> {
 /// orbit near a wall), its distance to their farthest corner; 1 % beyond either. A light inside the
 /// bounds is never farther than the diagonal from any surface.
 fn far_light(lo: Vec3, hi: Vec3, lights: &[Light]) -> f32 {
-    let corners =
-        (0..8).map(|k| Vec3::new([lo.x, hi.x][k & 1], [lo.y, hi.y][(k >> 1) & 1], [lo.z, hi.z][(k >> 2) & 1]));
-    let farthest = |p: Vec3| corners.clone().map(|c| (c - p).length()).fold(0.0f32, f32::max);
-    let beyond = lights.iter().map(|l| farthest(Vec3::from_slice(&l.position[..3]))).fold(0.0f32, f32::max);
-    (hi - lo).length().max(beyond) * 1.01
+    let beyond = lights.iter().map(|l| farthest_corner(lo, hi, Vec3::from_slice(&l.position[..3])));
+    (hi - lo).length().max(beyond.fold(0.0f32, f32::max)) * 1.01
+}
+
+/// The distance from `p` to the farthest corner of the box `lo`..`hi`.
+fn farthest_corner(lo: Vec3, hi: Vec3, p: Vec3) -> f32 {
+    let corner = |k: usize| Vec3::new([lo.x, hi.x][k & 1], [lo.y, hi.y][(k >> 1) & 1], [lo.z, hi.z][(k >> 2) & 1]);
+    (0..8).map(|k| (corner(k) - p).length()).fold(0.0f32, f32::max)
 }
 
 /// The largest intensity component of any of `lights`.
@@ -612,16 +613,7 @@ impl RenderContext {
         let eye = camera.eye;
         // Camera far plane: beyond the farthest corner of the bounds; near: a small fraction of it.
         let (lo, hi) = (self.scene.bounds_min, self.scene.bounds_max);
-        let mut far_cam = 0.0f32;
-        for k in 0..8 {
-            let c = glam::Vec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            );
-            far_cam = far_cam.max((c - eye).length());
-        }
-        let far_cam = far_cam.max(diag) * 1.01;
+        let far_cam = farthest_corner(lo, hi, eye).max(diag) * 1.01;
         let near = far_cam * 1e-5;
         let (voxel_origin, voxel_dims) = self.voxel_spec(s).uniforms_fields();
         let vpl_slots = s.light_map.faces() * self.scene.light_count * s.dprsm_res * s.dprsm_res;

@@ -16,7 +16,7 @@ pub struct FrameState {
     pub previous_camera: Option<Camera>,
     /// The lights of the last frame rendered.
     pub previous_lights: Option<Vec<Light>>,
-    /// The camera and lights of the last frame that kept the histories (ran `reproject`): frames between
+    /// The camera and lights of the last frame that used the histories (`Retained::histories_used`): frames between
     /// it and the next that keeps them (the viewer's still frames) must not have moved either, or the
     /// histories are forgotten (`Retained::forget_histories`).
     pub history_view: Option<(Camera, Vec<Light>)>,
@@ -38,12 +38,12 @@ impl FrameState {
         }
     }
 
-    /// After a frame: what the next one compares against (`kept_histories`: it ran `reproject`).
-    pub(super) fn frame_done(&mut self, kept_histories: bool) {
-        self.retained.next_frame();
-        if kept_histories {
+    /// After a frame: what the next one compares against.
+    pub(super) fn frame_done(&mut self) {
+        if self.retained.histories_used() {
             self.history_view = Some((self.camera, self.lights.clone()));
         }
+        self.retained.next_frame();
         self.previous_camera = Some(self.camera);
         self.previous_lights = Some(self.lights.clone());
     }

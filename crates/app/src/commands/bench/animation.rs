@@ -264,18 +264,18 @@ fn csv(samples: &[FrameSample]) -> String {
         let of = || samples.iter().filter(move |s| s.method.name() == m && s.temporal.name() == t);
         let later = || of().filter(|s| s.frame > 0);
         // Absent (no denoised frames) is an empty field; an infinite error is printed as such.
-        let finite = |x: f64| (!x.is_nan()).then_some(x);
+        let present = |x: f64| (!x.is_nan()).then_some(x);
         csv.push_str(&format!(
             "{m},{t},mean,{:.4},{:.4},{:.6e},{:.6e},{},{},{:.4},{:.6},{}\n",
             mean(later().map(|s| s.gpu_ms)),
             mean(of().map(|s| s.rays)),
             mean(of().map(|s| s.rel_mse)),
             mean(later().filter_map(|s| s.flicker)),
-            e(finite(mean(of().filter_map(|s| s.denoised.map(|d| d.0))))),
-            e(finite(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))))),
+            e(present(mean(of().filter_map(|s| s.denoised.map(|d| d.0))))),
+            e(present(mean(later().filter_map(|s| s.denoised.and_then(|d| d.1))))),
             mean(later().map(|s| s.raw_ms)),
             weighted_ratio(of().map(|s| (Some(s.image_mean), s.truth_mean))),
-            finite(weighted_ratio(of().map(|s| (s.denoised_image_mean, s.truth_mean))))
+            present(weighted_ratio(of().map(|s| (s.denoised_image_mean, s.truth_mean))))
                 .map(|v| format!("{v:.6}"))
                 .unwrap_or_default(),
         ));
