@@ -9,7 +9,7 @@
 //   Σ_v c(v) = Σ_v ∫_{Q_v⁺} F(v, y) dA(y),   F(v, y) = c(v) / A_v⁺,
 // an integral over pairs (VPL, point of its patch) in area measure, which both strategies sample:
 //   CDF: v from the gbg CDF mixture (probability P_v, shared/sampling.glsl), y uniform in Q_v⁺:
-//        p_c(v, y) = P_v / A_v⁺   (at x, in solid angle: P_v · |y−x|² / (A_v⁺ · cos θ_y), the issue's form);
+//        p_c(v, y) = P_v / A_v⁺   (at x, in solid angle: P_v · |y−x|² / (A_v⁺ · cos θ_y), the form the estimator is written in);
 //   gathering: a cosine-distributed direction ω from x (cos θ_x / π per steradian); the ray's first hit
 //        (voxel march, or the BVH with EXACT_VISIBILITY), projected into light l's DPRSM and refined
 //        (gathering_texel), names a texel v = T_l(ω); y is where the ray from x meets v's tangent

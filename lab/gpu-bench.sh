@@ -405,7 +405,7 @@ run_bench() {
   local vs
   IFS=, read -ra vs <<<"$vis_sizes"
   SECONDS=0
-  # The real-time frame first: the issue's 1080p goal.
+  # The real-time frame first: the 1080p goal (8 ms).
   realtime_table "$out" "$md" "${rt_size%x*}" "${rt_size#*x}" 24 "$dprsm"
   # And at the viewer's map size (half of `render`'s each way), what an interactive user gets.
   realtime_table "$out" "$md" "${rt_size%x*}" "${rt_size#*x}" 24 "$((dprsm / 2))"

@@ -9,6 +9,8 @@ packages=(
   libvulkan1               # the Vulkan loader
   cmake ninja-build g++ python3 git  # the shaderc crate builds glslang/shaderc from source
   xvfb xauth               # `bounce view` tests: a virtual X display (xvfb-run)
+  libxcursor1 libxi6 libxkbcommon0 libxkbcommon-x11-0  # what winit loads at run time to open a window on X
+  curl ca-certificates     # rustup, where Rust is missing
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -18,13 +20,34 @@ if ((${#missing[@]})); then
   echo "installing: ${missing[*]}" >&2
   sudo=""
   [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  if [ -n "$sudo" ] && ! command -v sudo >/dev/null 2>&1; then
+    echo "error: missing packages (${missing[*]}) and no sudo to install them: run this as root once" >&2
+    exit 1
+  fi
   $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  # env, not a prefix: sudo resets the environment it is given.
+  $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-if ! command -v cargo >/dev/null 2>&1; then
-  [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
+
+# Rust: the oldest the locked dependencies build with (Cargo.toml's rust-version). A missing or older
+# toolchain is installed with rustup (Debian's own cargo is too old), with rustfmt and clippy for test.sh.
+rust_minimum=1.88
+[ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
+rust_ok() {
+  local v
+  v="$(rustc --version 2>/dev/null | awk '{print $2}')" || return 1
+  [ -n "$v" ] && [ "$(printf '%s\n%s\n' "$rust_minimum" "$v" | sort -V | head -1)" = "$rust_minimum" ]
+}
+if ! command -v cargo >/dev/null 2>&1 || ! rust_ok; then
+  echo "installing Rust (stable, $rust_minimum or newer) with rustup" >&2
+  if ! command -v rustup >/dev/null 2>&1; then
+    curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y -q --profile minimal --no-modify-path
+    export PATH="$HOME/.cargo/bin:$PATH"
+  fi
+  rustup -q toolchain install stable --profile minimal --component rustfmt clippy
+  rustup -q default stable
 fi
-command -v cargo >/dev/null 2>&1 || { echo "error: cargo not found; install Rust 1.80 or newer (https://rustup.rs)" >&2; exit 1; }
+rust_ok || { echo "error: Rust $rust_minimum or newer is needed (rustc: $(rustc --version 2>&1))" >&2; exit 1; }
 
 # The first build compiles shaderc (glslang and SPIRV-Tools, C++) from source: say so before it starts,
 # and show cargo's progress (the callers build without -q when nothing is built yet).

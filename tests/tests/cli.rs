@@ -623,7 +623,7 @@ fn view_accumulates_exactly_the_frames_render_makes() {
     assert!(worst < 1e-5, "the viewer's mean differs from the renders': {worst}");
 }
 
-/// The bar: 30 frames under Xvfb exit 0 and the screenshot shows the scene, its image mean
+/// The bar: 30 frames under Xvfb exit 0 and the screenshot shows the scene, its image mean
 /// within 5 % of the converged `all` image's (30 × 4 VPLs per pixel: the mean's noise is ~1 %).
 #[test]
 fn view_30_frames_under_xvfb_shows_the_scene() {
@@ -685,7 +685,7 @@ fn view_is_real_time_while_the_camera_moves() {
     }
 }
 
-/// The bar for a moving light: `view --light-path orbit --frames 30` under Xvfb exits 0, its
+/// The bar for a moving light: `view --light-path orbit --frames 30` under Xvfb exits 0, its
 /// screenshot is exactly frame 29 of `render --frames 30 --light-path orbit` (same seed: `coherent`
 /// gives every frame of a moving light the seed S, and the viewer's mean after a light move is that
 /// one frame), it differs from the static light's frame with the same seed, and the whole run copied

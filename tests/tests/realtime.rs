@@ -160,7 +160,7 @@ fn realtime_skips_the_end_balls_while_the_camera_or_a_light_moves() {
     assert!(moving.ran.contains(&"ris_shade"), "{:?}", moving.ran);
 }
 
-/// At most two shadow rays per pixel per frame (the bound; realtime traces one for each of its
+/// At most two shadow rays per pixel per frame (the real-time bound; realtime traces one for each of its
 /// two reservoirs' final samples), counted by the shade's counter, while the camera orbits and the light moves; and the counter
 /// counts: ris with four reservoirs traces more than three per lit pixel on the same frames.
 #[test]

@@ -76,7 +76,7 @@ pub(crate) fn indirect_with(
 
 /// Tolerances: the tessellation (48 × 96 quads) moves the surface by under 0.1% of R and tilts facets
 /// by under 2°, and the 64² DPRSM is a midpoint quadrature of a smooth integrand (flux ∝ Δω, G
-/// constant): together well under 1%; the issue asks for 2% on the mean. Per pixel `all` must be within
+/// constant): together well under 1%; the bar is 2% on the mean. Per pixel `all` must be within
 /// 3% (facet-scale variation of cos terms near x), `uniform` with 256 VPLs within 15% RMS (its noise:
 /// the flux per texel varies 4× from a face's centre to its rim).
 #[test]
@@ -275,7 +275,7 @@ fn all_agrees_with_the_exact_one_bounce_reference_in_the_cornell_box() {
         "all vs exact one-bounce: relMSE {e:.4} (reference noise {noise:.4}), mean {ma:.5} vs {mr:.5} ({:+.2}%)",
         100.0 * (ma - mr) / mr
     );
-    // The issue's acceptance bar for `all` against an independent one-bounce tracer. What separates
+    // The acceptance bar for `all` against an independent one-bounce tracer. What separates
     // them: the DPRSM's discretisation, the voxel march (conservative cells fatten occluders: darker)
     // and the VPL singularity at corners (brighter); the reference's own noise is in `noise`.
     assert!(e <= 0.02, "relMSE {e}");

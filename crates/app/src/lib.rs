@@ -27,6 +27,8 @@ use std::io::Write;
 pub fn cli_reference() -> String {
     use clap::CommandFactory;
     let mut cmd = Cli::command().term_width(100);
+    // Subcommands name the binary in their usage lines (`bounce render …`) once the tree is built.
+    cmd.build();
     let mut md = String::from(
         "# bounce command-line reference\n\nGenerated from the clap schema (`bounce <command> --help`); a test checks it.\n",
     );

@@ -6,7 +6,8 @@
 //!   gbuffer ──────── direct ──┤            │ (kept per camera, size and lights; exact shadow rays)
 //!                             ├ importance → cdf_reduce (kept per CDF key; `uniform`'s in its own slot)
 //!                             ├ end_balls (per pixel, per VPL: kept with the G-buffer, the VPLs; exact gather)
-//!                             └ [psm_select → psm] → gather | mis | reference → radiance (temporal)
+//!                             ├ [psm_select → psm] → gather | mis | reference → radiance (temporal)
+//!                             └ reproject → ris (initial, temporal, spatial, shade) → [denoise] → radiance
 //! ```
 //!
 //! Every product above the last line is asked for with [`Graph::cached`] under its key

@@ -69,7 +69,7 @@ pub enum Method {
 }
 
 /// Reservoirs per pixel of `Method::Realtime`, each with its own reuse chain and one shadow ray: the
-/// issue's bound of two rays a pixel. Two against one (BENCHMARKS.md, "Real time under motion"): half the
+/// real-time bound of two rays a pixel. Two against one (BENCHMARKS.md, "Real time under motion"): half the
 /// raw error and flicker for 1.1–1.5× the frame time, 1.4–1.9× the raw efficiency in four runs of motion
 /// (Sibenik and the two rooms, camera and light; measured there only).
 pub const REALTIME_RESERVOIRS: u32 = 2;
