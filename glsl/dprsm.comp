@@ -57,14 +57,15 @@ void texel_vpl(ivec3 id, out vec4 position, out vec4 normal, out vec4 flux) {
     t = point.w;
     vec3 world = light.position.xyz + lm_from_local(point.xyz, li, face);
     float w0 = 1.0 - bary.x - bary.y;
-    vec3 n = normalize(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz);
+    vec3 ng = unit_direction(cross(v1.position_u.xyz - v0.position_u.xyz, v2.position_u.xyz - v0.position_u.xyz));
+    vec3 n = shading_normal(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz, ng);
     if (dot(n, light.position.xyz - world) < 0.0) n = -n;
     vec2 tex = w0 * vec2(v0.position_u.w, v0.normal_v.w) + bary.x * vec2(v1.position_u.w, v1.normal_v.w)
              + bary.y * vec2(v2.position_u.w, v2.normal_v.w);
     float d_omega = lm_d_omega(uv, res);
     // The face normal, not the shading one: the patch is the triangle's. Floored so that the area stays a
     // positive normal float (w = 0 means "no VPL") at any scene scale.
-    float cos_a = max(abs(dot(normalize(cross(b - a, c - a)), dir)), VPL_MIN_COS);
+    float cos_a = max(abs(dot(unit_direction(cross(b - a, c - a)), dir)), VPL_MIN_COS);
     position = vec4(world, max(d_omega * t * t / cos_a, 1e-30));
     normal = vec4(n, t);
     flux = vec4(albedo_at(tri, tex) * light.intensity.rgb * d_omega, d_omega);

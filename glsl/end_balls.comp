@@ -22,7 +22,7 @@ layout(set = 0, binding = B_END_BALL_OUT, rgba32f) uniform writeonly image2D out
 vec3 face_normal(uint tri, vec3 toward) {
     vec3 a = vertices[3u * tri].position_u.xyz, b = vertices[3u * tri + 1u].position_u.xyz;
     vec3 c = vertices[3u * tri + 2u].position_u.xyz;
-    vec3 n = normalize(cross(b - a, c - a));
+    vec3 n = unit_direction(cross(b - a, c - a));
     return dot(n, toward) < 0.0 ? -n : n;
 }
 
@@ -30,7 +30,7 @@ vec3 face_normal(uint tri, vec3 toward) {
 vec4 ball_at(vec3 p, uint tri, vec3 side) {
     if (tri == BVH_NO_TRI) return vec4(0.0);
     vec3 n = face_normal(tri, side);
-    if (any(isnan(n))) return vec4(0.0); // a zero-area triangle has no plane
+    if (n == vec3(0.0)) return vec4(0.0); // a zero-area triangle has no plane
     return vec4(n, end_ball_radius(p, n, END_BALL_MAX_RADIUS * frame.scene_min.w));
 }
 

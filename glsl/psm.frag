@@ -25,5 +25,7 @@ void main() {
     float t;
     vec2 bary;
     if (!wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, i_a, i_b, i_c, t, bary) || !(t > 0.0)) discard;
+    // A sliver's t from the barycentric point, as the light maps place their VPLs (shared/map_depth.glsl).
+    t = map_texel_point(dir, t, bary, i_a, i_b, i_c, frame.scene_max.w, gl_FragCoord.z).w;
     gl_FragDepth = map_texel_depth(t, frame.scene_max.w, gl_FragCoord.z);
 }

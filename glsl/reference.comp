@@ -48,9 +48,9 @@ Hit hit_at(uint tri, vec2 bary, vec3 x) {
     float w0 = 1.0 - bary.x - bary.y;
     Hit h;
     h.y = w0 * v0.position_u.xyz + bary.x * v1.position_u.xyz + bary.y * v2.position_u.xyz;
-    h.ns = normalize(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz);
+    h.ng = unit_direction(cross(v1.position_u.xyz - v0.position_u.xyz, v2.position_u.xyz - v0.position_u.xyz));
+    h.ns = shading_normal(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz, h.ng);
     if (dot(h.ns, x - h.y) < 0.0) h.ns = -h.ns;
-    h.ng = normalize(cross(v1.position_u.xyz - v0.position_u.xyz, v2.position_u.xyz - v0.position_u.xyz));
     h.x_side = sign(dot(h.ng, x - h.y));
     vec2 uv = w0 * vec2(v0.position_u.w, v0.normal_v.w) + bary.x * vec2(v1.position_u.w, v1.normal_v.w)
             + bary.y * vec2(v2.position_u.w, v2.normal_v.w);

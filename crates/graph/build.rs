@@ -94,6 +94,7 @@ const SHADERS: &[Shader] = &[
     file("test/owen_sobol.comp"),
     file("test/region_weights.comp"),
     file("test/shadow_queue.comp"),
+    file("test/unit_normals.comp"),
     file("test/voxel_march.comp"),
     file("test/voxel_rcp.comp"),
 ];

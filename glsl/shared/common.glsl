@@ -69,6 +69,24 @@ vec3 ray_triangle_bary(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
     return t > 0.0 ? vec3(t, u, v) : vec3(-1.0);
 }
 
+// n's direction for any finite n (0 for 0). Where |n|² is no normal float (a tiny triangle's edge cross
+// product: 0 or a denormal, where normalize gives ±inf or NaN; or beyond the float range) n is first
+// scaled by its largest component, exactly the same direction; elsewhere it is normalize(n).
+vec3 unit_direction(vec3 n) {
+    float l2 = dot(n, n);
+    if (l2 > 1e-30 && l2 < 1e30) return normalize(n);
+    float m = max(abs(n.x), max(abs(n.y), abs(n.z)));
+    return m > 0.0 && !isinf(m) ? normalize(n / m) : n;
+}
+
+// A surface point's shading normal: the vertex normals' interpolation, normalized, or `face` (the unit
+// face normal) where they cancel (vertex normals facing apart, a point on their zero set: normalize
+// gave NaN, which then lit every pixel that drew the VPL, or none).
+vec3 shading_normal(vec3 interpolated, vec3 face) {
+    float l2 = dot(interpolated, interpolated);
+    return l2 > 1e-30 && !isinf(l2) ? normalize(interpolated) : face;
+}
+
 // The thesis's luminance (eq. 7.6): the scalar importance of an RGB contribution (also the
 // reference's light-strategy weights).
 const vec3 LUMINANCE_WEIGHTS = vec3(LUMINANCE_R, LUMINANCE_G, LUMINANCE_B);

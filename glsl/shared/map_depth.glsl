@@ -62,11 +62,17 @@ float map_texel_depth(float t, float far, float box) {
 }
 
 // A texel's hit point in the map's frame (the viewpoint at the origin; xyz) and its distance (w): dir · t,
-// unless t came out short of the box (`box`, map_box_depth's: a sliver, above), then the barycentric
-// point of the watertight test's weights, a convex combination of the vertices, so on the triangle up to
-// rounding. The usual texel keeps dir · t, the more precise at grazing angles.
+// unless the triangle is a sliver (twice its area under 1e-3 of its longest edge squared: its plane's
+// normal, and so the plane-form t, is ill-conditioned, and came out long as well as short: points up to
+// 97 % of their distance off the triangle, behind the surface, in the map_depth test) or t came out short
+// of the box (`box`, map_box_depth's), then the barycentric point of the watertight test's weights, a
+// convex combination of the vertices, so on the triangle up to rounding. Other texels keep dir · t, the
+// more precise at grazing angles.
 vec4 map_texel_point(vec3 dir, float t, vec2 bary, vec3 a, vec3 b, vec3 c, float far, float box) {
-    if (min(t / far, 1.0) >= box) return vec4(dir * t, t);
+    vec3 n = cross(b - a, c - a);
+    float l2 = max(dot(b - a, b - a), max(dot(c - b, c - b), dot(a - c, a - c)));
+    bool sliver = dot(n, n) < 1e-6 * l2 * l2;
+    if (!sliver && min(t / far, 1.0) >= box) return vec4(dir * t, t);
     vec3 p = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
     return vec4(p, length(p));
 }

@@ -35,7 +35,7 @@ struct FrameUniforms {
     vec4 scene_min;          // xyz scene bounds (w: scene diagonal length)
     vec4 scene_max;          // xyz scene bounds (w: far distance used by the paraboloid maps)
     uvec4 size;              // x width, y height, z light count, w reflective DPRSM (VPL) resolution per face
-    uvec4 maps;              // x direct-light paraboloid shadow map resolution per face, y VPL count (2·lights·w²), z,w unused
+    uvec4 maps;              // x unused, y the VPL slots (faces × lights × dprsm_res²), z --psm-res, w --vpls
     vec4 shadow;             // x constant bias (world units), y slope bias (texel units), z,w unused
     vec4 voxel_origin;       // xyz world position of the grid's minimum corner, w cell size (cubic cells)
     uvec4 voxel_dims;        // xyz cells per axis, w total cells

@@ -4,8 +4,9 @@
 // psm.geom would emit, the least texel depth t / far over rays from the origin through q, q's
 // neighbours, the vertices, the edge midpoints and a 16 × 16 grid of the triangle (as psm.frag and dprsm.comp find t,
 // before map_texel_depth lifts it to the box's), how many of those rays hit, and distance_to_triangle.
-// vec4 [2k] = (box, least texel depth, hits, distance), [2k + 1].x the least distance of the hit points
-// map_texel_point places (the VPLs'), over far. tests/tests/dprsm.rs checks the box, the distance and the
+// vec4 [S k] = (box, least texel depth, hits, distance), [S k + 1].x the least distance of the hit points
+// map_texel_point places (the VPLs'), over far, [S k + 2 + i] ray i's placed point (w 1; 0 for a miss),
+// S = 2 + RAYS. tests/tests/dprsm.rs checks the box, the distance and the
 // placed points against the f64 closest point, and counts the texels the lift moves.
 #include "../shared/bindings.glsl"
 #include "../shared/watertight.glsl"
@@ -24,6 +25,7 @@ layout(std430, set = 0, binding = B_TEST_OUT) writeonly buffer Outputs { vec4 ou
 
 const uint GRID = 16u;
 const uint RAYS = GRID * GRID + 6u + 9u;
+const uint STRIDE = 2u + RAYS;
 
 // Ray i's aim: the grid's cell centres folded into the triangle, the vertices, the edge midpoints, then q
 // and q moved by a thousandth of each edge either way.
@@ -59,9 +61,13 @@ void main() {
         if (wt_hit_triangle_plane_t(wt_make_ray(vec3(0.0), dir), dir, a, b, c, t, bary) && t > 0.0) {
             hits++;
             least = min(least, min(t / far, 1.0));
-            placed = min(placed, map_texel_point(dir, t, bary, a, b, c, far, box).w / far);
+            vec4 point = map_texel_point(dir, t, bary, a, b, c, far, box);
+            placed = min(placed, point.w / far);
+            outputs[STRIDE * k + 2u + i] = vec4(point.xyz, 1.0);
+        } else {
+            outputs[STRIDE * k + 2u + i] = vec4(0.0);
         }
     }
-    outputs[2u * k] = vec4(box, least, float(hits), distance_to_triangle(a, b, c));
-    outputs[2u * k + 1u] = vec4(placed, 0.0, 0.0, 0.0);
+    outputs[STRIDE * k] = vec4(box, least, float(hits), distance_to_triangle(a, b, c));
+    outputs[STRIDE * k + 1u] = vec4(placed, 0.0, 0.0, 0.0);
 }

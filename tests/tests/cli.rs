@@ -206,7 +206,8 @@ fn bench_writes_csv_markdown_and_a_plot() {
 }
 
 /// A cached ground truth is its scene's: edit the scene (here its light) and the next run renders the
-/// truth anew instead of measuring against the old scene's; the same scene takes the cache again.
+/// truth anew instead of measuring against the old scene's; the same scene takes the cache again. A
+/// dark scene's bench writes its whole output.
 #[test]
 fn a_cached_reference_is_rendered_anew_when_the_scene_changes() {
     let d = scratch("bench-edited");
@@ -247,6 +248,14 @@ fn a_cached_reference_is_rendered_anew_when_the_scene_changes() {
         "{edited}"
     );
     assert!(run().contains("(cached)"));
+    // A dark scene (every error 0, nothing for the log axes) still writes its tables and its plot, the
+    // plot's axes empty (it was an error after the tables were written, leaving an old plot beside them).
+    std::fs::write(&scene, toml(0.0)).unwrap();
+    let dark = run();
+    assert!(dark.contains("reference: rendering"), "{dark}");
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    assert!(md.contains("| uniform |"), "{md}");
+    assert_eq!(&std::fs::read(out.join("time_vs_error.png")).unwrap()[1..4], b"PNG");
 }
 
 /// `compare`: relMSE and the mean ratio of a test EXR against a reference by their closed forms (one
@@ -481,6 +490,13 @@ fn bad_inputs_give_one_line_and_exit_2() {
             "width",
         ),
         ("zero vpls", vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))], vec!["--vpls", "0"], "VPL"),
+        // A count no frame needs: 4 billion filled the host's memory with dispatches before the first frame.
+        (
+            "too many vpls",
+            vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
+            vec!["--vpls", "4000000000"],
+            "VPL count",
+        ),
         (
             "huge dprsm",
             vec![("m.obj", good_obj.into()), ("s.toml", toml("m.obj", ""))],
@@ -534,19 +550,32 @@ fn bad_inputs_give_one_line_and_exit_2() {
         assert!(errs[0].contains(must), "{name}: the error does not name `{must}`: {}", errs[0]);
         assert!(!out.exists(), "{name}: an output file was written");
     }
-    // An output path that is a directory, and one file named for both outputs.
+    // An output path that is a directory (or ends like one), one file named for both outputs, and a name
+    // whose extension is not the format written (an EXR's bytes went into `x.png`, a scene file could
+    // be overwritten by its own render). An animation's frame whose name a folder holds is found before
+    // the first frame renders, and no frame is written.
     let dir = d.join("zero-vpls");
     let (scene, out) = (dir.join("s.toml"), dir.join("out.exr"));
     let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(frames.join("frame_0001.png")).unwrap();
+    let in_dir = |name: &str| format!("{}/{name}", dir.display());
     for (args, named) in [
         (vec!["--out", dir.to_str().unwrap()], "is a directory"),
+        (vec!["--out", &in_dir("new/")], "is a directory"),
         (vec!["--out", out, "--png", &format!("{}/./out.exr", dir.display())], "the same file"),
+        (vec!["--out", &in_dir("out.png")], "must end in .exr"),
+        (vec!["--out", scene], "must end in .exr"),
+        (vec!["--out", out, "--png", &in_dir("other.exr")], "must end in .png"),
+        (vec!["--frames", "3", "--out-dir", frames.to_str().unwrap()], "frame_0001.png"),
     ] {
         let r = bounce(&[&["render", scene, "--width", "8", "--height", "8"][..], &args].concat());
         assert_eq!(r.code, 2, "{named}: exit {} stderr {}", r.code, r.stderr);
         let errs = error_lines(&r);
         assert!(errs.len() == 1 && errs[0].contains(named), "{}", r.stderr);
         assert!(!Path::new(out).exists(), "{named}: an output file was written");
+        assert!(std::fs::read_dir(&frames).unwrap().count() == 1, "{named}: a frame was written");
+        assert!(std::fs::read_to_string(scene).unwrap().contains("[camera]"), "{named}: the scene was overwritten");
     }
     // A missing argument is named on the one line (clap lists it below its first line).
     let nowhere = d.join("nowhere");

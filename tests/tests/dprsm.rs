@@ -292,7 +292,9 @@ fn closest_point_f64(t: [DVec3; 3]) -> DVec3 {
 /// The test kernel also casts the fragment shader's texel rays through 271 points of each triangle (its
 /// closest point among them): the points `map_texel_point` places (the VPLs, dprsm.comp) must not be nearer the light
 /// than the triangle (on slivers the plane-form t fell up to 88 % short: 697 triangles failed this before
-/// the barycentric fallback), and it reports how many hit nearer than the box (the texels the lift moves).
+/// the barycentric fallback), nor off its plane (it also came out long, up to 97 % of the distance, until
+/// slivers took the barycentric point always), and it reports how many hit nearer than the box (the
+/// texels the lift moves).
 #[test]
 fn the_light_maps_box_depth_is_below_every_texel_depth() {
     let mut rng = bounce_tests::Rng(0x0DE9_7B0D);
@@ -349,9 +351,33 @@ fn the_light_maps_box_depth_is_below_every_texel_depth() {
     }
     let gpu = TestGpu::new();
     let shader = bounce_graph::shaders::MAP_DEPTH_COMP;
-    let out: Vec<[f32; 4]> = bounce_tests::run_test_kernel(&gpu, "map_depth", shader, &cases, 2 * cases.len());
+    // Per case: the box and depths, the least placed distance, then each of the kernel's 271 rays' point.
+    const STRIDE: usize = 2 + 271;
+    let out: Vec<[f32; 4]> = bounce_tests::run_test_kernel(&gpu, "map_depth", shader, &cases, STRIDE * cases.len());
     let (got, placed): (Vec<[f32; 4]>, Vec<f32>) =
-        (out.iter().step_by(2).copied().collect(), out.iter().skip(1).step_by(2).map(|p| p[0]).collect());
+        (out.iter().step_by(STRIDE).copied().collect(), out.iter().skip(1).step_by(STRIDE).map(|p| p[0]).collect());
+    // How far each placed point (a VPL) lies off its triangle's plane (f64), beyond 20 ulps of the
+    // triangle's size, over its distance from the light: a plane-form t that came out long put a sliver's
+    // VPLs behind its surface (up to 0.97 of their distance before slivers took the barycentric point).
+    let mut worst_off = (0.0f64, 0usize);
+    for (k, t) in tris.iter().enumerate() {
+        for p in out[STRIDE * k + 2..STRIDE * (k + 1)].iter().filter(|p| p[3] == 1.0) {
+            let p = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+            let size = t.iter().map(|v| v.length()).fold(0.0, f64::max);
+            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+            let off = (n.dot(p - t[0]).abs() - 2e-6 * size).max(0.0) / p.length();
+            if off > worst_off.0 {
+                worst_off = (off, k);
+            }
+        }
+    }
+    eprintln!("placed points: at most {:.2e} of their distance off their plane (case {})", worst_off.0, worst_off.1);
+    assert!(
+        worst_off.0 < 1e-5,
+        "case {}: a placed point {:.2e} of its distance off its plane",
+        worst_off.1,
+        worst_off.0
+    );
     let (mut bad, mut rays, mut hits, mut lifted, mut worst_short) = (vec![], 0usize, 0usize, 0usize, 0.0f64);
     for (k, (o, t)) in got.iter().zip(&tris).enumerate() {
         let far = cases[k][0][3] as f64;

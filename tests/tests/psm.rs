@@ -58,13 +58,18 @@ fn the_shared_vpl_set_with_its_maps_matches_all() {
 }
 
 /// Impossible PSM settings are refused with a reason: `all` (a map per VPL slot), more maps than the
-/// device's array layers, more memory than the bound.
+/// device's array layers or a render pass's layers, more memory than the bound.
 #[test]
 fn impossible_psm_settings_are_refused() {
     let gpu = TestGpu::new();
+    let limits = gpu.limits();
+    let (images, passes) = (limits.max_image_array_layers, limits.max_framebuffer_layers);
+    let over = images.min(passes) + 1;
+    let named = if images <= passes { "maxImageArrayLayers" } else { "maxFramebufferLayers" };
     for (s, want) in [
         (FrameSettings { method: Method::All, ..settings(Visibility::Psm, 1) }, "sampled method"),
-        (FrameSettings { vpls: 1_000_000, ..settings(Visibility::Psm, 1) }, "maxImageArrayLayers"),
+        (FrameSettings { vpls: over, ..settings(Visibility::Psm, 1) }, named),
+        (FrameSettings { vpls: 1_000_000, ..settings(Visibility::Psm, 1) }, "VPL count"),
         (FrameSettings { vpls: 2048, psm_res: 4096, ..settings(Visibility::Psm, 1) }, "MiB"),
     ] {
         let e = s.validate(&gpu).unwrap_err().to_string();

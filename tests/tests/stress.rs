@@ -415,3 +415,52 @@ fn a_light_moved_outside_the_bounds_still_lights_the_scene() {
     eprintln!("light outside the bounds: all {all:.4}, reference {reference:.4}, ratio {:.4}", all / reference);
     assert!(reference > 0.0 && (all / reference - 1.0).abs() < 0.05, "all {all} against the reference {reference}");
 }
+
+/// The face and shading normals (`unit_direction`, `shading_normal`, glsl/shared/common.glsl) against
+/// f64, where `normalize` fails: triangles from 1e-19 to 1e18 in size (a tiny one's edge cross product
+/// squares to 0 or a denormal, where normalize gave ±inf or NaN: a NaN VPL normal lit no pixel, or every
+/// pixel that drew it), and vertex normals that cancel at the point (n and −n at two corners, halfway:
+/// normalize(0) is NaN), where the face normal stands in.
+#[test]
+fn normals_are_unit_at_every_size_and_where_vertex_normals_cancel() {
+    let mut rng = bounce_tests::Rng(0x4E0E_3A15);
+    let mut cases: Vec<[[f32; 4]; 4]> = vec![];
+    let mut want: Vec<(DVec3, Option<DVec3>)> = vec![];
+    for k in 0..600 {
+        let scale = 10f32.powf(rng.range(-19.0, 18.0));
+        let [a, b, c] = [0, 1, 2].map(|_| rng.unit() * scale);
+        let face = (b - a).as_dvec3().cross((c - a).as_dvec3());
+        if face.length() == 0.0 || !face.is_finite() {
+            continue;
+        }
+        // Every third case: vertex normals n, −n meeting halfway (exactly 0); the others a unit vector.
+        let n = rng.unit();
+        let interpolated = if k % 3 == 0 { n * 0.5 + (-n) * 0.5 } else { n };
+        let w = |v: Vec3| [v.x, v.y, v.z, 0.0];
+        cases.push([w(a), w(b), w(c), w(interpolated)]);
+        let shading = (interpolated != Vec3::ZERO).then(|| n.as_dvec3().normalize());
+        want.push((face.normalize(), shading));
+    }
+    let gpu = TestGpu::new();
+    let shader = bounce_graph::shaders::UNIT_NORMALS_COMP;
+    let out: Vec<[f32; 4]> = bounce_tests::run_test_kernel(&gpu, "unit_normals", shader, &cases, 2 * cases.len());
+    let v = |p: [f32; 4]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+    let (mut tiny, mut cancelled) = (0, 0);
+    for (k, (face, shading)) in want.iter().enumerate() {
+        let (got_face, got_shading) = (v(out[2 * k]), v(out[2 * k + 1]));
+        assert!((got_face - face).length() < 1e-5, "case {k}: face {got_face} against {face} ({:?})", cases[k]);
+        let s = shading.unwrap_or(*face);
+        assert!((got_shading - s).length() < 1e-5, "case {k}: shading {got_shading} against {s} ({:?})", cases[k]);
+        // |cross|² outside f32's normal range: normalize's own square overflows or underflows.
+        let (a, b, c) = (v(cases[k][0]), v(cases[k][1]), v(cases[k][2]));
+        let l2 = (b - a).cross(c - a).length_squared();
+        tiny += usize::from(!(1.2e-38..3.4e38).contains(&l2));
+        cancelled += usize::from(shading.is_none());
+    }
+    // The cases the test is for are there.
+    eprintln!(
+        "{} cases: {tiny} cross products squaring outside f32's range, {cancelled} cancelled normals",
+        want.len()
+    );
+    assert!(tiny > 20 && cancelled > 100, "{tiny} tiny triangles, {cancelled} cancelled normals");
+}

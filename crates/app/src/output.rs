@@ -34,14 +34,14 @@ fn temp_path(path: &Path) -> PathBuf {
 /// uncommitted (a later output of the same command failed), it removes the temporary: a command that
 /// writes several files stages them all first, so a failure leaves none of them half-written or alone.
 #[must_use = "a staged file is removed unless committed"]
-struct Staged {
+pub struct Staged {
     tmp: PathBuf,
     path: PathBuf,
     committed: bool,
 }
 
 impl Staged {
-    fn commit(mut self) -> Result<()> {
+    pub fn commit(mut self) -> Result<()> {
         std::fs::rename(&self.tmp, &self.path).with_context(|| format!("renaming into {}", self.path.display()))?;
         self.committed = true;
         Ok(())
@@ -56,25 +56,50 @@ impl Drop for Staged {
     }
 }
 
+/// The file a write to `path` replaces: the target of a symbolic link (the rename would replace the link
+/// itself, leaving its target as it was), `path` otherwise.
+fn resolved(path: &Path) -> PathBuf {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()),
+        _ => path.to_path_buf(),
+    }
+}
+
 /// Write with `write` to `path`'s temporary file (removed again on failure).
 fn stage(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<Staged> {
-    let staged = Staged { tmp: temp_path(path), path: path.to_path_buf(), committed: false };
+    let path = resolved(path);
+    let staged = Staged { tmp: temp_path(&path), path, committed: false };
     write(&staged.tmp)?;
     Ok(staged)
 }
 
-/// Write with `write` to a temporary file, then rename over `path`; the temporary is removed on failure.
-fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    stage(path, write)?.commit()
-}
-
-/// Whether a file can be written at `path`, asked before the work that makes it: `path` is not a
-/// directory and its directory exists and takes a file (a temporary is created there and removed).
-/// The error names the path and the cause, for the caller to report as bad input.
-pub fn check_destination(path: &Path) -> Result<()> {
-    if path.is_dir() {
+/// Whether a file of type `ext` (`exr`, `png`) can be written at `path`, asked before the work that
+/// makes it: its name ends in `.ext` (the format follows the name), it is no directory and nothing but a
+/// file (or a link to one: the link's target is written), and its directory exists and takes a file (a
+/// temporary is created there and removed). The error names the path and the cause, for the caller to
+/// report as bad input.
+pub fn check_destination(path: &Path, ext: &str) -> Result<()> {
+    if path.is_dir() || path.as_os_str().as_encoded_bytes().ends_with(b"/") {
         anyhow::bail!("cannot write {}: it is a directory", path.display());
     }
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext)) {
+        anyhow::bail!(
+            "cannot write {}: the file is {}, so its name must end in .{ext}",
+            path.display(),
+            ext.to_uppercase()
+        );
+    }
+    if std::fs::symlink_metadata(path).is_ok() {
+        let target = std::fs::canonicalize(path).with_context(|| format!("cannot write {}", path.display()))?;
+        if !target.is_file() {
+            anyhow::bail!("cannot write {}: it exists and is not a regular file", path.display());
+        }
+        return check_destination_dir(&target);
+    }
+    check_destination_dir(path)
+}
+
+fn check_destination_dir(path: &Path) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -95,7 +120,12 @@ fn ascii(s: &str) -> String {
 
 /// Write a text file (temporary file, then rename).
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    write_atomic(path, |tmp| std::fs::write(tmp, text).with_context(|| format!("writing {}", path.display())))
+    stage_text(path, text)?.commit()
+}
+
+/// [`write_text`], staged: a command's tables are in place once its plot is drawn too.
+pub fn stage_text(path: &Path, text: &str) -> Result<Staged> {
+    stage(path, |tmp| std::fs::write(tmp, text).with_context(|| format!("writing {}", path.display())))
 }
 
 /// Write linear float32 RGB with `metadata` as EXR string attributes (`bounce.<key>`).
@@ -124,15 +154,35 @@ fn stage_exr(path: &Path, img: &RgbImage, metadata: &[(&str, String)]) -> Result
 /// An image as its EXR (with `metadata`) and, when asked, its tone-mapped PNG: both written before
 /// either is renamed into place, so a failure leaves neither.
 pub fn write_exr_and_png(exr: &Path, png: Option<&Path>, img: &RgbImage, metadata: &[(&str, String)]) -> Result<()> {
-    let staged_exr = stage_exr(exr, img, metadata)?;
-    let staged_png = png.map(|p| stage_png(p, img)).transpose()?;
-    staged_exr.commit()?;
-    staged_png.map_or(Ok(()), Staged::commit)
+    stage_image(exr, png, img, metadata)?.into_iter().try_for_each(Staged::commit)
 }
+
+/// [`write_exr_and_png`], staged: the files are in place once each is committed (an animation commits
+/// its frames once all are written).
+pub fn stage_image(exr: &Path, png: Option<&Path>, img: &RgbImage, metadata: &[(&str, String)]) -> Result<Vec<Staged>> {
+    let mut staged = vec![stage_exr(exr, img, metadata)?];
+    staged.extend(png.map(|p| stage_png(p, img)).transpose()?);
+    Ok(staged)
+}
+
+/// The most pixels an EXR may have to be read: 16384² (Vulkan's common largest 2-D image).
+const MAX_READ_PIXELS: usize = 16384 * 16384;
 
 /// Read the first RGB(A) layer of an EXR as linear RGB, with its `bounce.*` string attributes.
 pub fn read_exr(path: &Path) -> Result<(RgbImage, Vec<(String, String)>)> {
     use exr::prelude::*;
+    // The size the header claims, before any pixel memory is taken for it (a damaged or crafted header
+    // asked for 43 GB, and the allocation aborted the process).
+    let meta =
+        exr::meta::MetaData::read_from_file(path, false).with_context(|| format!("reading {}", path.display()))?;
+    for h in &meta.headers {
+        let (w, h) = (h.layer_size.width(), h.layer_size.height());
+        anyhow::ensure!(
+            w.saturating_mul(h) <= MAX_READ_PIXELS,
+            "reading {}: its header says {w}×{h} pixels, more than the 16384×16384 bounce reads",
+            path.display()
+        );
+    }
     let image = read_first_rgba_layer_from_file(
         path,
         |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
@@ -247,21 +297,27 @@ fn stage_png(path: &Path, img: &RgbImage) -> Result<Staged> {
     stage_png_bytes(path, img.width, img.height, srgb8(&tonemap_reinhard(img)))
 }
 
-/// Whether files can be written into the folder `path`, asked before the work: it is a folder, or it can
-/// be made (its nearest existing ancestor is a folder). Nothing is created here.
+/// Whether files can be written into the folder `path`, asked before the work: it is a folder that takes
+/// a file, or it can be made (its nearest existing ancestor is a folder that takes one). A temporary file
+/// is made and removed there to ask; no folder is created.
 pub fn check_folder(path: &Path) -> Result<()> {
-    if path.exists() {
-        anyhow::ensure!(path.is_dir(), "cannot write into {}: it is not a directory", path.display());
-        return Ok(());
-    }
-    let mut up = path.parent();
-    while let Some(p) = up.filter(|p| !p.as_os_str().is_empty()) {
-        if p.exists() {
-            anyhow::ensure!(p.is_dir(), "cannot create {}: {} is not a directory", path.display(), p.display());
-            break;
+    let mut existing = path;
+    if !path.exists() {
+        let mut up = path.parent();
+        existing = Path::new(".");
+        while let Some(p) = up.filter(|p| !p.as_os_str().is_empty()) {
+            if p.exists() {
+                anyhow::ensure!(p.is_dir(), "cannot create {}: {} is not a directory", path.display(), p.display());
+                existing = p;
+                break;
+            }
+            up = p.parent();
         }
-        up = p.parent();
     }
+    anyhow::ensure!(existing.is_dir(), "cannot write into {}: it is not a directory", path.display());
+    let probe = existing.join(format!(".bounce-probe.{}.tmp", std::process::id()));
+    std::fs::File::create(&probe).with_context(|| format!("cannot write into {}", path.display()))?;
+    std::fs::remove_file(&probe).with_context(|| format!("removing {}", probe.display()))?;
     Ok(())
 }
 
@@ -317,22 +373,73 @@ mod tests {
     #[test]
     fn a_destination_is_checked_without_leaving_anything() {
         let d = scratch("destination");
-        check_destination(&d.join("x.exr")).unwrap();
+        check_destination(&d.join("x.exr"), "exr").unwrap();
+        check_destination(&d.join("x.PNG"), "png").unwrap();
         assert!(names(&d).is_empty(), "the probe stayed: {:?}", names(&d));
-        let e = check_destination(&d).unwrap_err().to_string();
+        let e = check_destination(&d, "exr").unwrap_err().to_string();
         assert!(e.contains("is a directory"), "{e}");
-        let e = check_destination(&d.join("no/x.exr")).unwrap_err().to_string();
+        let e = check_destination(&d.join("no/x.exr"), "exr").unwrap_err().to_string();
         assert!(e.contains("no directory"), "{e}");
         std::fs::write(d.join("file"), "").unwrap();
-        let e = check_destination(&d.join("file/x.exr")).unwrap_err().to_string();
+        let e = check_destination(&d.join("file/x.exr"), "exr").unwrap_err().to_string();
         assert!(e.contains("no directory"), "{e}");
+        // The format follows the name; a name ending in a separator is a folder's.
+        for (name, ext) in [("x.png", "exr"), ("x.exr", "png"), ("x", "exr"), ("scene.toml", "exr"), ("new/", "exr")] {
+            let e = check_destination(&d.join(name), ext).unwrap_err().to_string();
+            assert!(e.contains("must end in") || e.contains("is a directory"), "{name}: {e}");
+        }
         check_folder(&d).unwrap();
         check_folder(&d.join("new/deeper")).unwrap();
         assert!(!d.join("new").exists(), "check_folder made a folder");
+        assert!(names(&d) == ["file"], "the probe stayed: {:?}", names(&d));
         let e = check_folder(&d.join("file")).unwrap_err().to_string();
         assert!(e.contains("not a directory"), "{e}");
         let e = check_folder(&d.join("file/sub/deeper")).unwrap_err().to_string();
         assert!(e.contains("is not a directory"), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// An EXR whose header claims more pixels than can be read is refused before its pixels' memory is
+    /// taken (a 60000² header aborted the process in the allocation).
+    #[test]
+    fn an_exr_claiming_a_huge_size_is_refused() {
+        let d = scratch("huge");
+        let img = RgbImage { width: 2, height: 2, pixels: vec![[1.0; 3]; 4] };
+        write_exr(&d.join("small.exr"), &img, &[]).unwrap();
+        let mut bytes = std::fs::read(d.join("small.exr")).unwrap();
+        // The data and display windows (box2i: x_min, y_min, x_max, y_max) say 60000 × 60000.
+        for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+            let at = bytes.windows(name.len()).position(|w| w == name).expect("the window attribute") + name.len() + 4;
+            bytes[at + 8..at + 12].copy_from_slice(&59999i32.to_le_bytes());
+            bytes[at + 12..at + 16].copy_from_slice(&59999i32.to_le_bytes());
+        }
+        std::fs::write(d.join("huge.exr"), &bytes).unwrap();
+        let e = format!("{:#}", read_exr(&d.join("huge.exr")).unwrap_err());
+        assert!(e.contains("60000×60000"), "{e}");
+        assert_eq!(read_exr(&d.join("small.exr")).unwrap().0.pixels, img.pixels);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// A link is written through (its target replaced, the link kept); a FIFO or a device is refused
+    /// before the work, not replaced by a file.
+    #[test]
+    fn a_link_is_written_through_and_a_special_file_refused() {
+        let d = scratch("links");
+        let img = RgbImage { width: 1, height: 1, pixels: vec![[1.0, 0.5, 0.25]] };
+        std::fs::write(d.join("target.exr"), "old").unwrap();
+        std::os::unix::fs::symlink(d.join("target.exr"), d.join("link.exr")).unwrap();
+        check_destination(&d.join("link.exr"), "exr").unwrap();
+        write_exr(&d.join("link.exr"), &img, &[]).unwrap();
+        assert!(
+            std::fs::symlink_metadata(d.join("link.exr")).unwrap().file_type().is_symlink(),
+            "the link was replaced"
+        );
+        assert_eq!(read_exr(&d.join("target.exr")).unwrap().0.pixels, img.pixels);
+        let status = std::process::Command::new("mkfifo").arg(d.join("fifo.exr")).status();
+        if status.is_ok_and(|s| s.success()) {
+            let e = check_destination(&d.join("fifo.exr"), "exr").unwrap_err().to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+        }
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

@@ -91,14 +91,13 @@ pub fn time_vs_error(path: &Path, series: &[(String, Vec<(f64, f64)>)], subtitle
         .flat_map(|(_, v)| v.iter().copied())
         .filter(|(t, e)| *t > 0.0 && *e > 0.0 && t.is_finite() && e.is_finite())
         .collect();
-    if pts.is_empty() {
-        return Err(anyhow!("no finite positive (time, error) point to plot"));
-    }
+    // With nothing to put on log axes (every error 0: a black scene) the axes are drawn empty, and say so.
+    let (pts, empty) = if pts.is_empty() { (vec![(1.0, 1.0)], ", no positive error to plot") } else { (pts, "") };
     let (tmin, tmax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (t, _)| (a.min(*t), b.max(*t)));
     let (emin, emax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (_, e)| (a.min(*e), b.max(*e)));
     png(path, (900, 640), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(format!("Run time against error ({subtitle})"), ("sans-serif", 22))
+            .caption(format!("Run time against error ({subtitle}{empty})"), ("sans-serif", 22))
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(96)
@@ -216,9 +215,12 @@ pub fn over_frames(path: &Path, panels: &[Panel], title: &str) -> Result<()> {
 fn frame_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel: &Panel) -> Result<()> {
     let ok = |(f, v): &(f64, f64)| f.is_finite() && *v > 0.0 && v.is_finite();
     let pts: Vec<(f64, f64)> = panel.series.iter().flat_map(|(_, v)| v.iter().copied()).filter(ok).collect();
-    if pts.is_empty() {
-        return Err(anyhow!("no finite positive value to plot for {}", panel.y));
-    }
+    // Nothing to put on a log axis (a black scene's errors, a still view's flicker): the axes, empty.
+    let (pts, y_desc) = if pts.is_empty() {
+        (vec![(0.0, 1.0)], format!("{} (none positive)", panel.y))
+    } else {
+        (pts, panel.y.to_string())
+    };
     let (fmin, fmax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (f, _)| (a.min(*f), b.max(*f)));
     let (vmin, vmax) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), (_, v)| (a.min(*v), b.max(*v)));
     let mut chart = ChartBuilder::on(area)
@@ -233,7 +235,7 @@ fn frame_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel:
     chart
         .configure_mesh()
         .x_desc("frame")
-        .y_desc(panel.y)
+        .y_desc(y_desc)
         .y_labels(8)
         .x_label_formatter(&|v| format!("{v:.0}"))
         .y_label_formatter(&|v| tick(*v))

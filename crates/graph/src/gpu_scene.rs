@@ -36,11 +36,14 @@ impl GpuScene {
             Buffer::with_data(gpu, name, storage, bytes).with_context(|| format!("uploading {name}"))
         };
         let max_range = gpu.limits().max_storage_buffer_range as u64;
+        // A scene too large for the device is the user's to change (a smaller texture): a settings error.
         for (what, n) in [("vertex buffer", scene.vertices.len() * 32), ("texel buffer", scene.texels.len() * 4)] {
-            anyhow::ensure!(
-                (n as u64) <= max_range,
-                "the scene's {what} ({n} bytes) exceeds the device limit maxStorageBufferRange ({max_range} bytes)"
-            );
+            if n as u64 > max_range {
+                return Err(crate::frame::SettingsError(format!(
+                    "the scene's {what} ({n} bytes) exceeds the device limit maxStorageBufferRange ({max_range} bytes)"
+                ))
+                .into());
+            }
         }
         let (mut lo, mut hi) = (scene.bounds_min, scene.bounds_max);
         if scene.vertices.is_empty() {

@@ -393,9 +393,12 @@ fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &str,
         v.dedup();
         v
     };
-    output::write_text(&dir.join("bench.csv"), &csv(samples, &pass_names))?;
+    // The tables and the plot go in together (a plot that cannot be drawn leaves neither table).
     let md = error_table(plan, samples, device, command) + &pass_table(plan, samples, &pass_names);
-    output::write_text(&dir.join("bench.md"), &md)?;
+    let tables = [
+        output::stage_text(&dir.join("bench.csv"), &csv(samples, &pass_names))?,
+        output::stage_text(&dir.join("bench.md"), &md)?,
+    ];
     let series: Vec<(String, Vec<(f64, f64)>)> = plan
         .methods
         .iter()
@@ -415,7 +418,8 @@ fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &str,
         &series,
         &format!("{}×{}, {}", b.width, b.height, device),
         &axes,
-    )
+    )?;
+    tables.into_iter().try_for_each(output::Staged::commit)
 }
 
 /// One row per frame (per budget with `--time-limits`: `time_limit_s` and the `frames` averaged), one

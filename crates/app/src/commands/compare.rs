@@ -10,7 +10,7 @@ use std::io::Write;
 
 pub fn run(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(h) = &a.heatmap {
-        output::check_destination(h).map_err(bad)?;
+        output::check_destination(h, "png").map_err(bad)?;
     }
     let (t, _) = output::read_exr(&a.test).map_err(bad)?;
     let (r, _) = output::read_exr(&a.reference).map_err(bad)?;

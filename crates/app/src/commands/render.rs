@@ -109,12 +109,21 @@ fn check_destinations(a: &RenderArgs) -> Result<()> {
         if a.png.as_deref().is_some_and(same) {
             return Err(bad(anyhow::anyhow!("--out and --png name the same file ({})", a.out.display())));
         }
-        for p in std::iter::once(&a.out).chain(&a.png) {
-            output::check_destination(p).map_err(bad)?;
+        output::check_destination(&a.out, "exr").map_err(bad)?;
+        if let Some(png) = &a.png {
+            output::check_destination(png, "png").map_err(bad)?;
         }
     }
     if let Some(dir) = &a.out_dir {
         output::check_folder(dir).map_err(bad)?;
+        // Each frame's files (a folder or a special file in one's place is found now, not at frame k).
+        if dir.is_dir() {
+            for k in 0..a.frames.unwrap_or(0) {
+                let stem = frame_stem(dir, k);
+                output::check_destination(&stem.with_extension("exr"), "exr").map_err(bad)?;
+                output::check_destination(&stem.with_extension("png"), "png").map_err(bad)?;
+            }
+        }
     }
     Ok(())
 }
@@ -134,6 +143,11 @@ fn check_animation_flags(a: &RenderArgs) -> Result<()> {
     }
 }
 
+/// Where frame k's EXR and PNG go (the extension added).
+fn frame_stem(dir: &std::path::Path, k: u32) -> std::path::PathBuf {
+    dir.join(format!("frame_{k:04}"))
+}
+
 /// Frame k of the animation: the lights at `path`'s frame k, the camera at `camera`'s, the seed of the
 /// seed schedule; an EXR and a PNG each.
 /// `render --frames N --out-dir DIR`: N frames along the light and camera paths, each an EXR and a PNG;
@@ -150,6 +164,8 @@ fn animate(
 ) -> Result<()> {
     let dir = a.out_dir.as_ref();
     let mut timed = vec![];
+    // The frames' files, in place once every frame is written: a run that fails leaves none of its frames.
+    let mut staged = vec![];
     if let Some(dir) = dir {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -180,12 +196,17 @@ fn animate(
             meta.push(("temporal", a.animation.temporal().name().to_string()));
             meta.push(("light_path", a.animation.light_path.clone().unwrap_or_else(|| "none".into())));
             meta.push(("camera_path", a.animation.camera_path.clone().unwrap_or_else(|| "none".into())));
-            let stem = dir.join(format!("frame_{k:04}"));
-            output::write_exr(&stem.with_extension("exr"), &img, &meta)?;
-            output::write_png(&stem.with_extension("png"), &img)?;
+            let stem = frame_stem(dir, k);
+            staged.extend(output::stage_image(
+                &stem.with_extension("exr"),
+                Some(&stem.with_extension("png")),
+                &img,
+                &meta,
+            )?);
         }
         timed.push(FrameOutput { radiance: vec![], raw: None, ..f });
     }
+    staged.into_iter().try_for_each(output::Staged::commit)?;
     match dir {
         Some(dir) => writeln!(err, "wrote {frames} frame(s) to {} (frame_0000.exr/.png …)", dir.display())?,
         None => writeln!(err, "rendered {frames} frame(s), not written (no --out-dir)")?,

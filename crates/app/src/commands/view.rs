@@ -96,9 +96,8 @@ pub fn run(a: &ViewArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()>
                 png.display()
             )));
         }
-        for p in [png.clone(), png.with_extension("exr")] {
-            output::check_destination(&p).map_err(bad)?;
-        }
+        output::check_destination(png, "png").map_err(bad)?;
+        output::check_destination(&png.with_extension("exr"), "exr").map_err(bad)?;
     }
     let vpls = a.picture.vpls.unwrap_or(bounce_graph::frame::FrameSettings::default().vpls);
     if !(1..=4096).contains(&vpls) {
@@ -483,17 +482,30 @@ impl Viewer<'_> {
         }
         self.set_title(&f, frame_ms);
         if shot {
-            let path = match (&self.args.screenshot, last) {
-                (Some(p), true) => p.clone(),
-                _ => {
-                    let st = self.state.as_mut().expect("started");
-                    st.shots += 1;
-                    PathBuf::from(format!("bounce-screenshot-{}.png", st.shots))
-                }
-            };
-            self.screenshot(&path, &f, shown, params.carries_prior())?;
+            self.take_screenshot(&f, shown, last, params.carries_prior())?;
         }
         Ok(last)
+    }
+
+    /// The screenshot of this frame: `--screenshot`'s after the last of `--frames`, else (P) under the next
+    /// name no earlier screenshot holds; one of those that cannot be written is said, and the session (and
+    /// its mean) goes on.
+    fn take_screenshot(&mut self, f: &FrameOutput, shown: (Method, u32), last: bool, prior: bool) -> Result<()> {
+        if let (Some(p), true) = (&self.args.screenshot, last) {
+            return self.screenshot(&p.clone(), f, shown, prior);
+        }
+        let st = self.state.as_mut().expect("started");
+        let path = loop {
+            st.shots += 1;
+            let p = PathBuf::from(format!("bounce-screenshot-{}.png", st.shots));
+            if !p.exists() && !p.with_extension("exr").exists() {
+                break p;
+            }
+        };
+        if let Err(e) = self.screenshot(&path, f, shown, prior) {
+            self.log.push(format!("screenshot not written: {e:#}"));
+        }
+        Ok(())
     }
 
     /// The title: method, VPLs, component, frames, the selected light, frame time, the slowest passes.

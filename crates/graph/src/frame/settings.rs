@@ -380,6 +380,11 @@ pub enum FaceMode {
     Uniform,
 }
 
+/// The most VPLs (samples) a pixel may draw a frame: a frame records one dispatch per
+/// `vpls_per_dispatch` of them, and beyond this a frame's commands and time grow to no use (the thesis's
+/// largest count is 800; 4 billion filled the host's memory before the first frame).
+pub const MAX_VPLS: u32 = 1 << 16;
+
 #[derive(Clone, Debug)]
 pub struct FrameSettings {
     pub width: u32,
@@ -659,8 +664,8 @@ impl FrameSettings {
                 reject!("{what} {v} exceeds the device limit maxImageDimension2D ({max})");
             }
         }
-        if self.vpls == 0 {
-            reject!("the VPL count must be at least 1");
+        if !(1..=MAX_VPLS).contains(&self.vpls) {
+            reject!("the VPL count must be between 1 and {MAX_VPLS} (got {})", self.vpls);
         }
         if let LightMap::Rsm { fov_deg } = self.light_map {
             if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0) {
@@ -674,12 +679,15 @@ impl FrameSettings {
             if self.psm_res == 0 || self.psm_res > max {
                 reject!("--psm-res must be between 1 and maxImageDimension2D ({max}) (got {})", self.psm_res);
             }
-            let layers = gpu.limits().max_image_array_layers;
-            if self.vpls > layers {
-                reject!(
-                    "--visibility psm renders one map per VPL: {} VPLs exceed maxImageArrayLayers ({layers})",
-                    self.vpls
-                );
+            // One layer a VPL, as an image's and as a render pass's (whose least guaranteed limit is 256).
+            let limits = gpu.limits();
+            for (layers, name) in [
+                (limits.max_image_array_layers, "maxImageArrayLayers"),
+                (limits.max_framebuffer_layers, "maxFramebufferLayers"),
+            ] {
+                if self.vpls > layers {
+                    reject!("--visibility psm renders one map per VPL: {} VPLs exceed {name} ({layers})", self.vpls);
+                }
             }
             let bytes = psm::Psm::bytes(self.vpls, self.psm_res);
             if bytes > psm::MAX_PSM_BYTES {

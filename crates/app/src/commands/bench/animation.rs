@@ -175,9 +175,7 @@ pub(super) fn run(
     bar.finish_and_clear();
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let md = table(a, base, &samples, &r.gpu.name, &command, &motion.label);
-    output::write_text(&a.out.join("bench.csv"), &csv(&samples))?;
-    output::write_text(&a.out.join("bench.md"), &md)?;
-    plot(&a.out.join("flicker.png"), a, &samples, base, &r.gpu.name)?;
+    write_outputs(a, &samples, &md, base, &r.gpu.name)?;
     writeln!(out, "{md}")?;
     writeln!(err, "wrote {}/bench.csv, bench.md, flicker.png", a.out.display())?;
     Ok(())
@@ -363,6 +361,16 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
         }
     }
     md
+}
+
+/// bench.csv, bench.md and flicker.png, together: a plot that cannot be drawn leaves neither table.
+fn write_outputs(a: &BenchArgs, samples: &[FrameSample], md: &str, base: &FrameSettings, device: &str) -> Result<()> {
+    let tables = [
+        output::stage_text(&a.out.join("bench.csv"), &csv(samples))?,
+        output::stage_text(&a.out.join("bench.md"), md)?,
+    ];
+    plot(&a.out.join("flicker.png"), a, samples, base, device)?;
+    tables.into_iter().try_for_each(output::Staged::commit)
 }
 
 fn plot(file: &Path, a: &BenchArgs, samples: &[FrameSample], b: &FrameSettings, device: &str) -> Result<()> {

@@ -86,8 +86,11 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     super::super::check_validation(&gpu, a.frame.validation)?;
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let md = markdown(a, &rows, &gpu.name, &command);
-    crate::output::write_text(&a.out.join("suite.csv"), &csv(&rows))?;
-    crate::output::write_text(&a.out.join("suite.md"), &md)?;
+    // The tables and the plot go in together (a plot that cannot be drawn leaves neither table).
+    let tables = [
+        crate::output::stage_text(&a.out.join("suite.csv"), &csv(&rows))?,
+        crate::output::stage_text(&a.out.join("suite.md"), &md)?,
+    ];
     let curves: Vec<(String, Vec<f64>)> = a
         .methods
         .iter()
@@ -95,6 +98,7 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         .map(|m| (m.name().to_string(), ratios(&rows, *m).into_values().collect()))
         .collect();
     crate::plot::sorted_ratios(&a.out.join("suite.png"), &curves, &format!("{} scenes", scenes.len()))?;
+    tables.into_iter().try_for_each(crate::output::Staged::commit)?;
     writeln!(out, "{md}")?;
     writeln!(err, "wrote {}/suite.csv, suite.md, suite.png", a.out.display())?;
     Ok(())
