@@ -370,7 +370,6 @@ fn check(what: &str, w: &[f32], s: Shape, cpu: &[f32], op: Op, us: &[f32], got: 
         let (cv, cp, tol) = match op {
             Op::Sample => {
                 let (cv, cp) = cpu_cdf::sample(cpu, w, u);
-                assert_eq!(cp, sanitise(w[cv as usize]) / cpu_cdf::total(cpu));
                 (cv, cp, PROB_ULPS)
             }
             _ => {

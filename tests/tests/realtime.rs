@@ -410,6 +410,8 @@ fn the_denoiser_keeps_a_corners_light() {
         let den = bounce_tests::mean(&rgb(&f.radiance)) / truth;
         eprintln!("frame {frame}: image mean over all's: raw {raw:.3}, denoised {den:.3}");
         assert!(den >= 0.78, "frame {frame}: the denoiser lost the corner's light: {den:.3} of all's mean");
+        // Nor does it add light (a filter's weights that sum above one, a history counted twice).
+        assert!(den <= 1.1, "frame {frame}: the denoiser added light: {den:.3} of all's mean");
     }
 }
 
@@ -463,6 +465,7 @@ fn the_denoiser_follows_a_change_of_the_lighting() {
     let (raw, shown) = (bounce_tests::mean(&rgb(f.raw.as_ref().unwrap())), bounce_tests::mean(&rgb(&f.radiance)));
     eprintln!("after the light doubled: image mean over all's: raw {:.3}, denoised {:.3}", raw / truth, shown / truth);
     assert!(shown / truth >= 0.75, "the denoiser lags: {:.3} of all's mean", shown / truth);
+    assert!(shown / truth <= 1.1, "the denoiser added light: {:.3} of all's mean", shown / truth);
 }
 
 /// The scene's camera slid sideways by `px` pixels (at the target's distance), still looking ahead.

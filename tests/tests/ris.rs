@@ -20,11 +20,17 @@ const SIZE: (u32, u32, u32, u32) = (24, 24, 32, 32);
 /// ris at the unbiasedness tests' settings (as `every_method_converges_to_all_at_the_monte_carlo_rate`:
 /// the 1/d² clamp at 1 % of the diagonal, defensive share 0.5), `reuse` spatial passes of 4 neighbours,
 /// temporal reuse with a cap of `cap` (0: none).
+/// The VPL set of every run and of `all` in these tests.
+const VPL_SET: u64 = 1;
+
 fn ris(visibility: Visibility, seed: u64, reuse: u32, cap: f32) -> FrameSettings {
     FrameSettings {
         method: Method::Ris,
         visibility,
         seed,
+        // Every run samples `all`'s VPL set (the seed mean converges to `all` on that set, not to the
+        // mean over sets, whose own difference the runs' spread does not count).
+        vpl_seed: Some(VPL_SET),
         vpls: 4,
         cdf_samples: 16,
         clamp: 0.01,
@@ -66,6 +72,7 @@ fn all(r: &mut Renderer, visibility: Visibility) -> Vec<[f32; 3]> {
         method: Method::All,
         clamp: 0.01,
         visibility,
+        vpl_seed: Some(VPL_SET),
         component: Component::Direct,
         ..FrameSettings::default()
     };
@@ -411,23 +418,28 @@ fn ris_with_temporal_reuse_converges_over_progressive_frames() {
     }
 }
 
-/// With exact visibility, ris's progressive mean is within 1 % of the GPU one-bounce reference on the
-/// Cornell box (where `all_with_exact_visibility_agrees_with_the_reference` compares `all`). The map is
-/// 128² per face: the patch kernel's VPL sum sits 1.1 % below the reference at 64² (0.5 % for the point
-/// kernel; `vpl::the_patch_kernel_brings_the_vpl_sum_closer_to_the_exact_one_bounce_image`), and its
-/// deficit shrinks with the patches (measured here: −1.14 % at 64², −0.43 % at 128²).
+/// With exact visibility, ris's progressive mean agrees with the GPU one-bounce reference on the Cornell
+/// box (where `all_with_exact_visibility_agrees_with_the_reference` compares `all`): within the VPL sum's
+/// own deficit and 4 standard errors of the difference. The map is 128² per face: the patch kernel's VPL
+/// sum sits 1.1 % below the reference at 64² (0.5 % for the point kernel;
+/// `vpl::the_patch_kernel_brings_the_vpl_sum_closer_to_the_exact_one_bounce_image`), and its deficit
+/// shrinks with the patches (measured here: −1.14 % at 64², −0.43 % at 128²), so 0.5 % is allowed for it.
+/// Over 192 frames 4 standard errors are 0.2 % of the mean (measured), so the bar is about 0.7 %.
 #[test]
 fn ris_with_exact_visibility_agrees_with_the_reference() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
     let gpu = TestGpu::new();
     let mut r = Renderer::new(&gpu, &scene).unwrap();
     let (w, h) = (24, 24);
-    let reference =
-        FrameSettings { method: Method::Reference, spp: 256, component: Component::Direct, ..FrameSettings::default() };
+    let reference = FrameSettings {
+        method: Method::Reference,
+        spp: 1024,
+        component: Component::Direct,
+        ..FrameSettings::default()
+    };
     let reference = indirect_with(&mut r, reference, w, h, 128, 64);
-    // 48 frames: with ris's defaults (no reuse) 16 frames left a Monte Carlo error near 1 % on their own.
-    let frames = 48;
-    let mut mean = 0.0;
+    let frames = 192;
+    let mut means = vec![];
     for k in 0..frames {
         let s = FrameSettings {
             method: Method::Ris,
@@ -438,14 +450,15 @@ fn ris_with_exact_visibility_agrees_with_the_reference() {
             component: Component::Direct,
             ..FrameSettings::default()
         };
-        mean += bounce_tests::mean(&indirect_with(&mut r, s, w, h, 128, 64)) / frames as f64;
+        means.push(bounce_tests::mean(&indirect_with(&mut r, s, w, h, 128, 64)));
     }
+    let (mean, se) = bounce_tests::mean_and_stderr(&means);
     let mr = bounce_tests::mean(&reference);
     eprintln!(
-        "ris (exact visibility, {frames} frames) vs reference: mean {mean:.5} vs {mr:.5} ({:+.2}%)",
+        "ris (exact visibility, {frames} frames) vs reference: mean {mean:.5} ± {se:.5} vs {mr:.5} ({:+.2}%)",
         100.0 * (mean - mr) / mr
     );
-    assert!(((mean - mr) / mr).abs() <= 0.01, "mean {mean} vs {mr}");
+    assert!((mean - mr).abs() <= 0.005 * mr + 4.0 * se, "mean {mean} ± {se} vs {mr}");
 }
 
 /// One candidate and no reuse: the reservoir keeps the source's sample with W = 1/p, so the image is the
