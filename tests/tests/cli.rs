@@ -568,6 +568,8 @@ fn bad_inputs_give_one_line_and_exit_2() {
         (vec!["--out", scene], "must end in .exr"),
         (vec!["--out", out, "--png", &in_dir("other.exr")], "must end in .png"),
         (vec!["--frames", "3", "--out-dir", frames.to_str().unwrap()], "frame_0001.png"),
+        // An animation writes into --out-dir: an --out or --png beside it was ignored without a word.
+        (vec!["--frames", "2", "--out-dir", frames.to_str().unwrap(), "--png", &in_dir("x.png")], "--png"),
     ] {
         let r = bounce(&[&["render", scene, "--width", "8", "--height", "8"][..], &args].concat());
         assert_eq!(r.code, 2, "{named}: exit {} stderr {}", r.code, r.stderr);

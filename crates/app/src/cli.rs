@@ -495,11 +495,11 @@ pub struct RenderArgs {
     /// The scene file (TOML), or its folder (holding `scene.toml`, as `make-scenes.py` writes them).
     #[arg(value_parser = scene_path)]
     pub scene: PathBuf,
-    /// Output EXR (linear float32 RGB).
-    #[arg(long, default_value = "out.exr")]
+    /// Output EXR (linear float32 RGB). An animation (--frames) writes into --out-dir instead.
+    #[arg(long, default_value = "out.exr", conflicts_with = "frames")]
     pub out: PathBuf,
     /// Also write a tone-mapped (Reinhard 2002) sRGB PNG.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "frames")]
     pub png: Option<PathBuf>,
     #[command(flatten)]
     pub picture: PictureArgs,

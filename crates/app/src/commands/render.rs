@@ -79,12 +79,12 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     }
     let mut meta = metadata(a, &settings, &gpu.name, &frame, bad_px);
     if let (Some((n, sets, gpu_ms)), Some(t)) = (frames, a.time_limit) {
-        meta.push(("time_limit_s", t.to_string()));
+        meta.push(("time_limit_s", format!("{t:?}")));
         meta.push(("frames", n.to_string()));
         meta.push(("vpl_sets", sets.to_string()));
         meta.push(("wall_s", format!("{wall:.3}")));
         meta.push(("gpu_ms_total", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())));
-        writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {t} s), {sets} VPL set(s)")?;
+        writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {} s), {sets} VPL set(s)", crate::plot::tick(t))?;
     }
     output::write_exr_and_png(&a.out, a.png.as_deref(), &img, &meta)?;
     if a.timings {
