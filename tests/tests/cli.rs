@@ -283,6 +283,17 @@ fn compare_measures_an_exr_against_a_reference() {
     let wide = RgbImage { width: 4, height: 1, pixels: vec![[1.0; 3]; 4] };
     write_exr(Path::new(&path("wide.exr")), &wide, &[]).unwrap();
     expect_bad_input(&["compare", &path("test.exr"), &path("wide.exr")], "2x2", &d.join("none"));
+    // A file that is no EXR is named so (an empty one read "failed to fill whole buffer", a PNG "file
+    // identifier missing").
+    std::fs::write(path("empty.exr"), "").unwrap();
+    expect_bad_input(&["compare", &path("empty.exr"), &path("ref.exr")], "not an OpenEXR file", &d.join("none"));
+    // The heatmap is said to be written.
+    let r = bounce(&["compare", &path("test.exr"), &path("ref.exr"), "--heatmap", &path("flip.png")]);
+    assert!(r.code == 0 && r.stderr.contains("wrote") && d.join("flip.png").exists(), "{}", r.stderr);
+    // No command is one line, not the program's tagline as an error; a command's usage error points to
+    // that command's help.
+    expect_bad_input(&[], "no command given", &d.join("none"));
+    expect_bad_input(&["compare", "--frobnicate"], "bounce compare --help", &d.join("none"));
 }
 
 /// `--defensive 0` (the thesis's CDFs, without a defensive share) renders, and says it is biased; with a

@@ -36,7 +36,8 @@ pub enum Command {
     Render(RenderArgs),
     /// List the Vulkan devices with the features and limits bounce uses.
     Info,
-    /// Error metrics of a test image against a reference image (both EXR).
+    /// Error metrics of a test image against a reference image (both EXR): relMSE = mean over pixels and
+    /// channels of (t − r)² / (r² + 0.01), RMSE, the ratio of the means, p99 and p99.9 of |t − r|, mean FLIP.
     Compare(CompareArgs),
     /// Run time against error for methods × VPL counts: bench.csv, bench.md, time_vs_error.png.
     Bench(BenchArgs),
@@ -250,9 +251,10 @@ pub struct PictureArgs {
     /// error at equal time of all methods (BENCHMARKS.md).
     #[arg(long, value_parser = METHODS)]
     pub method: Option<Method>,
-    /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray per pick). Default 64; `render
-    /// --time-limit` with ris takes 2 of 3 picks each per frame, the candidates chosen per view, many
-    /// cheap frames (at equal time lower error than few costly ones: BENCHMARKS.md).
+    /// VPLs per pixel (sampled methods; ris: reservoirs, one shadow ray per pick; not `all`, `realtime` or
+    /// `reference`). Default 64; `render --time-limit` with ris and without --vpls chooses reservoirs,
+    /// candidates and picks per view (it prints them): many cheap frames, which at equal time had lower
+    /// error than few costly ones (BENCHMARKS.md).
     #[arg(long)]
     pub vpls: Option<u32>,
     /// Random seed (same seed, same image).
@@ -309,7 +311,8 @@ pub struct FrameArgs {
     #[arg(long, value_parser = MIS_WEIGHTS, default_value = MIS_WEIGHTS.name_of(&d().mis_weights))]
     pub mis_weights: MisWeights,
     /// Samples per pixel of --method reference (default 256: its own noise is ≈ relMSE 1e-4 on the
-    /// default scene at 128²); under `render --time-limit`, per frame (default 8).
+    /// default scene at 128²); under a time limit (`render --time-limit`, `bench --time-limits`,
+    /// `suite`), per frame (default 8).
     #[arg(long)]
     pub spp: Option<u32>,
     /// Visibility of the VPL gather.
@@ -633,7 +636,7 @@ pub struct BenchArgs {
     /// Output folder (also caches the reference image).
     #[arg(long)]
     pub out: PathBuf,
-    /// Methods to sweep, comma-separated.
+    /// Methods to sweep, comma-separated (any but `all`, which is the reference of `--reference all`).
     #[arg(long, value_parser = METHODS, value_delimiter = ',', default_value = "uniform,global,stratified,local,gbg,mis")]
     pub methods: Vec<Method>,
     /// VPL counts per pixel, comma-separated (default 16,64,256; with --time-limits the first is the VPLs

@@ -104,12 +104,25 @@ pub fn report_usage(e: &clap::Error, out: &mut dyn Write, err: &mut dyn Write) -
         let _ = write!(out, "{text}");
         return SUCCESS;
     }
+    if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        // No command: clap's help, whose first paragraph is the program's tagline, not an error.
+        let _ =
+            writeln!(err, "error: no command given: render, info, compare, bench, view or suite (see `bounce --help`)");
+        return BAD_INPUT;
+    }
+    // The command's own help where the usage line names one (`Usage: bounce render …`).
+    let command = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("Usage: bounce "))
+        .and_then(|rest| rest.split_whitespace().next())
+        .filter(|c| !c.starts_with(['[', '<', '-']));
+    let help = command.map_or("bounce --help".to_string(), |c| format!("bounce {c} --help"));
     // clap's message is several paragraphs; the first names the problem (and, for missing arguments,
     // lists them on its following lines). One line, like every error.
     let lines = text.lines().skip_while(|l| l.trim().is_empty());
     let first: Vec<&str> = lines.take_while(|l| !l.trim().is_empty()).map(str::trim).collect();
     let first = if first.is_empty() { "invalid arguments".to_string() } else { first.join(" ") };
-    let _ = writeln!(err, "error: {} (see `bounce --help`)", first.trim_start_matches("error: ").trim());
+    let _ = writeln!(err, "error: {} (see `{help}`)", first.trim_start_matches("error: ").trim());
     BAD_INPUT
 }
 

@@ -53,7 +53,7 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
     let result = match cli.command {
         Command::Render(a) => commands::render::run(&a, out, err),
         Command::Info => commands::info::run(out),
-        Command::Compare(a) => commands::compare::run(&a, out),
+        Command::Compare(a) => commands::compare::run(&a, out, err),
         Command::Bench(a) => commands::bench::run(&a, out, err),
         Command::View(a) => commands::view::run(&a, out, err),
         Command::Suite(a) => commands::bench::suite::run(&a, out, err),

@@ -171,6 +171,12 @@ const MAX_READ_PIXELS: usize = 16384 * 16384;
 /// Read the first RGB(A) layer of an EXR as linear RGB, with its `bounce.*` string attributes.
 pub fn read_exr(path: &Path) -> Result<(RgbImage, Vec<(String, String)>)> {
     use exr::prelude::*;
+    // An OpenEXR file starts with its magic number; anything else is named for what it is not.
+    let mut magic = Vec::with_capacity(4);
+    let file = std::fs::File::open(path).with_context(|| format!("reading {}", path.display()))?;
+    std::io::Read::read_to_end(&mut std::io::Read::take(file, 4), &mut magic)
+        .with_context(|| format!("reading {}", path.display()))?;
+    anyhow::ensure!(magic == [0x76, 0x2f, 0x31, 0x01], "reading {}: not an OpenEXR file", path.display());
     // The size the header claims, before any pixel memory is taken for it (a damaged or crafted header
     // asked for 43 GB, and the allocation aborted the process).
     let meta =

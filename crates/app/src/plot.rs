@@ -237,7 +237,9 @@ fn frame_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel:
         .x_desc("frame")
         .y_desc(y_desc)
         .y_labels(8)
-        .x_label_formatter(&|v| format!("{v:.0}"))
+        // Whole frames only, at most ten labels (fractional ticks rounded to repeated numbers).
+        .x_labels(((fmax - fmin) as usize + 1).min(10))
+        .x_label_formatter(&|v| if (v - v.round()).abs() < 1e-6 { format!("{v:.0}") } else { String::new() })
         .y_label_formatter(&|v| tick(*v))
         .label_style(("sans-serif", 15))
         .draw()

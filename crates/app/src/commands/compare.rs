@@ -8,7 +8,7 @@ use crate::output;
 use anyhow::Result;
 use std::io::Write;
 
-pub fn run(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {
+pub fn run(a: &CompareArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()> {
     if let Some(h) = &a.heatmap {
         output::check_destination(h, "png").map_err(bad)?;
     }
@@ -38,6 +38,7 @@ pub fn run(a: &CompareArgs, out: &mut dyn Write) -> Result<()> {
     if let Some(h) = &a.heatmap {
         let (_, map) = output::flip(&t, &r);
         output::write_png_bytes(h, t.width, t.height, map)?;
+        writeln!(err, "wrote {}", h.display())?;
     }
     if a.json {
         writeln!(out, "{}", m.json())?;

@@ -51,7 +51,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     let startup = Startup { device_s, renderer_s, warm_up_s: warm.elapsed().as_secs_f64() };
     let t0 = Instant::now();
     let (frame, frames) = match a.time_limit {
-        None => (renderer.render(&settings)?, None),
+        None => (one_frame(&mut renderer, &settings)?, None),
         Some(t) => {
             let p = progressive(&mut renderer, &settings, t)?;
             // The reference's standard error is the last frame's, not the mean's: not reported.
@@ -61,22 +61,9 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         }
     };
     let wall = t0.elapsed().as_secs_f64();
-    for w in &frame.warnings {
-        writeln!(err, "warning: {w}")?;
-    }
-    if let Some(se) = frame.stderr {
-        writeln!(
-            err,
-            "reference: {} spp, standard error of the mean {se:.3e} (RMS over pixels and channels)",
-            settings.spp
-        )?;
-    }
     super::check_validation(&gpu, a.frame.validation)?;
     let img = RgbImage::from_rgba(frame.width, frame.height, &frame.radiance);
-    let bad_px = img.non_finite_count();
-    if bad_px > 0 {
-        writeln!(err, "warning: {bad_px} pixel(s) are not finite")?;
-    }
+    let bad_px = report_frame(&frame, &img, &settings, err)?;
     let mut meta = metadata(a, &settings, &gpu.name, &frame, bad_px);
     if let (Some((n, sets, gpu_ms)), Some(t)) = (frames, a.time_limit) {
         meta.push(("time_limit_s", format!("{t:?}")));
@@ -84,7 +71,8 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         meta.push(("vpl_sets", sets.to_string()));
         meta.push(("wall_s", format!("{wall:.3}")));
         meta.push(("gpu_ms_total", gpu_ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "n/a".into())));
-        writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {} s), {sets} VPL set(s)", crate::plot::tick(t))?;
+        let sets = if settings.method == Method::Reference { String::new() } else { format!(", {sets} VPL set(s)") };
+        writeln!(err, "{n} frame(s) in {wall:.2} s (time limit {} s){sets}", crate::plot::tick(t))?;
     }
     output::write_exr_and_png(&a.out, a.png.as_deref(), &img, &meta)?;
     if a.timings {
@@ -141,6 +129,40 @@ fn check_animation_flags(a: &RenderArgs) -> Result<()> {
         (None, None) if a.animation.moves() => fail("--light-path and --camera-path need --frames and --out-dir"),
         _ => Ok(()),
     }
+}
+
+/// One frame; `all`'s tiles and the path tracer's sample batches report their progress (a bar on a
+/// terminal).
+fn one_frame(renderer: &mut Renderer, settings: &FrameSettings) -> Result<FrameOutput> {
+    let bar = indicatif::ProgressBar::new(0);
+    let f = renderer.render_with_progress(settings, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    bar.finish_and_clear();
+    Ok(f)
+}
+
+/// What the user should know of the frame, on `err`: its warnings, the reference's own error, pixels that
+/// are not finite (returned: their count), and an image that is black.
+fn report_frame(frame: &FrameOutput, img: &RgbImage, s: &FrameSettings, err: &mut dyn Write) -> Result<usize> {
+    for w in &frame.warnings {
+        writeln!(err, "warning: {w}")?;
+    }
+    if let Some(se) = frame.stderr {
+        writeln!(err, "reference: {} spp, standard error of the mean {se:.3e} (RMS over pixels and channels)", s.spp)?;
+    }
+    let bad_px = img.non_finite_count();
+    if bad_px > 0 {
+        writeln!(err, "warning: {bad_px} pixel(s) are not finite")?;
+    }
+    if img.pixels.iter().all(|p| p.iter().all(|&c| c == 0.0)) {
+        writeln!(
+            err,
+            "note: the image is black: no light reaches what the camera sees (is a light outside the geometry, or behind a wall?)"
+        )?;
+    }
+    Ok(bad_px)
 }
 
 /// Where frame k's EXR and PNG go (the extension added).
@@ -260,6 +282,9 @@ fn time_limit_method(a: &RenderArgs, settings: &mut FrameSettings, err: &mut dyn
             "method: {} (no --method or --vpls: the lowest error at equal time of every method measured, BENCHMARKS.md)",
             settings.method.name()
         )?;
+    } else if a.picture.method.is_none() {
+        // --vpls asks for VPLs: the VPL default, said as the path tracer's choice is.
+        writeln!(err, "method: {} (--vpls without --method: the VPL methods' default)", settings.method.name())?;
     }
     if settings.method == Method::Reference && a.frame.spp.is_none() {
         settings.spp = crate::cli::TIME_LIMIT_SPP;

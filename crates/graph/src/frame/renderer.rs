@@ -161,7 +161,7 @@ impl Renderer {
         self.ctx.realtime_learns = None;
     }
 
-    /// An untimed frame of `s` at about 8 × 8 pixels (maps about 32² a face), then
+    /// Two untimed frames of `s` at about 8 × 8 pixels (maps about 32² a face), then
     /// [`Self::clear_frame_cache`]:
     /// a driver that compiles a shader at its first dispatch does it here, not inside the next frame's
     /// timestamps. llvmpipe does (on a cold shader cache the Cornell box's passes read 47–675 ms in their
@@ -184,7 +184,12 @@ impl Renderer {
             ..s.clone()
         };
         self.prepare(&small)?;
-        self.render(&small).context("the untimed warm-up frame")?;
+        // Twice: the second frame runs what only a frame with history runs (the temporal reuse, the
+        // denoiser's history), whose pipelines a first timed frame after one warm-up frame still built
+        // (`bench --animate` of realtime read 3× its GPU time on a cold driver cache).
+        for _ in 0..2 {
+            self.render(&small).context("the untimed warm-up frame")?;
+        }
         self.clear_frame_cache();
         Ok(())
     }

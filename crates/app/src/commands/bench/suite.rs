@@ -53,7 +53,11 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     if a.seeds == 0 {
         return Err(bad(anyhow::anyhow!("--seeds must be at least 1")));
     }
-    let base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
+    let mut base = FrameSettings { component: Component::Indirect, ..a.frame.settings(a.width, a.height) };
+    // At equal time the path tracer's frames are `render --time-limit`'s.
+    if a.frame.spp.is_none() && !a.equal_count {
+        base.spp = crate::cli::TIME_LIMIT_SPP;
+    }
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     let vpls = a.vpls.unwrap_or(SUITE_VPLS);
     for &method in &a.methods {
@@ -277,14 +281,15 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         let tail = per_scene(rows, m, |s| s.metrics.p999_abs);
         let tail_ratio =
             median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).and_then(|u| ratio(*v, *u))).collect());
+        // One seed has no spread to show.
+        let spread = if a.seeds > 1 { format!("{:.2} %", 100.0 * spread) } else { "–".into() };
         md += &format!(
-            "| {} | {:.3} | {:.3} ({ws}) | {above} of {} | {:.2} % ({bs}) | {:.2} % | {:.3} |\n",
+            "| {} | {:.3} | {:.3} ({ws}) | {above} of {} | {:.2} % ({bs}) | {spread} | {:.3} |\n",
             m.name(),
             geomean(r.values().copied()),
             wv,
             r.len(),
             100.0 * bv,
-            100.0 * spread,
             tail_ratio
         );
     }
