@@ -296,6 +296,28 @@ fn compare_measures_an_exr_against_a_reference() {
     expect_bad_input(&["compare", "--frobnicate"], "bounce compare --help", &d.join("none"));
 }
 
+/// A flag the method does not read is said (it was ignored without a word: `--candidates` with
+/// `uniform`, `--vpls` with `realtime`); one it reads is not.
+#[test]
+fn flags_the_method_does_not_read_are_said() {
+    let d = scratch("ignored-flags");
+    let scene = bounce_tests::default_scene();
+    let out = d.join("o.exr");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["render", scene.to_str().unwrap(), "--width", "8", "--height", "8"];
+        args.extend(["--out", out.to_str().unwrap()]);
+        args.extend(extra);
+        let r = bounce(&args);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        r.stderr.lines().filter(|l| l.starts_with("warning:")).map(str::to_string).collect::<Vec<_>>()
+    };
+    let w = run(&["--method", "uniform", "--vpls", "2", "--candidates", "4", "--spp", "8"]);
+    assert!(w.iter().any(|l| l.contains("--spp, --candidates not read by --method uniform")), "{w:?}");
+    let w = run(&["--method", "realtime", "--vpls", "2"]);
+    assert!(w.iter().any(|l| l.contains("--vpls not read by --method realtime")), "{w:?}");
+    assert!(run(&["--method", "ris", "--vpls", "2", "--candidates", "4"]).is_empty());
+}
+
 /// `--defensive 0` (the thesis's CDFs, without a defensive share) renders, and says it is biased; with a
 /// share, or with `uniform`, nothing is said.
 #[test]
@@ -807,14 +829,15 @@ fn bad_light_paths_are_exit_2() {
 }
 
 /// `render --frames N --timings` without --out-dir times the frames back to back and writes nothing (no
-/// frame, no --out); without --timings it is the one-line error naming --out-dir.
+/// frame, not --out's default); without --timings it is the one-line error naming --out-dir; an --out
+/// beside --frames is refused (an animation writes into --out-dir).
 #[test]
 fn frames_without_an_out_dir_are_only_timed() {
     let d = scratch("timed-frames");
     let scene = bounce_tests::default_scene();
-    let o = d.join("o.exr");
-    let args =
-        ["render", scene.to_str().unwrap(), "--frames", "3", "--light-path", "orbit", "--out", o.to_str().unwrap()];
+    let default_out = Path::new("out.exr");
+    let before = default_out.exists();
+    let args = ["render", scene.to_str().unwrap(), "--frames", "3", "--light-path", "orbit"];
     let mut timed = args.to_vec();
     timed.extend(["--width", "8", "--height", "8", "--vpls", "2", "--validation", "--timings"]);
     let r = bounce(&timed);
@@ -822,8 +845,13 @@ fn frames_without_an_out_dir_are_only_timed() {
     assert!(r.stdout.contains("median over frames 1..3"), "{}", r.stdout);
     assert!(r.stdout.lines().any(|l| l.starts_with("total")), "{}", r.stdout);
     assert!(r.stderr.contains("not written"), "{}", r.stderr);
-    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0, "nothing may be written");
+    assert!(before || !default_out.exists(), "--out's default was written");
+    let o = d.join("o.exr");
     expect_bad_input(&args, "--out-dir", &o);
+    let mut with_out = args.to_vec();
+    with_out.extend(["--timings", "--out", o.to_str().unwrap()]);
+    expect_bad_input(&with_out, "--out", &o);
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0, "nothing may be written");
 }
 
 /// A moving camera (`--camera-path`): `render --frames 3 --camera-path orbit:8` starts at the scene's own

@@ -672,7 +672,8 @@ pub struct BenchArgs {
     /// relMSE and flicker against a per-frame ground truth, at --vpls's first value per frame.
     #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml|none")]
     pub animate: Option<String>,
-    /// With --animate, move the camera too (`orbit[:PERIOD]` or a keyframe TOML, as --camera-path).
+    /// Move the camera along this path (`orbit[:PERIOD]` or a keyframe TOML, as `render --camera-path`),
+    /// measured as --animate measures (alone it is `--animate none`: the lights stay put).
     #[arg(long, value_name = "orbit[:PERIOD]|FILE.toml")]
     pub camera_path: Option<String>,
     /// Frames of the --animate animation.

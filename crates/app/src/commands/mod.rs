@@ -10,7 +10,7 @@ pub mod view;
 use crate::cli::FrameArgs;
 use anyhow::Result;
 use bounce_device::Gpu;
-use bounce_graph::frame::{FrameSettings, Renderer, RisSource};
+use bounce_graph::frame::{FrameSettings, Method, Renderer, RisSource};
 use bounce_graph::scene::Scene;
 use std::io::Write;
 use std::path::Path;
@@ -21,6 +21,28 @@ fn load_scene(path: &Path, err: &mut dyn Write) -> Result<Scene> {
     let scene = Scene::load(path)?;
     writeln!(err, "{}", scene.summary())?;
     Ok(scene)
+}
+
+/// The flags given that `method` does not read (a user who sets one expects it to act), said once as a
+/// warning on `err`: the sample count of a method that takes every VPL, a fixed budget or samples paths;
+/// the path tracer's samples; ris's source, candidates and picks (realtime's are fixed).
+fn warn_ignored_flags(vpls: Option<u32>, frame: &FrameArgs, method: Method, err: &mut dyn Write) -> Result<()> {
+    let samples_vpls = !matches!(method, Method::All | Method::Reference | Method::Realtime);
+    let ris = method == Method::Ris;
+    let ignored: Vec<&str> = [
+        ("--vpls", vpls.is_some() && !samples_vpls),
+        ("--spp", frame.spp.is_some() && method != Method::Reference),
+        ("--source", frame.source.is_some() && !ris),
+        ("--candidates", frame.candidates.is_some() && !ris),
+        ("--picks", frame.picks.is_some() && !ris),
+    ]
+    .into_iter()
+    .filter_map(|(flag, ignored)| ignored.then_some(flag))
+    .collect();
+    if !ignored.is_empty() {
+        writeln!(err, "warning: {} not read by --method {}", ignored.join(", "), method.name())?;
+    }
+    Ok(())
 }
 
 /// With `--validation`, fails if the layers reported anything during the command.
