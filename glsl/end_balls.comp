@@ -30,7 +30,7 @@ vec3 face_normal(uint tri, vec3 toward) {
 vec4 ball_at(vec3 p, uint tri, vec3 side) {
     if (tri == BVH_NO_TRI) return vec4(0.0);
     vec3 n = face_normal(tri, side);
-    if (n == vec3(0.0)) return vec4(0.0); // a zero-area triangle has no plane
+    if (!(dot(n, n) > 0.0)) return vec4(0.0); // a zero-area triangle has no plane
     return vec4(n, end_ball_radius(p, n, END_BALL_MAX_RADIUS * frame.scene_min.w));
 }
 

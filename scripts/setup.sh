@@ -10,15 +10,16 @@ packages=(
   cmake ninja-build g++ python3 git  # the shaderc crate builds glslang/shaderc from source
   xvfb xauth               # `bounce view` tests: a virtual X display (xvfb-run)
   libxcursor1 libxi6 libxkbcommon0 libxkbcommon-x11-0  # what winit loads at run time to open a window on X
-  curl ca-certificates     # rustup, where Rust is missing
 )
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if ((${#missing[@]})); then
+
+# Installs the packages of "$@" that are missing (as root, or through sudo).
+apt_install() {
+  local missing=() p sudo=""
+  for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  ((${#missing[@]})) || return 0
   echo "installing: ${missing[*]}" >&2
-  sudo=""
   [ "$(id -u)" -eq 0 ] || sudo="sudo"
   if [ -n "$sudo" ] && ! command -v sudo >/dev/null 2>&1; then
     echo "error: missing packages (${missing[*]}) and no sudo to install them: run this as root once" >&2
@@ -27,27 +28,43 @@ if ((${#missing[@]})); then
   $sudo apt-get update -qq
   # env, not a prefix: sudo resets the environment it is given.
   $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+}
+apt_install "${packages[@]}"
 
 # Rust: the oldest the locked dependencies build with (Cargo.toml's rust-version). A missing or older
-# toolchain is installed with rustup (Debian's own cargo is too old), with rustfmt and clippy for test.sh.
+# toolchain is installed with rustup (Debian's own cargo is too old), with rustfmt and clippy for test.sh;
+# a toolchain that is new enough is left as it is.
 rust_minimum=1.88
-[ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
+cargo_bin="${CARGO_HOME:-$HOME/.cargo}/bin"
 rust_ok() {
   local v
   v="$(rustc --version 2>/dev/null | awk '{print $2}')" || return 1
   [ -n "$v" ] && [ "$(printf '%s\n%s\n' "$rust_minimum" "$v" | sort -V | head -1)" = "$rust_minimum" ]
 }
-if ! command -v cargo >/dev/null 2>&1 || ! rust_ok; then
+if ! rust_ok && [ -x "$cargo_bin/cargo" ]; then
+  export PATH="$cargo_bin:$PATH"
+fi
+if ! rust_ok; then
   echo "installing Rust (stable, $rust_minimum or newer) with rustup" >&2
   if ! command -v rustup >/dev/null 2>&1; then
+    apt_install curl ca-certificates
     curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y -q --profile minimal --no-modify-path
-    export PATH="$HOME/.cargo/bin:$PATH"
+    export PATH="$cargo_bin:$PATH"
+    echo "note: Rust is in $cargo_bin; a new shell finds it after \`. ${CARGO_HOME:-$HOME/.cargo}/env\`" >&2
   fi
   rustup -q toolchain install stable --profile minimal --component rustfmt clippy
   rustup -q default stable
 fi
 rust_ok || { echo "error: Rust $rust_minimum or newer is needed (rustc: $(rustc --version 2>&1))" >&2; exit 1; }
+# test.sh checks formatting and lints: a minimal toolchain lacks both.
+if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
+  if command -v rustup >/dev/null 2>&1; then
+    rustup -q component add rustfmt clippy
+  else
+    echo "error: cargo fmt and cargo clippy are needed (rustfmt and clippy; not installed with this Rust)" >&2
+    exit 1
+  fi
+fi
 
 # The first build compiles shaderc (glslang and SPIRV-Tools, C++) from source: say so before it starts,
 # and show cargo's progress (the callers build without -q when nothing is built yet).

@@ -71,12 +71,14 @@ vec3 ray_triangle_bary(vec3 org, vec3 dir, vec3 a, vec3 b, vec3 c) {
 
 // n's direction for any finite n (0 for 0). Where |n|² is no normal float (a tiny triangle's edge cross
 // product: 0 or a denormal, where normalize gives ±inf or NaN; or beyond the float range) n is first
-// scaled by its largest component, exactly the same direction; elsewhere it is normalize(n).
+// scaled by 2^±64, exactly (a division by a tiny component has no precision bound in Vulkan); elsewhere
+// it is normalize(n).
 vec3 unit_direction(vec3 n) {
     float l2 = dot(n, n);
     if (l2 > 1e-30 && l2 < 1e30) return normalize(n);
-    float m = max(abs(n.x), max(abs(n.y), abs(n.z)));
-    return m > 0.0 && !isinf(m) ? normalize(n / m) : n;
+    vec3 s = n * (l2 <= 1e-30 ? 18446744073709551616.0 : 5.42101086242752217e-20);
+    float s2 = dot(s, s);
+    return s2 > 0.0 && !isinf(s2) ? normalize(s) : vec3(0.0);
 }
 
 // A surface point's shading normal: the vertex normals' interpolation, normalized, or `face` (the unit

@@ -38,10 +38,10 @@ void lm_axes(uint l, uint face, out vec3 X, out vec3 Y, out vec3 Z) {
     } else {
         vec3 centre = 0.5 * (frame.scene_min.xyz + frame.scene_max.xyz);
         vec3 d = centre - lights[l].position.xyz;
-        // Down where the light sits at the centre: d = 0 exactly at every scale (an absolute threshold in
-        // world units turned the map between scales for a light within it of the centre).
-        vec3 u = unit_direction(d);
-        Z = u != vec3(0.0) ? u : vec3(0.0, -1.0, 0.0);
+        // Down where the light sits at the centre, within 1e-6 of the scene's diagonal (relative, so the
+        // same at every scale: an absolute threshold in world units turned the map between scales).
+        float diagonal = frame.scene_min.w;
+        Z = dot(d, d) > 1e-12 * diagonal * diagonal ? unit_direction(d) : vec3(0.0, -1.0, 0.0);
     }
     tangent_basis(Z, X, Y);
 }

@@ -65,6 +65,12 @@ fn resolved(path: &Path) -> PathBuf {
     }
 }
 
+/// Whether two output paths name one file: lexically absolute (`./a.exr` and `a.exr`), links followed
+/// (two names of one file would share one temporary, and the second commit find it gone).
+pub fn same_destination(a: &Path, b: &Path) -> bool {
+    std::path::absolute(resolved(a)).ok() == std::path::absolute(resolved(b)).ok()
+}
+
 /// Write with `write` to `path`'s temporary file (removed again on failure).
 fn stage(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<Staged> {
     let path = resolved(path);

@@ -93,9 +93,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
 /// Where the images go, checked before the work that makes them (an animation writes to --out-dir).
 fn check_destinations(a: &RenderArgs) -> Result<()> {
     if a.frames.is_none() {
-        // Lexically absolute (`./a.exr` and `a.exr` are one file), as far as that goes without the disk.
-        let same = |p: &std::path::Path| std::path::absolute(p).ok() == std::path::absolute(&a.out).ok();
-        if a.png.as_deref().is_some_and(same) {
+        if a.png.as_deref().is_some_and(|p| output::same_destination(p, &a.out)) {
             return Err(bad(anyhow::anyhow!("--out and --png name the same file ({})", a.out.display())));
         }
         output::check_destination(&a.out, "exr").map_err(bad)?;
@@ -283,7 +281,7 @@ fn time_limit_method(a: &RenderArgs, settings: &mut FrameSettings, err: &mut dyn
             "method: {} (no --method or --vpls: the lowest error at equal time of every method measured, BENCHMARKS.md)",
             settings.method.name()
         )?;
-    } else if a.picture.method.is_none() {
+    } else if a.picture.method.is_none() && a.picture.vpls.is_some() {
         // --vpls asks for VPLs: the VPL default, said as the path tracer's choice is.
         writeln!(err, "method: {} (--vpls without --method: the VPL methods' default)", settings.method.name())?;
     }
