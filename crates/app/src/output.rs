@@ -65,6 +65,24 @@ fn resolved(path: &Path) -> PathBuf {
     }
 }
 
+/// Removes from `dir` the temporaries an interrupted run left of files named `prefix…` (`.NAME.PID.tmp`,
+/// as [`stage`] names them: a killed animation leaves its staged frames hidden in its folder, under a
+/// process id no later run has). Returns how many.
+pub fn remove_stale_temporaries(dir: &Path, prefix: &str) -> Result<usize> {
+    let mut removed = 0;
+    for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+        let path = entry?.path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else { continue };
+        let Some(rest) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else { continue };
+        let Some((file, pid)) = rest.rsplit_once('.') else { continue };
+        if file.starts_with(prefix) && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()) && path.is_file() {
+            std::fs::remove_file(&path).with_context(|| format!("removing {}", path.display()))?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
 /// Whether two output paths name one file: lexically absolute (`./a.exr` and `a.exr`), links followed
 /// (two names of one file would share one temporary, and the second commit find it gone).
 pub fn same_destination(a: &Path, b: &Path) -> bool {
@@ -429,6 +447,25 @@ mod tests {
         let e = format!("{:#}", read_exr(&d.join("huge.exr")).unwrap_err());
         assert!(e.contains("60000×60000"), "{e}");
         assert_eq!(read_exr(&d.join("small.exr")).unwrap().0.pixels, img.pixels);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// An interrupted run's hidden temporaries are removed; a file of another name, or a temporary of
+    /// another output, is not.
+    #[test]
+    fn stale_temporaries_are_removed_and_nothing_else() {
+        let d = scratch("stale");
+        for name in [
+            ".frame_0003.exr.4242.tmp",
+            ".frame_0003.png.17.tmp",
+            ".frame_0001.exr.x.tmp",
+            "frame_0001.exr",
+            ".bench.csv.5.tmp",
+        ] {
+            std::fs::write(d.join(name), "").unwrap();
+        }
+        assert_eq!(remove_stale_temporaries(&d, "frame_").unwrap(), 2);
+        assert_eq!(names(&d), [".bench.csv.5.tmp", ".frame_0001.exr.x.tmp", "frame_0001.exr"]);
         std::fs::remove_dir_all(&d).unwrap();
     }
 

@@ -189,6 +189,7 @@ fn animate(
     let mut staged = vec![];
     if let Some(dir) = dir {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        output::remove_stale_temporaries(dir, "frame_")?;
     }
     let gpu_name = r.gpu.name.clone();
     // So that frame 0's `gpu_ms` is its work, as every later frame's is.
