@@ -535,7 +535,7 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
 /// bench.md's second table: each pass's median GPU time per method, at the largest VPL count.
 fn pass_table(plan: &BenchPlan, samples: &[Sample], pass_names: &[&str]) -> String {
     let mut md = String::from(
-        "\n## Per-pass GPU time (ms, median; the last frame of a budget), in the last column\n\n| method |",
+        "\n## Per-pass GPU time (ms, median over runs; at equal time each run's last frame), in the last column\n\n| method |",
     );
     for p in pass_names {
         md.push_str(&format!(" {p} |"));

@@ -77,7 +77,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     }
     output::write_exr_and_png(&a.out, a.png.as_deref(), &img, &meta)?;
     if a.timings {
-        timings(out, &settings, &frame, wall, &gpu.name)?;
+        timings(out, &settings, &frame, (wall, a.time_limit.is_some()), &gpu.name)?;
         startup.report(out)?;
     }
     writeln!(
@@ -368,9 +368,17 @@ impl Startup {
 
 /// The `--timings` table on `out`: each pass's GPU time, the passes a cache skipped, the total, the
 /// PSM memory where the frame has per-VPL shadow maps, and the wall time.
-fn timings(out: &mut dyn Write, s: &FrameSettings, frame: &FrameOutput, wall: f64, device: &str) -> Result<()> {
+fn timings(
+    out: &mut dyn Write,
+    s: &FrameSettings,
+    frame: &FrameOutput,
+    (wall, progressive): (f64, bool),
+    device: &str,
+) -> Result<()> {
     let ms = |m: Option<f64>| m.map(|m| format!("{m:10.3}")).unwrap_or_else(|| format!("{:>10}", "n/a"));
-    writeln!(out, "{:<16} {:>10}", "pass", "GPU ms")?;
+    // Under --time-limit the table is the last progressive frame's (the wall time is the whole budget's).
+    let which = if progressive { "   (the last frame's)" } else { "" };
+    writeln!(out, "{:<16} {:>10}{which}", "pass", "GPU ms")?;
     for t in &frame.timings {
         writeln!(out, "{:<16} {}", t.name, ms(t.ms))?;
     }
