@@ -57,8 +57,8 @@ void texel_vpl(ivec3 id, out vec4 position, out vec4 normal, out vec4 flux) {
     t = point.w;
     vec3 world = light.position.xyz + lm_from_local(point.xyz, li, face);
     float w0 = 1.0 - bary.x - bary.y;
-    vec3 ng = unit_direction(cross(v1.position_u.xyz - v0.position_u.xyz, v2.position_u.xyz - v0.position_u.xyz));
-    vec3 n = shading_normal(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz, ng);
+    vec3 n = shading_normal(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz, vec3(0.0));
+    if (n == vec3(0.0)) n = triangle_normal(tri); // vertex normals that cancel here
     if (dot(n, light.position.xyz - world) < 0.0) n = -n;
     vec2 tex = w0 * vec2(v0.position_u.w, v0.normal_v.w) + bary.x * vec2(v1.position_u.w, v1.normal_v.w)
              + bary.y * vec2(v2.position_u.w, v2.normal_v.w);

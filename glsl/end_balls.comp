@@ -20,9 +20,7 @@ layout(set = 0, binding = B_END_BALL_OUT, rgba32f) uniform writeonly image2D out
 
 // Scene triangle tri's unit face normal, turned to the side of `toward`.
 vec3 face_normal(uint tri, vec3 toward) {
-    vec3 a = vertices[3u * tri].position_u.xyz, b = vertices[3u * tri + 1u].position_u.xyz;
-    vec3 c = vertices[3u * tri + 2u].position_u.xyz;
-    vec3 n = unit_direction(cross(b - a, c - a));
+    vec3 n = triangle_normal(tri);
     return dot(n, toward) < 0.0 ? -n : n;
 }
 

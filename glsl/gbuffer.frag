@@ -12,11 +12,9 @@ layout(location = 2) out vec4 o_albedo;   // rgb albedo, w = 1
 
 void main() {
     uint tri = uint(gl_PrimitiveID);
+    // The face normal only where the vertex normals cancel (fetched then, not for every fragment).
     vec3 n = shading_normal(i_normal, vec3(0.0));
-    if (n == vec3(0.0)) {
-        vec3 a = vertices[3u * tri].position_u.xyz;
-        n = unit_direction(cross(vertices[3u * tri + 1u].position_u.xyz - a, vertices[3u * tri + 2u].position_u.xyz - a));
-    }
+    if (n == vec3(0.0)) n = triangle_normal(tri);
     // Two-sided surfaces: the shading normal faces the incoming (camera) direction.
     if (dot(n, frame.eye.xyz - i_position) < 0.0) n = -n;
     o_position = vec4(i_position, 1.0);

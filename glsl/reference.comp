@@ -48,7 +48,7 @@ Hit hit_at(uint tri, vec2 bary, vec3 x) {
     float w0 = 1.0 - bary.x - bary.y;
     Hit h;
     h.y = w0 * v0.position_u.xyz + bary.x * v1.position_u.xyz + bary.y * v2.position_u.xyz;
-    h.ng = unit_direction(cross(v1.position_u.xyz - v0.position_u.xyz, v2.position_u.xyz - v0.position_u.xyz));
+    h.ng = triangle_normal(tri);
     h.ns = shading_normal(w0 * v0.normal_v.xyz + bary.x * v1.normal_v.xyz + bary.y * v2.normal_v.xyz, h.ng);
     if (dot(h.ns, x - h.y) < 0.0) h.ns = -h.ns;
     h.x_side = sign(dot(h.ng, x - h.y));

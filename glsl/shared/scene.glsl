@@ -21,6 +21,13 @@ layout(std430, set = 0, binding = B_TEXTURES) readonly buffer Textures { Texture
 layout(std430, set = 0, binding = B_TEXELS) readonly buffer Texels { uint texels[]; };
 layout(std430, set = 0, binding = B_LIGHTS) readonly buffer Lights { Light lights[]; };
 
+// Triangle tri's unit face normal (its winding's side; 0 for a zero-area triangle), at any size
+// (common.glsl's unit_direction).
+vec3 triangle_normal(uint tri) {
+    vec3 a = vertices[3u * tri].position_u.xyz;
+    return unit_direction(cross(vertices[3u * tri + 1u].position_u.xyz - a, vertices[3u * tri + 2u].position_u.xyz - a));
+}
+
 #include "lightmap.glsl"
 
 // The depth bias of a paraboloid shadow-map test (the per-VPL maps of `--visibility psm`): at
