@@ -205,7 +205,7 @@ void main() {
                 uint v = (uint(t.z) * res + uint(t.y)) * res + uint(t.x);
                 Vpl vpl = vpl_fetch_texel(t);
                 if (!vpl.valid) continue;
-                // The uniform source with faces by Russian roulette draws a face by its count of VPLs, then
+                // The uniform source (the validity CDF alone) draws a face by its count of VPLs, then
                 // a VPL of it uniformly: 1 / (all VPLs) for each. Its CDF's prefixes are integers, exact in
                 // f32, so this is the pool's cdf_prob_rows to rounding, without its divisions and loop.
                 float p_source = RIS_UNIFORM_SOURCE ? 1.0 / cdf_total_at(0u) : source_prob(v);

@@ -20,8 +20,9 @@ void main() {
         uint seed = pcg_hash(tile ^ 0x6A09E667u) ^ pc.seed;
         uint v;
         if (RIS_UNIFORM_SOURCE) {
-            // The uniform source with faces by Russian roulette: its section and the defensive one are the
-            // same CDF (importance = validity), so draw_vpl's mixture is that CDF's distribution. One search
+            // The uniform source: its mixture is the validity CDF alone (no method section, no defensive
+            // share), whose faces go by Russian roulette whatever --face says (it chooses among a method
+            // section's faces), so draw_vpl's mixture is that CDF's distribution. One search
             // (and its probability) instead of draw_vpl's two, with draw_vpl's stratified points.
             uint all_rows = faces() * face_rows();
             vec3 u = vec3(owen_sobol2(k, seed ^ 0xA54FF53Au), owen_sobol1(k, seed ^ 0x510E527Fu));

@@ -114,8 +114,13 @@ void main() {
                 if (ris.learned > 0.0) {
                     // A kept VPL has an unshadowed contribution (its target is positive): 0 means occluded.
                     uint vi = vis_tile_base(px) + 2u * vis_cell_of(r.vpl);
-                    if (c != vec3(0.0)) atomicAdd(vis_counts[vi], 1u);
-                    atomicAdd(vis_counts[vi + 1u], 1u);
+                    // The counts stop at RIS_VIS_COUNT_MAX rays (a tile's counts are kept across moves: hours
+                    // of a 1080p view could wrap a uint, and (visible + 1) / (traced + 2) would pass 1). Any
+                    // counts fixed before a choice keep the estimate unbiased.
+                    if (atomicAdd(vis_counts[vi + 1u], 0u) < RIS_VIS_COUNT_MAX) {
+                        if (c != vec3(0.0)) atomicAdd(vis_counts[vi], 1u);
+                        atomicAdd(vis_counts[vi + 1u], 1u);
+                    }
                 }
             }
         }

@@ -188,6 +188,8 @@ const float END_BALL_MAX_RADIUS = 0.03;
 // Most picks per reservoir's candidates (ris.picks; the initial stage keeps them in the components of a
 // vec4, pick 0 in the reservoir itself).
 #define RIS_MAX_PICKS 4
+// The learned visibility's traced count at which a (tile, cell) stops counting (ris_shade.comp).
+#define RIS_VIS_COUNT_MAX 0x40000000u
 // The shade's shadow-ray counter: one uint, the rays the frame traced (added to by each subgroup).
 #define B_RIS_RAYS 57
 // ris's temporal stage: last frame's VPL maps (this frame's when no light moved), for the targets at last

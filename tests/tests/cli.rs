@@ -296,10 +296,11 @@ fn compare_measures_an_exr_against_a_reference() {
     expect_bad_input(&["compare", "--frobnicate"], "bounce compare --help", &d.join("none"));
 }
 
-/// A flag the method does not read is said (it was ignored without a word: `--candidates` with
-/// `uniform`, `--vpls` with `realtime`); one it reads is not.
+/// A frame flag given that the frame does not read is said (`FrameSettings::reads`, which the reads
+/// tests hold against the images), with the settings that decide it, also when given at its default
+/// value; flags it reads are not.
 #[test]
-fn flags_the_method_does_not_read_are_said() {
+fn flags_the_frame_does_not_read_are_said() {
     let d = scratch("ignored-flags");
     let scene = bounce_tests::default_scene();
     let out = d.join("o.exr");
@@ -311,10 +312,16 @@ fn flags_the_method_does_not_read_are_said() {
         assert_eq!(r.code, 0, "{}", r.stderr);
         r.stderr.lines().filter(|l| l.starts_with("warning:")).map(str::to_string).collect::<Vec<_>>()
     };
-    let w = run(&["--method", "uniform", "--vpls", "2", "--candidates", "4", "--spp", "8"]);
-    assert!(w.iter().any(|l| l.contains("--spp, --candidates not read by --method uniform")), "{w:?}");
-    let w = run(&["--method", "realtime", "--vpls", "2"]);
-    assert!(w.iter().any(|l| l.contains("--vpls not read by --method realtime")), "{w:?}");
+    let w = run(&["--method", "uniform", "--vpls", "2", "--candidates", "4", "--spp", "8", "--mis-weights", "thesis"]);
+    let said = "this frame (--method uniform, --visibility exact) does not read --mis-weights, --spp, --candidates";
+    assert!(w.iter().any(|l| l.contains(said)), "{w:?}");
+    let w = run(&["--method", "realtime", "--vpls", "2", "--denoise", "on"]);
+    assert!(w.iter().any(|l| l.ends_with("does not read --vpls")), "{w:?}");
+    // A flag at its default value is still a flag given.
+    let w = run(&["--method", "ris", "--mis-weights", "consistent", "--psm-res", "256"]);
+    assert!(w.iter().any(|l| l.ends_with("--source uniform) does not read --mis-weights, --psm-res")), "{w:?}");
+    let w = run(&["--component", "direct", "--seed", "3", "--dprsm-res", "16"]);
+    assert!(w.iter().any(|l| l.ends_with("(--component direct) does not read --seed, --dprsm-res")), "{w:?}");
     assert!(run(&["--method", "ris", "--vpls", "2", "--candidates", "4"]).is_empty());
 }
 

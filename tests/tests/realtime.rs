@@ -599,7 +599,9 @@ fn the_realtime_frame_is_linear_in_the_lights_intensity() {
 /// is bit for bit the one without it (raw and denoised: the reservoirs, the surfaces and the denoiser's
 /// history are the last real-time frame's, the motion against its camera). Before, the still frame
 /// remade the reservoirs, and the histories swapped at every frame, so the next real-time frame found its
-/// history two frames old (or none).
+/// history two frames old (or none). A still frame that moved on to a new VPL set (as a still view's
+/// frames do) makes the next real-time frame forget its history, as one that moved the camera does: the
+/// history would be weighed with the new set's maps, not those its reservoirs were drawn with.
 #[test]
 fn a_still_frame_between_real_time_frames_keeps_their_history() {
     let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
@@ -607,24 +609,34 @@ fn a_still_frame_between_real_time_frames_keeps_their_history() {
     let (w, h, res, vox) = SIZE;
     let s = FrameSettings { width: w, height: h, dprsm_res: res, voxels: vox, denoise: true, ..realtime(9) };
     let still = FrameSettings { method: Method::Ris, denoise: false, ..s.clone() };
-    let sequence = |between: bool| {
+    let new_set = FrameSettings { vpl_seed: Some(77), ..still.clone() };
+    // The still frame before frame 4: none, one that sees frame 3's view, one with a new VPL set, one
+    // seen from elsewhere.
+    let sequence = |between: Option<(&FrameSettings, f32)>| {
         let mut r = Renderer::new(&gpu, &scene).unwrap();
         let mut out = vec![];
         for k in 0..6 {
-            // The still frame sees frame 3's view: nothing moved for it.
-            if k == 4 && between {
-                r.render(&still).unwrap();
+            let pan = 0.4 * k as f32;
+            if let (4, Some((still, moved))) = (k, between) {
+                r.set_camera(panned(&scene, pan - 0.4 + moved, h));
+                r.render(still).unwrap();
             }
-            r.set_camera(panned(&scene, 0.4 * k as f32, h));
+            r.set_camera(panned(&scene, pan, h));
+            // The real-time frames keep their set: the still frames' is theirs alone.
             let f = r.render(&s).unwrap();
             out.push((f.radiance, f.raw));
         }
         out
     };
-    let (plain, with_still) = (sequence(false), sequence(true));
+    let plain = sequence(None);
+    let with_still = sequence(Some((&still, 0.0)));
     assert!(
         plain[4] == with_still[4] && plain[5] == with_still[5],
         "a still frame between changed the real-time frames"
     );
     assert!(plain[3] != plain[4], "the frames repeat");
+    let after_new_set = sequence(Some((&new_set, 0.0)));
+    let after_moved = sequence(Some((&still, 0.9)));
+    assert!(after_moved[4] != plain[4], "a still frame from elsewhere kept the history");
+    assert!(after_new_set[4] == after_moved[4], "a still frame with a new VPL set kept the history");
 }

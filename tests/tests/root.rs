@@ -16,6 +16,7 @@ mod lightmaps;
 mod present;
 mod progressive;
 mod psm;
+mod reads;
 mod realtime;
 mod reference;
 mod ris;

@@ -284,7 +284,8 @@ pub struct FrameArgs {
     /// Reflective DPRSM resolution per face (VPLs: 2 × lights × res²).
     #[arg(long, default_value_t = d().dprsm_res)]
     pub dprsm_res: u32,
-    /// Voxels along the longest side of the scene (cubic cells).
+    /// Voxels along the longest side of the scene (cubic cells): the grid of --visibility voxel, and the
+    /// distance below which the CDF methods' importance bounds 1/d² (one cell).
     #[arg(long, default_value_t = d().voxels)]
     pub voxels: u32,
     /// A VPL's falloff with distance.
@@ -527,6 +528,9 @@ pub struct RenderArgs {
     pub out_dir: Option<PathBuf>,
     #[command(flatten)]
     pub animation: AnimationArgs,
+    /// The frame settings given on the command line, not left at their defaults (`lib::run` fills it).
+    #[arg(skip)]
+    pub given: Vec<bounce_graph::frame::Setting>,
 }
 
 /// `view` renders a frame per redraw, so it starts from a smaller window and cheaper maps than

@@ -16,7 +16,6 @@ pub mod metrics;
 pub mod output;
 pub mod plot;
 
-use clap::Parser;
 use cli::{Cli, Command};
 use std::ffi::OsString;
 use std::io::Write;
@@ -46,10 +45,16 @@ pub fn cli_reference() -> String {
 /// Runs the command line `args` (program name first); returns the exit code. Output goes to `out`,
 /// progress, warnings and the one-line error to `err`.
 pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let cli = match Cli::try_parse_from(args) {
-        Ok(cli) => cli,
+    use clap::{CommandFactory, FromArgMatches};
+    let parsed = Cli::command().try_get_matches_from(args).and_then(|m| Ok((Cli::from_arg_matches(&m)?, m)));
+    let (mut cli, matches) = match parsed {
+        Ok(parsed) => parsed,
         Err(e) => return error::report_usage(&e, out, err),
     };
+    // Which frame flags were given, not defaulted: `render` says those its frame does not read.
+    if let (Command::Render(a), Some(m)) = (&mut cli.command, matches.subcommand_matches("render")) {
+        a.given = commands::given_settings(m);
+    }
     let result = match cli.command {
         Command::Render(a) => commands::render::run(&a, out, err),
         Command::Info => commands::info::run(out),

@@ -10,7 +10,7 @@ pub mod view;
 use crate::cli::FrameArgs;
 use anyhow::Result;
 use bounce_device::Gpu;
-use bounce_graph::frame::{FrameSettings, Method, Renderer, RisSource};
+use bounce_graph::frame::{Component, FrameSettings, Method, Renderer, RisSource, Setting};
 use bounce_graph::scene::Scene;
 use std::io::Write;
 use std::path::Path;
@@ -23,25 +23,62 @@ fn load_scene(path: &Path, err: &mut dyn Write) -> Result<Scene> {
     Ok(scene)
 }
 
-/// The flags given that `method` does not read (a user who sets one expects it to act), said once as a
-/// warning on `err`: the sample count of a method that takes every VPL, a fixed budget or samples paths;
-/// the path tracer's samples; ris's source, candidates and picks (realtime's are fixed).
-fn warn_ignored_flags(vpls: Option<u32>, frame: &FrameArgs, method: Method, err: &mut dyn Write) -> Result<()> {
-    let samples_vpls = !matches!(method, Method::All | Method::Reference | Method::Realtime);
-    let ris = method == Method::Ris;
-    let ignored: Vec<&str> = [
-        ("--vpls", vpls.is_some() && !samples_vpls),
-        ("--spp", frame.spp.is_some() && method != Method::Reference),
-        ("--source", frame.source.is_some() && !ris),
-        ("--candidates", frame.candidates.is_some() && !ris),
-        ("--picks", frame.picks.is_some() && !ris),
-    ]
-    .into_iter()
-    .filter_map(|(flag, ignored)| ignored.then_some(flag))
-    .collect();
-    if !ignored.is_empty() {
-        writeln!(err, "warning: {} not read by --method {}", ignored.join(", "), method.name())?;
+/// Each frame setting's flag, by clap's argument id.
+const SETTING_FLAGS: [(&str, Setting); 20] = [
+    ("vpls", Setting::Vpls),
+    ("seed", Setting::Seed),
+    ("dprsm_res", Setting::DprsmRes),
+    ("voxels", Setting::Voxels),
+    ("vpl_kernel", Setting::VplKernel),
+    ("cdf_samples", Setting::CdfSamples),
+    ("regions", Setting::Regions),
+    ("gather_rays", Setting::GatherRays),
+    ("defensive", Setting::Defensive),
+    ("face", Setting::Face),
+    ("mis_weights", Setting::MisWeights),
+    ("spp", Setting::Spp),
+    ("visibility", Setting::Visibility),
+    ("psm_res", Setting::PsmRes),
+    ("light_map", Setting::LightMap),
+    ("cdf_seed", Setting::CdfSeed),
+    ("source", Setting::Source),
+    ("candidates", Setting::Candidates),
+    ("picks", Setting::Picks),
+    ("denoise", Setting::Denoise),
+];
+
+/// The frame settings whose flags `m` (a command's matches) has from the command line, not from a default.
+pub fn given_settings(m: &clap::ArgMatches) -> Vec<Setting> {
+    let given =
+        |id: &str| m.ids().any(|i| i == id) && m.value_source(id) == Some(clap::parser::ValueSource::CommandLine);
+    SETTING_FLAGS.iter().filter(|(id, _)| given(id)).map(|&(_, s)| s).collect()
+}
+
+/// The flags given that the frame does not read ([`FrameSettings::reads`]: a user who sets one expects
+/// it to act), said once as a warning on `err`, with the settings that decide it.
+fn warn_ignored_flags(given: &[Setting], s: &FrameSettings, err: &mut dyn Write) -> Result<()> {
+    let ignored: Vec<String> = SETTING_FLAGS
+        .iter()
+        .filter(|(_, setting)| given.contains(setting) && !s.reads(*setting))
+        .map(|(id, _)| format!("--{}", id.replace('_', "-")))
+        .collect();
+    if ignored.is_empty() {
+        return Ok(());
     }
+    let frame = if s.component == Component::Direct {
+        "--component direct".to_string()
+    } else {
+        let source = match s.method {
+            Method::Ris => format!(", --source {}", crate::cli::RIS_SOURCES.name_of(&s.ris.source)),
+            _ => String::new(),
+        };
+        format!(
+            "--method {}, --visibility {}{source}",
+            s.method.name(),
+            crate::cli::VISIBILITIES.name_of(&s.visibility)
+        )
+    };
+    writeln!(err, "warning: this frame ({frame}) does not read {}", ignored.join(", "))?;
     Ok(())
 }
 

@@ -6,12 +6,14 @@
 pub mod chunks;
 pub mod keys;
 pub mod progressive;
+pub mod reads;
 pub mod recipe;
 pub mod renderer;
 pub mod settings;
 pub mod state;
 mod warnings;
 
+pub use reads::Setting;
 pub use recipe::build_frame;
 pub use renderer::{FrameOutput, RenderContext, Renderer};
 pub use settings::{

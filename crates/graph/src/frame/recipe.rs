@@ -270,9 +270,10 @@ fn ris_frame(s: &FrameSettings, i: &RecipeInputs, gather: GatherPush) -> RisFram
     RisFrame { push, spatial_passes: ris.spatial_passes, candidates_per_dispatch, key, uniform_source }
 }
 
-/// Whether ris's candidates take the uniform source's shortcut (`RisFrame::uniform_source`).
+/// Whether ris's candidates take the uniform source's shortcut (`RisFrame::uniform_source`). `--face`
+/// chooses among a CDF's sections only; the uniform source is the validity section alone, whatever it says.
 pub(crate) fn ris_uniform_source(s: &FrameSettings) -> bool {
-    s.ris_settings().source == RisSource::Uniform && s.face == FaceMode::RussianRoulette
+    s.ris_settings().source == RisSource::Uniform
 }
 
 /// ris's stages' settings (`pass` and `history` are set per stage).

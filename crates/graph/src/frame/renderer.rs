@@ -123,6 +123,7 @@ impl Renderer {
             retained: Retained::default(),
             previous_camera: None,
             previous_lights: None,
+            previous_vpls: None,
             history_view: None,
             realtime_frames: 0,
         };
@@ -156,6 +157,7 @@ impl Renderer {
         self.state.retained.clear();
         self.state.previous_camera = None;
         self.state.previous_lights = None;
+        self.state.previous_vpls = None;
         self.state.history_view = None;
         self.state.realtime_frames = 0;
         self.ctx.realtime_learns = None;
@@ -340,6 +342,7 @@ impl Renderer {
         let (ctx, state) = (&self.ctx, &mut self.state);
         let i = ctx.recipe_inputs(s, &state.camera, &state.lights, &uniforms);
         let (total, per_chunk) = ctx.chunking(s, &i);
+        let vpls_key = i.keys.vpls;
         let mut log = FrameLog::default();
         let mut read = Read::default();
         // What the presented image read back is divided by for its mean (present's `add`).
@@ -378,7 +381,7 @@ impl Renderer {
             }
             Ok(())
         })?;
-        state.frame_done();
+        state.frame_done(vpls_key);
         state.realtime_frames += (s.method == Method::Realtime) as u64;
         let mut radiance: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read.radiance);
         if present.is_some() {

@@ -16,10 +16,14 @@ pub struct FrameState {
     pub previous_camera: Option<Camera>,
     /// The lights of the last frame rendered.
     pub previous_lights: Option<Vec<Light>>,
-    /// The camera and lights of the last frame that used the histories (`Retained::histories_used`): frames between
-    /// it and the next that keeps them (the viewer's still frames) must not have moved either, or the
-    /// histories are forgotten (`Retained::forget_histories`).
-    pub history_view: Option<(Camera, Vec<Light>)>,
+    /// The VPLs' key ([`super::keys::Keys::vpls`]) of the last frame rendered.
+    pub previous_vpls: Option<u64>,
+    /// The camera, lights and VPLs of the last frame that used the histories (`Retained::histories_used`):
+    /// frames between it and the next that keeps them (the viewer's still frames) must not have changed
+    /// them either, or the histories are forgotten (`Retained::forget_histories`). The VPLs too: the next
+    /// frame weighs its reservoirs' history with the VPLs the frame before it had (`Graph::replaced`),
+    /// which after a still frame that moved on to a new VPL set are not the ones they were drawn with.
+    pub history_view: Option<(Camera, Vec<Light>, u64)>,
     /// `Method::Realtime` frames rendered since the renderer began or its frame cache was cleared: each
     /// draws its random numbers from it and the seed, so the frames whose reservoirs it reuses are
     /// independent draws. Only realtime frames count, so that a sequence's images do not depend on what
@@ -28,21 +32,25 @@ pub struct FrameState {
 }
 
 impl FrameState {
-    /// Forget the histories where a frame that kept none moved the view since the last that did: their
-    /// motion (last frame's camera against theirs) would be wrong.
+    /// Forget the histories where a frame that kept none moved the view or changed the VPLs since the last
+    /// that did: their motion (last frame's camera against theirs) or their VPLs would be wrong.
     pub(super) fn forget_moved_histories(&mut self) {
-        let last_view = self.previous_camera.zip(self.previous_lights.clone());
+        let last_view = match (self.previous_camera, self.previous_lights.clone(), self.previous_vpls) {
+            (Some(camera), Some(lights), Some(vpls)) => Some((camera, lights, vpls)),
+            _ => None,
+        };
         if self.history_view.is_some() && self.history_view != last_view {
             self.retained.forget_histories();
             self.history_view = None;
         }
     }
 
-    /// After a frame: what the next one compares against.
-    pub(super) fn frame_done(&mut self) {
+    /// After a frame whose VPLs had the key `vpls`: what the next one compares against.
+    pub(super) fn frame_done(&mut self, vpls: u64) {
         if self.retained.histories_used() {
-            self.history_view = Some((self.camera, self.lights.clone()));
+            self.history_view = Some((self.camera, self.lights.clone(), vpls));
         }
+        self.previous_vpls = Some(vpls);
         self.retained.next_frame();
         self.previous_camera = Some(self.camera);
         self.previous_lights = Some(self.lights.clone());

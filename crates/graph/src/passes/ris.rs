@@ -180,8 +180,7 @@ pub struct RisFrame {
     pub spatial_passes: u32,
     /// Candidates one initial dispatch may stream per reservoir under the loop limit.
     pub candidates_per_dispatch: u32,
-    /// The source is `uniform` with faces by Russian roulette: its mixture is the validity CDF alone, which
-    /// the pool draws from directly.
+    /// The source is `uniform`: its mixture is the validity CDF alone, which the pool draws from directly.
     pub uniform_source: bool,
     /// What the history depends on (camera, CDF, every setting but the seed): reservoirs are carried to
     /// the next frame only while it is unchanged.
