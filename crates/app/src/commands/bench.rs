@@ -376,7 +376,8 @@ fn measure(r: &mut Renderer, s: &FrameSettings, column: Column, reference: &RgbI
         Some(t) => {
             let p = render_for(r, s, Duration::from_secs_f64(t), &mut |_, _| {})?;
             let f = FrameOutput { radiance: p.radiance, ..p.last };
-            (f, p.frames, p.gpu_ms.unwrap_or(f64::NAN))
+            // Per frame, as without a budget.
+            (f, p.frames, p.gpu_ms.unwrap_or(f64::NAN) / p.frames as f64)
         }
     };
     let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -427,8 +428,8 @@ fn write_outputs(dir: &Path, plan: &BenchPlan, samples: &[Sample], device: &str,
     tables.into_iter().try_for_each(output::Staged::commit)
 }
 
-/// One row per frame (per budget with `--time-limits`: `time_limit_s` and the `frames` averaged), one
-/// column per pass.
+/// One row per frame (per budget with `--time-limits`: `time_limit_s` and the `frames` averaged, `gpu_ms`
+/// their mean, `wall_ms` their sum, the pass columns the last frame's), one column per pass.
 fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
     let mut csv = String::from(
         "method,vpls,seed,gpu_ms,wall_ms,rmse,rel_mse,mean_ratio,p99_abs,p999_abs,flip,time_limit_s,frames",
@@ -454,8 +455,9 @@ fn csv(samples: &[Sample], pass_names: &[&str]) -> String {
             s.column.seconds.map(|t| t.to_string()).unwrap_or_default(),
             s.frames,
         ));
+        // A pass the frame did not run (a product it kept) is empty, not 0 ms.
         for p in pass_names {
-            csv.push_str(&format!(",{:.4}", s.passes.get(p).copied().unwrap_or(0.0)));
+            csv.push_str(&s.passes.get(p).map_or(",".to_string(), |ms| format!(",{ms:.4}")));
         }
         csv.push('\n');
     }
@@ -491,7 +493,7 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
     let equal_time = plan.columns.iter().any(|c| c.seconds.is_some());
     let mut md = format!(
         "# bounce bench\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, clamp {}, {:?} VPLs, {} repeat(s) \
-         (runs 1..={}, each its own seed); medians over repeats. Reference: {}. {}\n\n## {}, p99.9 |error| and mean FLIP against the reference\n\n| method |",
+         (runs 1..={}, each its own seed{}); medians over repeats. Reference: {}. {}\n\n## {}, p99.9 |error| and mean FLIP against the reference\n\n| method |",
         b.width,
         b.height,
         b.dprsm_res,
@@ -500,6 +502,7 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
         b.vpl_kernel,
         plan.repeats,
         plan.repeats,
+        if b.cdf_seed.is_some() { ", one VPL set and CDF between them (--cdf-seed): they differ in the pixels' numbers alone" } else { "" },
         match plan.reference {
             Reference::Path { spp } => format!("the path-traced ground truth (`--method reference`, {spp} spp)"),
             Reference::All => "the exhaustive VPL sum on the same VPL set (`--method all`)".to_string(),
@@ -511,21 +514,22 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
         },
         if equal_time { "Frames averaged, relMSE" } else { "GPU time (ms), relMSE" },
     );
+    // At equal time, each budget's frames and the wall time they took (the budget to within half a frame).
+    let first = if equal_time { "frames | wall s" } else { "ms" };
     for c in &plan.columns {
-        let first = if equal_time { "frames" } else { "ms" };
         md.push_str(&format!(" {}: {first} | relMSE | p99.9 | FLIP |", c.label()));
     }
     md.push_str("\n|---|");
     for _ in &plan.columns {
-        md.push_str("---:|---:|---:|---:|");
+        md.push_str(if equal_time { "---:|---:|---:|---:|---:|" } else { "---:|---:|---:|---:|" });
     }
     md.push('\n');
     for &m in &plan.methods {
         md.push_str(&format!("| {} |", m.name()));
         for &c in &plan.columns {
             let x = cell(samples, m, c);
-            let first = if equal_time { x.frames } else { x.time };
-            md.push_str(&format!(" {first:.1} | {:.4} | {:.4} | {:.4} |", x.rel_mse, x.tail, x.flip));
+            let first = if equal_time { format!("{:.1} | {:.2}", x.frames, x.time) } else { format!("{:.1}", x.time) };
+            md.push_str(&format!(" {first} | {:.4} | {:.4} | {:.4} |", x.rel_mse, x.tail, x.flip));
         }
         md.push('\n');
     }

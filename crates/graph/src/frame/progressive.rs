@@ -27,13 +27,14 @@
 //! still uniform, so the mean stays unbiased. Measured: BENCHMARKS.md, "The path tracer's frames".
 //!
 //! `all` and the direct component are the same every frame: they render one frame, whatever the budget.
-//! `realtime`'s frames are averaged raw (its denoised output is biased by design); they reuse one
-//! another's reservoirs, so they are correlated, and the mean's error falls slower than 1/frames.
+//! `realtime`'s frames are averaged raw (its denoised output is biased by design; the denoiser does not
+//! run); they reuse one another's reservoirs, so they are correlated, and the mean's error falls slower
+//! than 1/frames.
 //!
 //! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
-//! upload). A frame is started only if it should end within the budget, judged by the last frame's time;
-//! the first frame always runs, and so does a second while time is left (the first also built what the
-//! others reuse, so only the second tells what a frame costs).
+//! upload). The first frame always runs; another runs where half of it fits in what is left, judged by
+//! the last frame's time (after the first, which also built what the others reuse, an overestimate), so
+//! that the frames end as near the budget as whole frames allow, at most half a frame over.
 
 use super::renderer::{FrameOutput, Renderer};
 use super::settings::{Component, FrameSettings, Method};
@@ -82,7 +83,9 @@ pub fn frame_settings(s: &FrameSettings, k: u32, set: u32) -> FrameSettings {
         (None, 0) => None,
         (None, j) => Some(fingerprint(&(s.vpl_seed_or_derived(), j, "vpl set"))),
     };
-    FrameSettings { seed: s.seed.wrapping_add(k as u64), cdf_seed, vpl_seed, ..s.clone() }
+    // `realtime`'s frames are averaged raw (each unbiased, the denoised ones not): no denoiser to pay for.
+    let denoise = s.denoise && s.method != Method::Realtime;
+    FrameSettings { seed: s.seed.wrapping_add(k as u64), cdf_seed, vpl_seed, denoise, ..s.clone() }
 }
 
 /// How many times a VPL set's cost the frames on it take before the next set is drawn: the sets take at
@@ -153,6 +156,16 @@ impl VplSets {
     }
 }
 
+/// Whether a progressive render `elapsed` into `budget`, whose last frame took `last`, renders another:
+/// where it would end nearer the budget with it than without it, i.e. where half of it fits. The next
+/// frame costs about what the last one did (after the first, which also built what the others reuse, at
+/// most that). So every method's time is the budget to within half a frame, over or under: a method of
+/// long frames is neither given a whole frame more (a second frame whenever time was left let mis run
+/// 1.3–2.6× a 0.5 s budget) nor cut a whole frame short.
+pub fn another_frame(elapsed: Duration, last: Duration, budget: Duration) -> bool {
+    elapsed + last / 2 <= budget
+}
+
 /// Render frames of `s` (seeds `s.seed`, `s.seed + 1`, …, VPL sets as [`VplSets`] says) until `budget`,
 /// and average them.
 /// `progress(frames, elapsed)` is called after each frame.
@@ -182,13 +195,10 @@ pub fn render_for(
         gpu_ms = gpu_ms.zip(f.gpu_ms()).map(|(a, b)| a + b);
         let elapsed = t0.elapsed();
         progress(frames, elapsed);
-        // The next frame costs about what the last one did. The first also built what the others
-        // reuse (voxel grid, maps, CDF), so it is no guide: a second frame runs whenever time is left.
         let this_frame = elapsed - previous;
         previous = elapsed;
         vpl_sets.frame_done(this_frame.as_secs_f64());
-        let next_ends_late = if frames == 1 { elapsed >= budget } else { elapsed + this_frame > budget };
-        if next_ends_late || !averages(s) {
+        if !another_frame(elapsed, this_frame, budget) || !averages(s) {
             break f;
         }
     };
@@ -201,6 +211,25 @@ pub fn render_for(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Frames of 0.3 s in a 0.5 s budget: a second (ending at 0.6 s, 0.1 over) is nearer than stopping
+    /// at 0.3 (0.2 under); frames of 0.4 s: one (0.1 under, not 0.3 over). Many short frames fill it.
+    #[test]
+    fn the_frames_end_as_near_the_budget_as_whole_frames_allow() {
+        let ms = Duration::from_millis;
+        let ends = |frame: u64| {
+            let mut elapsed = ms(frame);
+            while another_frame(elapsed, ms(frame), ms(500)) {
+                elapsed += ms(frame);
+            }
+            elapsed
+        };
+        assert_eq!(ends(300), ms(600));
+        assert_eq!(ends(400), ms(400));
+        assert_eq!(ends(700), ms(700));
+        assert_eq!(ends(30), ms(510));
+        assert_eq!(ends(25), ms(500));
+    }
 
     fn sampled() -> FrameSettings {
         FrameSettings { method: Method::Gbg, component: Component::Indirect, ..FrameSettings::default() }

@@ -318,9 +318,9 @@ fn table(a: &BenchArgs, b: &FrameSettings, samples: &[FrameSample], device: &str
     let mut md = format!(
         "# bounce bench --animate\n\n`{command}`\n\nDevice: {device}. {}×{}, indirect, DPRSM {}² per face, {} voxels, \
          {} VPLs per pixel per frame, {} frames of `{arg}`. Ground truth: `--method reference` at {} spp per frame. \
-         relMSE: mean over frames; flicker: mean over frames 1..{} of the relMSE of the frame-to-frame difference \
+         relMSE: mean over every frame (frame 0 too, which reuses no history yet: the viewer shows it); flicker: mean over frames 1..{} of the relMSE of the frame-to-frame difference \
          against the ground truth's; GPU ms: mean over frames 1..{} (the light side and the gather; voxels and \
-         G-buffer kept), raw: less the denoiser's passes (what the raw estimate costs, `--denoise off`); \
+         G-buffer kept; frame 0 also builds them), raw: less the denoiser's passes (what the raw estimate costs, `--denoise off`); \
          rays: shadow rays per pixel per frame, counted (– where a method does not count them). \
          relMSE and flicker are of the raw estimate; `denoised`: of the displayed output where a method has a \
          denoiser (realtime); mean ratio: the image's mean over the ground truth's (raw, denoised; over the frames, \

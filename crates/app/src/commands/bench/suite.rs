@@ -217,16 +217,15 @@ fn means(rows: &[Row], method: Method) -> BTreeMap<String, (f64, f64)> {
 /// with error where `uniform` has none, or with a non-finite image) makes it infinite, and a 0 (exact
 /// where `uniform` is not) makes it 0: the headline never hides the scene that rules it.
 fn geomean(v: impl IntoIterator<Item = f64>) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for x in v.into_iter().filter(|x| !x.is_nan()) {
-        s += x.ln();
-        n += 1;
+    let v: Vec<f64> = v.into_iter().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return f64::NAN;
     }
-    if n == 0 {
-        f64::NAN
-    } else {
-        (s / n as f64).exp()
+    // An infinite ratio rules over a 0 (whose logarithm would cancel it into NaN).
+    if v.contains(&f64::INFINITY) {
+        return f64::INFINITY;
     }
+    (v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp()
 }
 
 /// The (scene, value) with the largest value.
@@ -253,8 +252,16 @@ fn header(a: &SuiteArgs, scenes: usize, device: &str, command: &str) -> String {
     format!(
         "# Suite: {scenes} scenes, {} seeds, {budget}, {}×{}\n\n`{command}` on {device}; relMSE against each \
          scene's path-traced ground truth ({} spp), the median over seeds; ratios are over `uniform`'s on \
-         the same scene.\n\n",
-        a.seeds, a.width, a.height, a.reference_spp
+         the same scene.{}\n\n",
+        a.seeds,
+        a.width,
+        a.height,
+        a.reference_spp,
+        if a.frame.cdf_seed.is_some() {
+            " The seeds share one VPL set and CDF (--cdf-seed): their spread is the pixels' numbers' alone."
+        } else {
+            ""
+        }
     )
 }
 
@@ -265,9 +272,14 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         s
     };
     let mut md = header(a, scenes.len(), device, command);
-    md += "| method | geomean relMSE / uniform | worst (scene) | scenes above uniform | largest |mean − truth| over seeds (scene) | largest spread of the mean over seeds | median p99.9 |error| / uniform |\n";
-    md += "|---|---:|---|---:|---|---:|---:|\n";
+    // The time each method took, over uniform's (geomean over scenes): at equal time the wall time of its
+    // frames (the budget to within half a frame), at equal count one frame's GPU time.
+    let time = |s: &Sample| if a.equal_count { s.gpu_ms } else { s.wall_ms };
+    let time_name = if a.equal_count { "GPU ms / uniform" } else { "wall time / uniform" };
+    md += &format!("| method | geomean relMSE / uniform | worst (scene) | scenes above uniform | largest |mean − truth| over seeds (scene) | largest spread of the mean over seeds | median p99.9 |error| / uniform | {time_name} |\n");
+    md += "|---|---:|---|---:|---|---:|---:|---:|\n";
     let uniform_tail = per_scene(rows, Method::Uniform, |s| s.metrics.p999_abs);
+    let uniform_time = per_scene(rows, Method::Uniform, time);
     // Each method's per-scene ratios, computed once for the three tables.
     let all: BTreeMap<&str, BTreeMap<String, f64>> = a.methods.iter().map(|m| (m.name(), ratios(rows, *m))).collect();
     for &m in &a.methods {
@@ -277,14 +289,20 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         let mm = means(rows, m);
         let bias: BTreeMap<String, f64> = mm.iter().map(|(k, (m, _))| (k.clone(), (m - 1.0).abs())).collect();
         let (bs, bv) = worst(&bias);
-        let spread = mm.values().map(|(_, s)| *s).fold(0.0, f64::max);
+        // A scene whose spread is undefined (a black truth's infinite mean ratio) shows as NaN, not as 0.
+        let spread = mm
+            .values()
+            .map(|(_, s)| *s)
+            .fold(0.0, |a: f64, s| if s.is_nan() || a.is_nan() { f64::NAN } else { a.max(s) });
         let tail = per_scene(rows, m, |s| s.metrics.p999_abs);
         let tail_ratio =
             median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).and_then(|u| ratio(*v, *u))).collect());
+        let times = per_scene(rows, m, time);
+        let time_ratio = geomean(times.iter().filter_map(|(k, v)| uniform_time.get(k).map(|u| v / u)));
         // One seed has no spread to show.
         let spread = if a.seeds > 1 { format!("{:.2} %", 100.0 * spread) } else { "–".into() };
         md += &format!(
-            "| {} | {:.3} | {:.3} ({ws}) | {above} of {} | {:.2} % ({bs}) | {spread} | {:.3} |\n",
+            "| {} | {:.3} | {:.3} ({ws}) | {above} of {} | {:.2} % ({bs}) | {spread} | {:.3} | {time_ratio:.2} |\n",
             m.name(),
             geomean(r.values().copied()),
             wv,
@@ -370,6 +388,7 @@ mod tests {
         // An infinitely worse scene rules the headline; an undefined one is left out.
         assert_eq!(geomean([2.0, f64::INFINITY]), f64::INFINITY);
         assert_eq!(geomean([2.0, 0.0]), 0.0);
+        assert_eq!(geomean([0.0, f64::INFINITY]), f64::INFINITY);
         assert!((geomean([2.0, f64::NAN, 8.0]) - 4.0).abs() < 1e-12);
         let m: BTreeMap<String, f64> = [("a".to_string(), 1.0), ("b".to_string(), 3.0)].into();
         assert_eq!(worst(&m), ("b".to_string(), 3.0));
