@@ -265,6 +265,14 @@ fn header(a: &SuiteArgs, scenes: usize, device: &str, command: &str) -> String {
     )
 }
 
+/// The time `m` took over uniform's (geomean over scenes of the medians over seeds): at equal time the
+/// wall time of its frames (the budget to within half a frame), at equal count one frame's GPU time.
+fn time_ratio(a: &SuiteArgs, rows: &[Row], m: Method) -> f64 {
+    let time = |s: &Sample| if a.equal_count { s.gpu_ms } else { s.wall_ms };
+    let uniform = per_scene(rows, Method::Uniform, time);
+    geomean(per_scene(rows, m, time).iter().filter_map(|(k, v)| uniform.get(k).map(|u| v / u)))
+}
+
 fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String {
     let scenes: Vec<String> = {
         let mut s: Vec<String> = rows.iter().map(|r| r.scene.clone()).collect();
@@ -272,14 +280,10 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         s
     };
     let mut md = header(a, scenes.len(), device, command);
-    // The time each method took, over uniform's (geomean over scenes): at equal time the wall time of its
-    // frames (the budget to within half a frame), at equal count one frame's GPU time.
-    let time = |s: &Sample| if a.equal_count { s.gpu_ms } else { s.wall_ms };
     let time_name = if a.equal_count { "GPU ms / uniform" } else { "wall time / uniform" };
     md += &format!("| method | geomean relMSE / uniform | worst (scene) | scenes above uniform | largest |mean − truth| over seeds (scene) | largest spread of the mean over seeds | median p99.9 |error| / uniform | {time_name} |\n");
     md += "|---|---:|---|---:|---|---:|---:|---:|\n";
     let uniform_tail = per_scene(rows, Method::Uniform, |s| s.metrics.p999_abs);
-    let uniform_time = per_scene(rows, Method::Uniform, time);
     // Each method's per-scene ratios, computed once for the three tables.
     let all: BTreeMap<&str, BTreeMap<String, f64>> = a.methods.iter().map(|m| (m.name(), ratios(rows, *m))).collect();
     for &m in &a.methods {
@@ -297,8 +301,7 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         let tail = per_scene(rows, m, |s| s.metrics.p999_abs);
         let tail_ratio =
             median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).and_then(|u| ratio(*v, *u))).collect());
-        let times = per_scene(rows, m, time);
-        let time_ratio = geomean(times.iter().filter_map(|(k, v)| uniform_time.get(k).map(|u| v / u)));
+        let time_ratio = time_ratio(a, rows, m);
         // One seed has no spread to show.
         let spread = if a.seeds > 1 { format!("{:.2} %", 100.0 * spread) } else { "–".into() };
         md += &format!(
