@@ -265,6 +265,12 @@ fn header(a: &SuiteArgs, scenes: usize, device: &str, command: &str) -> String {
     )
 }
 
+/// The largest of `v` (0 if empty), or NaN if any is: a scene whose spread is undefined (a black truth's
+/// infinite mean ratio) shows as such, not as the others' largest.
+fn largest(v: impl IntoIterator<Item = f64>) -> f64 {
+    v.into_iter().fold(0.0, |a: f64, x| if x.is_nan() || a.is_nan() { f64::NAN } else { a.max(x) })
+}
+
 /// The time `m` took over uniform's (geomean over scenes of the medians over seeds): at equal time the
 /// wall time of its frames (the budget to within half a frame), at equal count one frame's GPU time.
 fn time_ratio(a: &SuiteArgs, rows: &[Row], m: Method) -> f64 {
@@ -293,11 +299,7 @@ fn markdown(a: &SuiteArgs, rows: &[Row], device: &str, command: &str) -> String 
         let mm = means(rows, m);
         let bias: BTreeMap<String, f64> = mm.iter().map(|(k, (m, _))| (k.clone(), (m - 1.0).abs())).collect();
         let (bs, bv) = worst(&bias);
-        // A scene whose spread is undefined (a black truth's infinite mean ratio) shows as NaN, not as 0.
-        let spread = mm
-            .values()
-            .map(|(_, s)| *s)
-            .fold(0.0, |a: f64, s| if s.is_nan() || a.is_nan() { f64::NAN } else { a.max(s) });
+        let spread = largest(mm.values().map(|(_, s)| *s));
         let tail = per_scene(rows, m, |s| s.metrics.p999_abs);
         let tail_ratio =
             median(tail.iter().filter_map(|(k, v)| uniform_tail.get(k).and_then(|u| ratio(*v, *u))).collect());
