@@ -7,9 +7,11 @@
 // and equal to them, c_i / Σ c, where the targets agree), for 3k + 1 target evaluations instead of
 // (k + 1)². With ris.control == RIS_CONTROL_REUSE (the last pass) it also writes the control variate's
 // U_g = Σ_i m_i(y_i) f_x(y_i) W_i,
-// the mean of f_x(y) W over this resampling's choice given its inputs (passes/ris.rs). With the learned
-// visibility every target carries its factor at its own pixel's tile, and the control's g is f · s (s the
-// learned guess at this pixel's tile) as in the initial stage.
+// the mean of f_x(y) W over this resampling's choice given its inputs (passes/ris.rs). The learned
+// visibility's factor (at this pixel's tile) is in the resampling's target p̂_x alone, which cancels from
+// the estimate; the weights m_i take the targets without it (its counts hold the rays traced for the
+// inputs' own samples: weights depending on the sample they weigh would not average to the integral).
+// The control's g is f · s (s the learned guess at this pixel's tile) as in the initial stage.
 #define RIS_LEARNED_READ
 #include "shared/ris.glsl"
 
@@ -82,19 +84,20 @@ void main() {
         if (in_i.vpl == RIS_NONE || !(in_i.weight > 0.0)) continue;
         Vpl vpl = vpl_fetch(in_i.vpl);
         vec2 learned_here = learned_at(px, in_i.vpl);
-        float here = target_of(xs[0], ns[0], albs[0], vpl) * learned_here.x;
+        // p̂_0 without the learned factor (the weights') and with it (the resampling's).
+        float p0 = target_of(xs[0], ns[0], albs[0], vpl), here = p0 * learned_here.x;
         float m = 0.0;
         if (n == 1u) {
             m = 1.0;
         } else if (i == 0u) {
             // m_0(y) = Σ_j (c_j / S) · a p̂_0(y) / (p̂_j(y) + a p̂_0(y)).
             for (uint j = 1u; j < n; j++) {
-                float d = target_of(xs[j], ns[j], albs[j], vpl) * learned_at(q[j], in_i.vpl).x + a * here;
-                m += d > 0.0 ? inputs[j].confidence / s_n * a * here / d : 0.0;
+                float d = target_of(xs[j], ns[j], albs[j], vpl) + a * p0;
+                m += d > 0.0 ? inputs[j].confidence / s_n * a * p0 / d : 0.0;
             }
         } else {
             // m_i(y) = (c_i / S) · p̂_i(y) / (p̂_i(y) + a p̂_0(y)).
-            float own = target_of(xs[i], ns[i], albs[i], vpl) * learned_at(q[i], in_i.vpl).x, d = own + a * here;
+            float own = target_of(xs[i], ns[i], albs[i], vpl), d = own + a * p0;
             m = d > 0.0 ? in_i.confidence / s_n * own / d : 0.0;
         }
         float w = m * here * in_i.weight;

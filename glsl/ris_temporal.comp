@@ -10,10 +10,10 @@
 // had been drawn for its new place, and its contribution weight (drawn for the old one) makes a firefly:
 // Sibenik under a light orbit had 4× the error of no temporal reuse. With the view and the lights
 // unchanged q is the pixel itself and p̂_1 = p̂_0 (up to the albedo's unorm8), so the weights are the
-// confidences'. With the learned visibility
-// both targets carry its factor, at this pixel's tile and at q's (this frame's counts: any positive
-// functions with the unshadowed support make weights that sum to 1 where the history can be, which is
-// all unbiasedness asks of them).
+// confidences'. The learned visibility's factor (at this pixel's tile) is in the resampling's target p̂_0
+// alone, which cancels from the estimate and so may depend on anything; the weights m_i take the targets
+// without it: its counts hold the ray last frame's shade traced for the history's own sample, and weights
+// that depended on the sample they weigh would not average to the integral.
 #define RIS_LEARNED_READ
 #include "shared/ris.glsl"
 
@@ -51,18 +51,18 @@ void main() {
     Reservoir h = res_history[res_index(q, layer)];
     float ch = min(h.confidence, ris.history_cap * m);
     bool has0 = r.vpl != RIS_NONE && r.weight > 0.0, has1 = h.vpl != RIS_NONE && h.weight > 0.0;
-    // Each sample's target here and at q: (p̂_0, p̂_1).
-    vec2 t0 = has0 ? vec2(r.target, prev_target_at(xq, nq, aq, r.vpl) * learned_at(q, r.vpl).x) : vec2(0.0);
-    vec2 t1 = has1 ? vec2(target_at(x, nx, ax, h.vpl) * learned_at(px, h.vpl).x,
-                          prev_target_at(xq, nq, aq, h.vpl) * learned_at(q, h.vpl).x)
-                   : vec2(0.0);
+    // Each sample's target here and at q without the learned factor, (p̂_0, p̂_1), for the weights; and its
+    // target here with it, for the resampling (r.target is the initial stage's, with it).
+    vec2 t0 = has0 ? vec2(r.target / learned_at(px, r.vpl).x, prev_target_at(xq, nq, aq, r.vpl)) : vec2(0.0);
+    vec2 t1 = has1 ? vec2(target_at(x, nx, ax, h.vpl), prev_target_at(xq, nq, aq, h.vpl)) : vec2(0.0);
+    float here1 = has1 ? t1.x * learned_at(px, h.vpl).x : 0.0;
     float d0 = m * t0.x + ch * t0.y, d1 = m * t1.x + ch * t1.y;
-    float w0 = d0 > 0.0 ? m * t0.x / d0 * t0.x * r.weight : 0.0;
-    float w1 = d1 > 0.0 ? ch * t1.y / d1 * t1.x * h.weight : 0.0;
+    float w0 = d0 > 0.0 ? m * t0.x / d0 * r.target * r.weight : 0.0;
+    float w1 = d1 > 0.0 ? ch * t1.y / d1 * here1 * h.weight : 0.0;
     float sum = w0 + w1;
     if (w1 > 0.0 && ris_rand(px, 2u, layer) * sum < w1) {
         r.vpl = h.vpl;
-        r.target = t1.x;
+        r.target = here1;
     }
     r.weight = r.target > 0.0 && sum > 0.0 ? sum / r.target : 0.0;
     r.confidence = m + ch;

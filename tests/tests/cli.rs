@@ -298,7 +298,7 @@ fn compare_measures_an_exr_against_a_reference() {
 
 /// A frame flag given that the frame does not read is said (`FrameSettings::reads`, which the reads
 /// tests hold against the images), with the settings that decide it, also when given at its default
-/// value; flags it reads are not.
+/// value; flags it reads are not. `bench` says those no method of its sweep reads.
 #[test]
 fn flags_the_frame_does_not_read_are_said() {
     let d = scratch("ignored-flags");
@@ -323,6 +323,14 @@ fn flags_the_frame_does_not_read_are_said() {
     let w = run(&["--component", "direct", "--seed", "3", "--dprsm-res", "16"]);
     assert!(w.iter().any(|l| l.ends_with("(--component direct) does not read --seed, --dprsm-res")), "{w:?}");
     assert!(run(&["--method", "ris", "--vpls", "2", "--candidates", "4"]).is_empty());
+    // bench (and suite) say the flags no method of the sweep reads.
+    let dir = d.join("bench");
+    let mut args = vec!["bench", scene.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--methods", "uniform,gbg"];
+    args.extend(["--vpls", "2", "--repeats", "1", "--reference", "all", "--width", "8", "--height", "8"]);
+    args.extend(["--dprsm-res", "16", "--mis-weights", "thesis", "--gather-rays", "2"]);
+    let r = bounce(&args);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stderr.contains("warning: no method of --methods uniform,gbg reads --mis-weights\n"), "{}", r.stderr);
 }
 
 /// `--defensive 0` (the thesis's CDFs, without a defensive share) renders, and says it is biased; with a

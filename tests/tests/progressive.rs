@@ -47,3 +47,31 @@ fn vpl_sets_average_away_one_sets_quadrature_error() {
     assert!(sets <= 0.5 * one, "the mean of {SETS} sets {sets} against one set's {one}");
     assert!((ratio - 1.0).abs() <= 0.01, "the mean of {SETS} sets is {ratio} of the exact image's");
 }
+
+/// A progressive render judges its second frame by the first's GPU time in the passes that run again
+/// (`FrameOutput::repeated_share`): the passes the graph marks as making kept products must be those
+/// the second frame does not run, and it runs no pass the first did not run unmarked.
+#[test]
+fn the_passes_marked_kept_are_those_the_next_frame_skips() {
+    let scene = Scene::load(&bounce_tests::default_scene()).unwrap();
+    let gpu = TestGpu::new();
+    let mut r = Renderer::new(&gpu, &scene).unwrap();
+    for method in [Method::Uniform, Method::Stratified, Method::Gbg, Method::Mis, Method::Ris, Method::Reference] {
+        let s =
+            FrameSettings { method, width: 16, height: 16, dprsm_res: 16, vpls: 2, spp: 2, ..FrameSettings::default() };
+        r.clear_frame_cache();
+        let first = r.render(&frame_settings(&s, 0, 0)).unwrap();
+        let next = r.render(&frame_settings(&s, 1, 0)).unwrap();
+        let kept: Vec<&str> = first.timings.iter().filter(|t| t.kept).map(|t| t.name).collect();
+        let again: Vec<&str> = first.timings.iter().filter(|t| !t.kept).map(|t| t.name).collect();
+        assert!(!kept.is_empty(), "{method:?}: the first frame made nothing to keep");
+        // (A temporal resource's first clear, ris's control counts, runs in the first frame alone.)
+        assert!(
+            next.ran.iter().all(|p| again.contains(p) && !kept.contains(p)),
+            "{method:?}: the second frame ran {:?}, the first {again:?} again and {kept:?} kept",
+            next.ran
+        );
+        let share = first.repeated_share().unwrap();
+        assert!(share > 0.0 && share < 1.0, "{method:?}: {share}");
+    }
+}

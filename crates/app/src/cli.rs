@@ -360,6 +360,9 @@ pub struct FrameArgs {
     /// Enable the Vulkan validation layers; fail if they report anything.
     #[arg(long)]
     pub validation: bool,
+    /// The frame settings given on the command line, not left at their defaults (`lib::run` fills it).
+    #[arg(skip)]
+    pub given: Vec<bounce_graph::frame::Setting>,
 }
 
 /// The A/B switches of the `lab` cargo feature (left out of the default build; CI builds it once).
@@ -514,8 +517,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub timings: bool,
     /// Render progressive frames (seed, seed + 1, …; one CDF; the reference continues one sample
-    /// sequence) for this many seconds of wall time and write their mean: equal-time comparisons in one
-    /// flag. Without --method (and --vpls), the path tracer (the lowest error at equal time). Not for
+    /// sequence) for this many seconds of wall time (to within half a frame: a frame runs where half of it
+    /// fits) and write their mean: equal-time comparisons in one flag. Without --method (and --vpls), the path tracer (the lowest error at equal time). Not for
     /// `all` (the same every frame).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limit: Option<f64>,
@@ -528,9 +531,6 @@ pub struct RenderArgs {
     pub out_dir: Option<PathBuf>,
     #[command(flatten)]
     pub animation: AnimationArgs,
-    /// The frame settings given on the command line, not left at their defaults (`lib::run` fills it).
-    #[arg(skip)]
-    pub given: Vec<bounce_graph::frame::Setting>,
 }
 
 /// `view` renders a frame per redraw, so it starts from a smaller window and cheaper maps than

@@ -51,9 +51,15 @@ pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32
         Ok(parsed) => parsed,
         Err(e) => return error::report_usage(&e, out, err),
     };
-    // Which frame flags were given, not defaulted: `render` says those its frame does not read.
-    if let (Command::Render(a), Some(m)) = (&mut cli.command, matches.subcommand_matches("render")) {
-        a.given = commands::given_settings(m);
+    // Which frame flags were given, not defaulted: `render`, `bench` and `suite` say those nothing reads.
+    let frame = match &mut cli.command {
+        Command::Render(a) => Some(&mut a.frame),
+        Command::Bench(a) => Some(&mut a.frame),
+        Command::Suite(a) => Some(&mut a.frame),
+        Command::View(_) | Command::Info | Command::Compare(_) => None,
+    };
+    if let (Some(frame), Some((_, m))) = (frame, matches.subcommand()) {
+        frame.given = commands::given_settings(m);
     }
     let result = match cli.command {
         Command::Render(a) => commands::render::run(&a, out, err),

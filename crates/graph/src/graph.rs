@@ -29,12 +29,14 @@ use anyhow::{Context, Result};
 use bounce_device::sync::{self, Access, Target, Tracked};
 use bounce_device::{vk, Buffer, BufferDesc, Gpu, Image, ImageDesc, TimestampPool};
 use std::cell::Cell;
-use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::marker::PhantomData;
 
 mod products;
+mod retained;
 pub use products::{Products, RawHandle};
+pub use retained::Retained;
+use retained::{Kept, Product, TemporalSlot};
 
 /// A typed reference to a graph resource. Reads take `&Handle`, writes `&mut Handle`.
 pub struct Handle<T> {
@@ -93,67 +95,6 @@ enum Res {
 impl Res {
     fn depth(&self) -> bool {
         matches!(self, Res::Image(i) if i.desc.is_depth())
-    }
-}
-
-/// A kept resource and its last access.
-struct Kept {
-    res: Res,
-    last: Access,
-}
-
-/// The products of one [`Graph::cached`] name: the key they were made under and their resources, in
-/// [`Products::handles`] order.
-struct Product {
-    key: u64,
-    resources: Vec<Kept>,
-}
-
-/// A temporal resource: what it was made for (description and key) and the resource.
-struct TemporalSlot {
-    fingerprint: u64,
-    kept: Kept,
-}
-
-/// What the graph keeps across frames: cached products by name and temporal resources by name. Owned by
-/// whoever renders frames (the `Renderer`'s frame state) and lent to each graph.
-#[derive(Default)]
-pub struct Retained {
-    products: HashMap<&'static str, Product>,
-    temporal: HashMap<String, TemporalSlot>,
-    /// Per history name: how many frames have used it (its two slots swap at each), and the last frame
-    /// that did.
-    histories: HashMap<String, (u64, u64)>,
-    frame: u64,
-}
-
-impl Retained {
-    /// Forget everything kept: the next graph records every pass it needs.
-    pub fn clear(&mut self) {
-        self.products.clear();
-        self.temporal.clear();
-        self.histories.clear();
-    }
-    /// Forget every history ([`Graph::history_image`], [`Graph::history_buffer`]): the next frame that uses
-    /// one starts it anew. For a view changed by frames that kept none (their motion is not the histories').
-    pub fn forget_histories(&mut self) {
-        for name in std::mem::take(&mut self.histories).into_keys() {
-            (0..2).for_each(|k| _ = self.temporal.remove(&format!("{name}#{k}")));
-        }
-    }
-    /// Whether the current frame (since the last [`Retained::next_frame`]) used a history.
-    pub fn histories_used(&self) -> bool {
-        self.histories.values().any(|&(_, frame)| frame == self.frame)
-    }
-    /// Start a new frame.
-    pub fn next_frame(&mut self) {
-        self.frame += 1;
-    }
-    /// Names of the cached products held now (diagnostics and tests).
-    pub fn product_names(&self) -> Vec<&'static str> {
-        let mut v: Vec<_> = self.products.keys().copied().collect();
-        v.sort_unstable();
-        v
     }
 }
 
@@ -263,6 +204,8 @@ struct PassEntry<'a> {
     name: &'static str,
     uses: Vec<(usize, Access, Use)>,
     record: Option<Record<'a>>,
+    /// Added by a [`Graph::cached`] build: the next frame with its key will not run it.
+    kept: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -343,6 +286,8 @@ impl PassContext<'_> {
 #[derive(Clone, Debug)]
 pub struct PassTiming {
     pub name: &'static str,
+    /// The pass makes a product the graph keeps ([`Graph::cached`]): a next frame with its key skips it.
+    pub kept: bool,
     /// `None` when the device has no timestamps.
     pub ms: Option<f64>,
 }
@@ -363,6 +308,8 @@ pub struct Graph<'a> {
     /// Products that [`Graph::try_cached`] found under another key: kept for this graph only, for
     /// [`Graph::replaced`].
     replaced: Vec<(&'static str, Vec<Kept>)>,
+    /// How deep in [`Graph::cached`] builds the passes being added are.
+    building: u32,
 }
 
 impl<'a> Graph<'a> {
@@ -376,6 +323,7 @@ impl<'a> Graph<'a> {
             retained: None,
             requests: vec![],
             replaced: vec![],
+            building: 0,
         }
     }
 
@@ -465,7 +413,12 @@ impl<'a> Graph<'a> {
                 let handles: Vec<RawHandle> = resources.into_iter().map(|k| self.lend(name, k)).collect();
                 P::from_handles(&mut handles.iter().copied())
             }
-            None => build(self)?,
+            None => {
+                self.building += 1;
+                let built = build(self);
+                self.building -= 1;
+                built?
+            }
         };
         let mut handles = vec![];
         p.handles(&mut handles);
@@ -586,7 +539,8 @@ impl<'a> Graph<'a> {
 
     /// Start declaring a pass. `name` is the pass's file stem: labels, timing rows and tests use it.
     pub fn add_pass<'g>(&'g mut self, name: &'static str) -> PassBuilder<'g, 'a> {
-        PassBuilder { graph: self, pass: PassEntry { name, uses: vec![], record: None } }
+        let kept = self.building > 0;
+        PassBuilder { graph: self, pass: PassEntry { name, uses: vec![], record: None, kept } }
     }
 
     /// A pass `name` that zeroes `buffers` (a transfer fill): accumulators the next passes add into.
@@ -687,7 +641,7 @@ impl<'a> Graph<'a> {
                 let end = ts.write(cmd);
                 gpu.end_label(cmd);
                 ran.push(pass.name);
-                stamps.push((begin, end));
+                stamps.push((begin, end, pass.kept));
             }
         })?;
         // The frame ran whatever its timestamps say: one that cannot be read leaves it untimed, and the
@@ -696,8 +650,9 @@ impl<'a> Graph<'a> {
         let timings = ran
             .iter()
             .zip(&stamps)
-            .map(|(name, (b, e))| PassTiming {
+            .map(|(name, (b, e, kept))| PassTiming {
                 name,
+                kept: *kept,
                 ms: match (b, e) {
                     (Some(b), Some(e)) if !ticks.is_empty() => Some(ts.elapsed_ms(&ticks, *b, *e)),
                     _ => None,

@@ -17,6 +17,9 @@
 //! - `time_vs_error.png`: median relMSE against median GPU time, log–log, one line per method (points at
 //!   the VPL counts), so equal-time comparisons read off a vertical line.
 //!
+//! `realtime` is scored as `render` gives it: one frame denoised (unless `--denoise off`); at equal time
+//! the mean of its raw frames (the denoised ones are not unbiased, and the denoiser does not run).
+//!
 //! With `--animate PATH --frames N` it measures temporal stability instead (per-frame relMSE and
 //! flicker of a moving light's animation): see [`animation`].
 
@@ -58,6 +61,7 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         ReferenceArg::All => FrameSettings { vpl_seed: Some(base.vpl_seed_or_derived()), ..base },
         ReferenceArg::Path => base,
     };
+    super::warn_unread_by_methods(&a.frame.given, &base, &a.methods, err)?;
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     // Bad settings are one line at once, before the renderer builds its pipelines and uploads the scene;
     // the checks that need the renderer follow below.

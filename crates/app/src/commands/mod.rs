@@ -57,14 +57,6 @@ pub fn given_settings(m: &clap::ArgMatches) -> Vec<Setting> {
 /// The flags given that the frame does not read ([`FrameSettings::reads`]: a user who sets one expects
 /// it to act), said once as a warning on `err`, with the settings that decide it.
 fn warn_ignored_flags(given: &[Setting], s: &FrameSettings, err: &mut dyn Write) -> Result<()> {
-    let ignored: Vec<String> = SETTING_FLAGS
-        .iter()
-        .filter(|(_, setting)| given.contains(setting) && !s.reads(*setting))
-        .map(|(id, _)| format!("--{}", id.replace('_', "-")))
-        .collect();
-    if ignored.is_empty() {
-        return Ok(());
-    }
     let frame = if s.component == Component::Direct {
         "--component direct".to_string()
     } else {
@@ -72,14 +64,42 @@ fn warn_ignored_flags(given: &[Setting], s: &FrameSettings, err: &mut dyn Write)
             Method::Ris => format!(", --source {}", crate::cli::RIS_SOURCES.name_of(&s.ris.source)),
             _ => String::new(),
         };
-        format!(
-            "--method {}, --visibility {}{source}",
-            s.method.name(),
-            crate::cli::VISIBILITIES.name_of(&s.visibility)
-        )
+        let visibility = crate::cli::VISIBILITIES.name_of(&s.visibility);
+        format!("--method {}, --visibility {visibility}{source}", s.method.name())
     };
-    writeln!(err, "warning: this frame ({frame}) does not read {}", ignored.join(", "))?;
+    warn_unread(given, std::slice::from_ref(s), &format!("this frame ({frame}) does not read"), err)
+}
+
+/// The flags given that none of `frames` reads, said as one warning on `err`: `{what} --a, --b`.
+fn warn_unread(given: &[Setting], frames: &[FrameSettings], what: &str, err: &mut dyn Write) -> Result<()> {
+    let ignored: Vec<String> = SETTING_FLAGS
+        .iter()
+        .filter(|(_, setting)| given.contains(setting) && !frames.iter().any(|s| s.reads(*setting)))
+        .map(|(id, _)| format!("--{}", id.replace('_', "-")))
+        .collect();
+    if !ignored.is_empty() {
+        writeln!(err, "warning: {what} {}", ignored.join(", "))?;
+    }
     Ok(())
+}
+
+/// Under `bench` and `suite`, the flags given that no method of `methods` reads on `base` (ris also from
+/// the gathered source, which its budget at equal time takes where visibility blocks most of a view,
+/// unless --source is given).
+fn warn_unread_by_methods(
+    given: &[Setting],
+    base: &FrameSettings,
+    methods: &[Method],
+    err: &mut dyn Write,
+) -> Result<()> {
+    let mut frames: Vec<FrameSettings> =
+        methods.iter().map(|&method| FrameSettings { method, ..base.clone() }).collect();
+    if methods.contains(&Method::Ris) && !given.contains(&Setting::Source) {
+        let ris = bounce_graph::frame::RisSettings { source: RisSource::Gbg, ..base.ris };
+        frames.push(FrameSettings { method: Method::Ris, ris, ..base.clone() });
+    }
+    let names: Vec<&str> = methods.iter().map(|m| m.name()).collect();
+    warn_unread(given, &frames, &format!("no method of --methods {} reads", names.join(",")), err)
 }
 
 /// With `--validation`, fails if the layers reported anything during the command.

@@ -26,7 +26,7 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     if a.time_limit.is_some() {
         time_limit_method(a, &mut settings, err)?;
     }
-    super::warn_ignored_flags(&a.given, &settings, err)?;
+    super::warn_ignored_flags(&a.frame.given, &settings, err)?;
     let started = Instant::now();
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     let device_s = started.elapsed().as_secs_f64();

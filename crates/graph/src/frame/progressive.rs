@@ -33,8 +33,8 @@
 //!
 //! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
 //! upload). The first frame always runs; another runs where half of it fits in what is left, judged by
-//! the last frame's time (after the first, which also built what the others reuse, an overestimate), so
-//! that the frames end as near the budget as whole frames allow, at most half a frame over.
+//! the last frame's time (after the first, which also made what the others keep, by the share of its GPU
+//! time in the passes that run again), so that the frames end as near the budget as whole frames allow.
 
 use super::renderer::{FrameOutput, Renderer};
 use super::settings::{Component, FrameSettings, Method};
@@ -156,14 +156,13 @@ impl VplSets {
     }
 }
 
-/// Whether a progressive render `elapsed` into `budget`, whose last frame took `last`, renders another:
-/// where it would end nearer the budget with it than without it, i.e. where half of it fits. The next
-/// frame costs about what the last one did (after the first, which also built what the others reuse, at
-/// most that). So every method's time is the budget to within half a frame, over or under: a method of
-/// long frames is neither given a whole frame more (a second frame whenever time was left let mis run
-/// 1.3–2.6× a 0.5 s budget) nor cut a whole frame short.
-pub fn another_frame(elapsed: Duration, last: Duration, budget: Duration) -> bool {
-    elapsed + last / 2 <= budget
+/// Whether a progressive render `elapsed` into `budget`, whose next frame should take `next`, renders
+/// it: where it would end nearer the budget with it than without it, i.e. where half of it fits. So
+/// every method's time is the budget to within half a frame, over or under: a method of long frames is
+/// neither given a whole frame more (a second frame whenever time was left let mis run 1.3–2.6× a 0.5 s
+/// budget) nor cut a whole frame short.
+pub fn another_frame(elapsed: Duration, next: Duration, budget: Duration) -> bool {
+    elapsed + next / 2 <= budget
 }
 
 /// Render frames of `s` (seeds `s.seed`, `s.seed + 1`, …, VPL sets as [`VplSets`] says) until `budget`,
@@ -198,7 +197,10 @@ pub fn render_for(
         let this_frame = elapsed - previous;
         previous = elapsed;
         vpl_sets.frame_done(this_frame.as_secs_f64());
-        if !another_frame(elapsed, this_frame, budget) || !averages(s) {
+        // The first frame also made what the next keeps (maps, G-buffer, CDF): the next costs its share
+        // of the GPU time in the passes that run again (all of it without timestamps).
+        let next = if frames == 1 { this_frame.mul_f64(f.repeated_share().unwrap_or(1.0)) } else { this_frame };
+        if !another_frame(elapsed, next, budget) || !averages(s) {
             break f;
         }
     };

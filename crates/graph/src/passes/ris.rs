@@ -22,9 +22,10 @@
 //!   target depends on earlier frames only, so given them it is a fixed function, positive wherever p̂
 //!   is (δ_L > 0), and RIS is unbiased for any such target; the progressive mean of unbiased frames is
 //!   unbiased. It is what makes a VPL behind a wall rare once the rays have seen the wall. The reuse
-//!   stages weigh every input's target by the factor at that input's pixel (this frame's counts):
-//!   every such target has the unshadowed one's support, so their balance weights sum to 1 wherever
-//!   any input can hold a VPL, which is all the combination needs.
+//!   stages resample by the target with the factor at their own pixel (it cancels from the estimate),
+//!   but weigh their inputs (the MIS weights m_i) by the targets without it: the counts hold the rays
+//!   earlier frames traced for the inputs' own samples (a history's sample was traced last frame), and
+//!   weights that depended on the sample they weigh would not average to the integral.
 //! - With `--near-candidates N` > 0 (the default, 8 of 32; the pool, not the voxel target): the last N
 //!   candidates are texels of (2r + 1)² windows (`--near-radius r`) around where x projects into each
 //!   light's map: the VPLs next to x, which hold the target's tail. A near candidate picks light l's
