@@ -52,19 +52,24 @@ vec3 clamp_to_neighbourhood(ivec2 px, vec3 h) {
     return clamp(h, m1 - DENOISE_CLAMP_SIGMAS * sd, m1 + DENOISE_CLAMP_SIGMAS * sd);
 }
 
-// λ of the temporal gradient test (above) between this frame at px and the history at q.
+// λ of the temporal gradient test (above) between this frame at px and the history at q, over the offsets
+// whose pixels lie inside the image around both (n of them: at a border the mean's noise is that of n
+// pixels, not of 25 with some repeated).
 float gradient_weight(ivec2 px, ivec2 q) {
-    float now = 0.0, before = 0.0, variance = 0.0;
-    ivec2 hi = ivec2(frame.size.xy) - 1;
+    float now = 0.0, before = 0.0, variance = 0.0, n = 0.0;
+    ivec2 size = ivec2(frame.size.xy);
     for (int dy = -2; dy <= 2; dy++) {
         for (int dx = -2; dx <= 2; dx++) {
-            ivec2 a = clamp(px + ivec2(dx, dy), ivec2(0), hi), b = clamp(q + ivec2(dx, dy), ivec2(0), hi);
+            ivec2 a = px + ivec2(dx, dy), b = q + ivec2(dx, dy);
+            if (any(lessThan(min(a, b), ivec2(0))) || any(greaterThanEqual(max(a, b), size))) continue;
             now += luminance(illumination(a));
             variance += texelFetch(raw, a, 0).a;
             before += luminance(texelFetch(prev_color, b, 0).rgb);
+            n += 1.0;
         }
     }
-    float change = abs(now - before) / 25.0, noise = sqrt(variance / 625.0 * (1.0 + pc.alpha));
+    // (n ≥ 1: px and q are inside the image.)
+    float change = abs(now - before) / n, noise = sqrt(variance / (n * n) * (1.0 + pc.alpha));
     return change > 0.0 ? clamp((change - DENOISE_GRADIENT_SIGMAS * noise) / change, 0.0, 1.0) : 0.0;
 }
 
