@@ -323,6 +323,8 @@ fn flags_the_frame_does_not_read_are_said() {
     let w = run(&["--component", "direct", "--seed", "3", "--dprsm-res", "16"]);
     assert!(w.iter().any(|l| l.ends_with("(--component direct) does not read --seed, --dprsm-res")), "{w:?}");
     assert!(run(&["--method", "ris", "--vpls", "2", "--candidates", "4"]).is_empty());
+    // --cdf-seed places the VPLs of every VPL method (it was said unread beside `uniform`).
+    assert!(run(&["--method", "uniform", "--vpls", "2", "--cdf-seed", "3"]).is_empty());
     // bench (and suite) say the flags no method of the sweep reads.
     let dir = d.join("bench");
     let mut args = vec!["bench", scene.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--methods", "uniform,gbg"];

@@ -54,7 +54,11 @@ fn changed(s: &FrameSettings, setting: Setting) -> FrameSettings {
         }
         Setting::PsmRes => t.psm_res = 24,
         Setting::LightMap => t.light_map = LightMap::Cube,
-        Setting::CdfSeed => t.cdf_seed = Some(s.cdf_seed.map_or(7, |c| c + 1)),
+        // As `--cdf-seed` sets them: the importance's seed and the VPL set's.
+        Setting::CdfSeed => {
+            let c = Some(s.cdf_seed.map_or(7, |c| c + 1));
+            (t.cdf_seed, t.vpl_seed) = (c, c);
+        }
         Setting::Source => {
             t.ris.source = if s.ris.source == RisSource::Global { RisSource::Uniform } else { RisSource::Global }
         }
@@ -71,10 +75,11 @@ fn bases() -> Vec<FrameSettings> {
     let mut v = vec![
         FrameSettings { component: Component::Direct, method: Method::Ris, ..b.clone() },
         FrameSettings { component: Component::Direct, method: Method::Global, ..b.clone() },
-        // An animation's pinned VPL set.
-        FrameSettings { method: Method::All, vpl_seed: Some(5), ..b.clone() },
-        FrameSettings { method: Method::Uniform, vpl_seed: Some(5), ..b.clone() },
-        FrameSettings { method: Method::All, cdf_seed: Some(3), ..b.clone() },
+        // An animation's VPL set, pinned to the seed's; `--cdf-seed`'s (both seeds).
+        FrameSettings { method: Method::All, vpl_seed: Some(b.seed), ..b.clone() },
+        FrameSettings { method: Method::Uniform, vpl_seed: Some(b.seed), ..b.clone() },
+        FrameSettings { method: Method::All, cdf_seed: Some(3), vpl_seed: Some(3), ..b.clone() },
+        FrameSettings { method: Method::Global, cdf_seed: Some(3), vpl_seed: Some(3), ..b.clone() },
     ];
     for method in Method::ALL {
         for visibility in [Visibility::Exact, Visibility::Voxel, Visibility::Psm] {

@@ -6,7 +6,8 @@
 
 use super::settings::{Component, FrameSettings, Method, Visibility};
 
-/// A frame setting that one command-line flag sets.
+/// A frame setting that one command-line flag sets (`CdfSeed`: `--cdf-seed`, which sets `cdf_seed` and
+/// `vpl_seed` alike).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Setting {
     Vpls,
@@ -91,8 +92,9 @@ impl FrameSettings {
             Setting::MisWeights => method == Method::Mis,
             Setting::Spp => method == Method::Reference,
             Setting::PsmRes => vpls && self.visibility == Visibility::Psm,
-            // The seed of the importance's gather points and of the VPLs' places in their texels.
-            Setting::CdfSeed => vpls && (cdf || self.vpl_seed.is_none()),
+            // `--cdf-seed` sets both the importance's seed and the VPLs' places in their texels (`cdf_seed`
+            // and `vpl_seed`): every VPL frame reads the latter.
+            Setting::CdfSeed => vpls,
             Setting::Source | Setting::Candidates | Setting::Picks => method == Method::Ris,
             Setting::Denoise => method == Method::Realtime,
         }
