@@ -325,6 +325,21 @@ fn flags_the_frame_does_not_read_are_said() {
     assert!(run(&["--method", "ris", "--vpls", "2", "--candidates", "4"]).is_empty());
     // --cdf-seed places the VPLs of every VPL method (it was said unread beside `uniform`).
     assert!(run(&["--method", "uniform", "--vpls", "2", "--cdf-seed", "3"]).is_empty());
+    // Under --time-limit the warning reads the settings the frames run: ris's budget takes the gathered
+    // source in the two rooms (so --gather-rays and --defensive act), and realtime's frames are averaged raw.
+    let rooms = bounce_tests::workspace().join("assets/two-rooms/scene.toml");
+    let limited = |extra: &[&str]| {
+        let mut args = vec!["render", rooms.to_str().unwrap(), "--width", "8", "--height", "8", "--dprsm-res", "16"];
+        args.extend(["--out", out.to_str().unwrap(), "--time-limit", "0.2"]);
+        args.extend(extra);
+        let r = bounce(&args);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        r.stderr
+    };
+    let e = limited(&["--method", "ris", "--gather-rays", "2", "--defensive", "0.6"]);
+    assert!(e.contains("gathered CDF (gbg, defensive 0.6)") && !e.contains("warning:"), "{e}");
+    let e = limited(&["--method", "realtime", "--denoise", "on"]);
+    assert!(e.contains("warning: --time-limit averages realtime's raw frames and does not read --denoise"), "{e}");
     // bench (and suite) say the flags no method of the sweep reads.
     let dir = d.join("bench");
     let mut args = vec!["bench", scene.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--methods", "uniform,gbg"];

@@ -223,8 +223,8 @@ pub const RIS_FRAME_BLOCKED: (u32, u32, u32, u32) = (2, 64, 8, 3);
 pub const RIS_FRAME_OPEN: (u32, u32, u32, u32) = (2, 128, 16, 3);
 /// Under the same budget choice, where visibility blocks at least this share of the view's unshadowed
 /// transport, ris draws its candidates from the gathering-based CDF (`--source gbg`: the VPLs the view's
-/// own cosine rays reach) with a defensive share of `RIS_GATHERED_DEFENSIVE`, unless --source or
-/// --defensive is given. A uniform pool then holds almost nothing visible, and which few visible VPLs
+/// own cosine rays reach) with a defensive share of `RIS_GATHERED_DEFENSIVE` (or --defensive's), unless
+/// --source is given. A uniform pool then holds almost nothing visible, and which few visible VPLs
 /// it holds moves every pixel's estimate at once: in the two rooms (blocked 0.99) the image mean of a
 /// 0.7 s render varied by 1.5 % RMS from run to run, 0.5 % with the gathered source, at 1.1–1.2× lower
 /// relMSE. In the doorway (0.52) it cost 1.5× (BENCHMARKS.md, "ris: several picks per reservoir"). On

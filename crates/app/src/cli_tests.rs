@@ -83,3 +83,27 @@ fn a_scene_folder_names_its_scene_toml() {
     assert_eq!(r.scene, PathBuf::from("s.toml"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Every frame setting has a flag, and every flag's id is an argument of `render`, `bench` and `suite`
+/// (a misspelt id would never be found given, and its warning never said).
+#[test]
+fn every_setting_has_a_flag_of_the_commands_that_warn() {
+    use crate::commands::SETTING_FLAGS;
+    use bounce_graph::frame::Setting;
+    for s in Setting::ALL {
+        assert_eq!(SETTING_FLAGS.iter().filter(|(_, f)| *f == s).count(), 1, "{s:?}");
+    }
+    let mut cmd = Cli::command();
+    cmd.build();
+    for name in ["render", "bench", "suite"] {
+        let sub = cmd.find_subcommand(name).unwrap();
+        let ids: Vec<&str> = sub.get_arguments().map(|a| a.get_id().as_str()).collect();
+        for (id, _) in SETTING_FLAGS {
+            // bench and suite sweep the seed themselves; render has every flag.
+            if name != "render" && id == "seed" {
+                continue;
+            }
+            assert!(ids.contains(&id), "`{name}` has no argument `{id}`");
+        }
+    }
+}

@@ -46,7 +46,9 @@ pub fn cli_reference() -> String {
 /// progress, warnings and the one-line error to `err`.
 pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
     use clap::{CommandFactory, FromArgMatches};
-    let parsed = Cli::command().try_get_matches_from(args).and_then(|m| Ok((Cli::from_arg_matches(&m)?, m)));
+    let parsed = Cli::command()
+        .try_get_matches_from(args)
+        .and_then(|m| Ok((Cli::from_arg_matches(&m).map_err(|e| e.format(&mut Cli::command()))?, m)));
     let (mut cli, matches) = match parsed {
         Ok(parsed) => parsed,
         Err(e) => return error::report_usage(&e, out, err),

@@ -61,7 +61,8 @@ pub fn run(a: &BenchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
         ReferenceArg::All => FrameSettings { vpl_seed: Some(base.vpl_seed_or_derived()), ..base },
         ReferenceArg::Path => base,
     };
-    super::warn_unread_by_methods(&a.frame.given, &base, &a.methods, err)?;
+    let per_view = a.vpls.is_empty() && !a.time_limits.is_empty();
+    super::warn_unread_by_methods(&a.frame.given, &base, &a.methods, per_view, err)?;
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     // Bad settings are one line at once, before the renderer builds its pipelines and uploads the scene;
     // the checks that need the renderer follow below.
@@ -512,7 +513,7 @@ fn error_table(plan: &BenchPlan, samples: &[Sample], device: &str, command: &str
             Reference::All => "the exhaustive VPL sum on the same VPL set (`--method all`)".to_string(),
         },
         if equal_time {
-            "Each column is a wall-time budget: every method averages the progressive frames that fit in it."
+            "Each column is a wall-time budget: every method averages its progressive frames while half of the next fits (`wall s`: the time they took)."
         } else {
             "GPU time: the sum of the frame's pass timestamps."
         },

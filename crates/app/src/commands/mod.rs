@@ -23,8 +23,9 @@ fn load_scene(path: &Path, err: &mut dyn Write) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Each frame setting's flag, by clap's argument id.
-const SETTING_FLAGS: [(&str, Setting); 20] = [
+/// Each frame setting's flag, by clap's argument id (a test holds it against `Setting::ALL` and the
+/// commands' arguments).
+pub(crate) const SETTING_FLAGS: [(&str, Setting); 20] = [
     ("vpls", Setting::Vpls),
     ("seed", Setting::Seed),
     ("dprsm_res", Setting::DprsmRes),
@@ -55,8 +56,15 @@ pub fn given_settings(m: &clap::ArgMatches) -> Vec<Setting> {
 }
 
 /// The flags given that the frame does not read ([`FrameSettings::reads`]: a user who sets one expects
-/// it to act), said once as a warning on `err`, with the settings that decide it.
-fn warn_ignored_flags(given: &[Setting], s: &FrameSettings, err: &mut dyn Write) -> Result<()> {
+/// it to act), said once as a warning on `err`, with the settings that decide it. Under a time limit
+/// (`progressive`) realtime's frames are averaged raw, and `--denoise` is not read either.
+fn warn_ignored_flags(given: &[Setting], s: &FrameSettings, progressive: bool, err: &mut dyn Write) -> Result<()> {
+    let raw_mean = progressive && s.method == Method::Realtime;
+    if raw_mean && given.contains(&Setting::Denoise) {
+        writeln!(err, "warning: --time-limit averages realtime's raw frames and does not read --denoise")?;
+    }
+    let given: Vec<Setting> = given.iter().copied().filter(|g| !(raw_mean && *g == Setting::Denoise)).collect();
+    let given = given.as_slice();
     let frame = if s.component == Component::Direct {
         "--component direct".to_string()
     } else {
@@ -83,18 +91,19 @@ fn warn_unread(given: &[Setting], frames: &[FrameSettings], what: &str, err: &mu
     Ok(())
 }
 
-/// Under `bench` and `suite`, the flags given that no method of `methods` reads on `base` (ris also from
-/// the gathered source, which its budget at equal time takes where visibility blocks most of a view,
-/// unless --source is given).
+/// Under `bench` and `suite`, the flags given that no method of `methods` reads on `base` (with
+/// `per_view`, ris's per-view budget at equal time, ris also from the gathered source, which it takes
+/// where visibility blocks most of a view unless --source is given).
 fn warn_unread_by_methods(
     given: &[Setting],
     base: &FrameSettings,
     methods: &[Method],
+    per_view: bool,
     err: &mut dyn Write,
 ) -> Result<()> {
     let mut frames: Vec<FrameSettings> =
         methods.iter().map(|&method| FrameSettings { method, ..base.clone() }).collect();
-    if methods.contains(&Method::Ris) && !given.contains(&Setting::Source) {
+    if per_view && methods.contains(&Method::Ris) && !given.contains(&Setting::Source) {
         let ris = bounce_graph::frame::RisSettings { source: RisSource::Gbg, ..base.ris };
         frames.push(FrameSettings { method: Method::Ris, ris, ..base.clone() });
     }
@@ -132,17 +141,16 @@ fn ris_frame_budget(frame: &FrameArgs, renderer: &mut Renderer, settings: &mut F
     // An explicit --picks stands.
     let k = frame.picks.unwrap_or(k);
     (settings.vpls, settings.ris.candidates, settings.ris.near_candidates, settings.ris.picks) = (r, m, n, k);
-    let gathered = frame.source.is_none()
-        && frame.defensive.is_none()
-        && blocked.is_some_and(|b| b >= crate::cli::RIS_GATHERED_BLOCKED);
+    // A given --defensive is the gathered source's share; it does not decide the source.
+    let gathered = frame.source.is_none() && blocked.is_some_and(|b| b >= crate::cli::RIS_GATHERED_BLOCKED);
     if gathered {
-        (settings.ris.source, settings.defensive) = (RisSource::Gbg, crate::cli::RIS_GATHERED_DEFENSIVE);
+        settings.ris.source = RisSource::Gbg;
+        settings.defensive = frame.defensive.unwrap_or(crate::cli::RIS_GATHERED_DEFENSIVE);
     }
     let share = blocked.map_or("nothing lit in view".into(), |b| format!("{:.0} %", 100.0 * b));
-    let source = if gathered {
-        format!(", from the gathered CDF (gbg, defensive {})", crate::cli::RIS_GATHERED_DEFENSIVE)
-    } else {
-        String::new()
+    let source = match gathered {
+        true => format!(", from the gathered CDF (gbg, defensive {})", settings.defensive),
+        false => String::new(),
     };
     Ok(format!(
         "ris per frame: {r} reservoirs × {m} candidates ({} from the near window){source}, {k} picks each; visibility blocks {share} of the view's unshadowed transport",

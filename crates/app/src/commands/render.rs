@@ -26,7 +26,6 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
     if a.time_limit.is_some() {
         time_limit_method(a, &mut settings, err)?;
     }
-    super::warn_ignored_flags(&a.frame.given, &settings, err)?;
     let started = Instant::now();
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     let device_s = started.elapsed().as_secs_f64();
@@ -38,6 +37,8 @@ pub fn run(a: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(
         writeln!(err, "{}", super::ris_frame_budget(&a.frame, &mut renderer, &mut settings)?)?;
         settings.validate(&gpu)?;
     }
+    // On the settings the frames run (ris's budget may have chosen its source).
+    super::warn_ignored_flags(&a.frame.given, &settings, a.time_limit.is_some(), err)?;
     renderer.check(&settings)?;
     if let Some(frames) = a.frames {
         animate(a, &mut renderer, &settings, (path.as_ref(), camera.as_ref()), frames, (out, err))?;

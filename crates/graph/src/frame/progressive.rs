@@ -33,8 +33,9 @@
 //!
 //! The budget counts the frames' wall time, not the start-up before them (device, pipelines, scene
 //! upload). The first frame always runs; another runs where half of it fits in what is left, judged by
-//! the last frame's time (after the first, which also made what the others keep, by the share of its GPU
-//! time in the passes that run again), so that the frames end as near the budget as whole frames allow.
+//! the last frame's time (after the first, which also made what the others keep, less the GPU time of the
+//! passes that made it), so that the frames end about as near the budget as whole frames allow (a frame
+//! that draws a new VPL set costs more than the one before it).
 
 use super::renderer::{FrameOutput, Renderer};
 use super::settings::{Component, FrameSettings, Method};
@@ -158,7 +159,7 @@ impl VplSets {
 
 /// Whether a progressive render `elapsed` into `budget`, whose next frame should take `next`, renders
 /// it: where it would end nearer the budget with it than without it, i.e. where half of it fits. So
-/// every method's time is the budget to within half a frame, over or under: a method of long frames is
+/// every method's time is the budget to within about half a frame, over or under: a method of long frames is
 /// neither given a whole frame more (a second frame whenever time was left let mis run 1.3–2.6× a 0.5 s
 /// budget) nor cut a whole frame short.
 pub fn another_frame(elapsed: Duration, next: Duration, budget: Duration) -> bool {
@@ -197,9 +198,10 @@ pub fn render_for(
         let this_frame = elapsed - previous;
         previous = elapsed;
         vpl_sets.frame_done(this_frame.as_secs_f64());
-        // The first frame also made what the next keeps (maps, G-buffer, CDF): the next costs its share
-        // of the GPU time in the passes that run again (all of it without timestamps).
-        let next = if frames == 1 { this_frame.mul_f64(f.repeated_share().unwrap_or(1.0)) } else { this_frame };
+        // The first frame also made what the next keeps (maps, G-buffer, CDF): the next costs it less
+        // that GPU time (all of it without timestamps; what the host does each frame stays in).
+        let kept = Duration::from_secs_f64(f.kept_gpu_ms().unwrap_or(0.0).max(0.0) / 1e3);
+        let next = if frames == 1 { this_frame.saturating_sub(kept) } else { this_frame };
         if !another_frame(elapsed, next, budget) || !averages(s) {
             break f;
         }

@@ -10,25 +10,45 @@ use super::settings::{Component, FrameSettings, Method, Visibility};
 /// `vpl_seed` alike).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Setting {
+    /// `--vpls`.
     Vpls,
+    /// `--seed`.
     Seed,
+    /// `--dprsm-res`.
     DprsmRes,
+    /// `--voxels`.
     Voxels,
+    /// `--vpl-kernel`.
     VplKernel,
+    /// `--cdf-samples`.
     CdfSamples,
+    /// `--regions`.
     Regions,
+    /// `--gather-rays`.
     GatherRays,
+    /// `--defensive`.
     Defensive,
+    /// `--face`.
     Face,
+    /// `--mis-weights`.
     MisWeights,
+    /// `--spp`.
     Spp,
+    /// `--visibility`.
     Visibility,
+    /// `--psm-res`.
     PsmRes,
+    /// `--light-map`.
     LightMap,
+    /// `--cdf-seed` (`cdf_seed` and `vpl_seed`).
     CdfSeed,
+    /// `--source` (ris's).
     Source,
+    /// `--candidates` (ris's).
     Candidates,
+    /// `--picks` (ris's).
     Picks,
+    /// `--denoise`.
     Denoise,
 }
 

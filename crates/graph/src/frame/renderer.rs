@@ -93,12 +93,10 @@ impl FrameOutput {
         self.timings.iter().map(|t| t.ms).sum()
     }
 
-    /// The share of the frame's GPU time in passes a next frame of the same settings runs again (not
-    /// those that made products it keeps: maps, G-buffer, CDF, …); `None` without timestamps or time.
-    pub fn repeated_share(&self) -> Option<f64> {
-        let total = self.gpu_ms()?;
-        let again: f64 = self.timings.iter().filter(|t| !t.kept).filter_map(|t| t.ms).sum();
-        (total > 0.0).then(|| (again / total).clamp(0.0, 1.0))
+    /// The frame's GPU time in passes that made products a next frame of the same settings keeps (maps,
+    /// G-buffer, CDF, …) and does not run again; `None` without timestamps.
+    pub fn kept_gpu_ms(&self) -> Option<f64> {
+        self.timings.iter().filter(|t| t.kept).map(|t| t.ms).sum()
     }
 
     /// The frame's GPU time less the display filter's passes (`passes/denoise.rs`): what its raw

@@ -58,7 +58,8 @@ pub fn run(a: &SuiteArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<()
     if a.frame.spp.is_none() && !a.equal_count {
         base.spp = crate::cli::TIME_LIMIT_SPP;
     }
-    super::super::warn_unread_by_methods(&a.frame.given, &base, &a.methods, err)?;
+    let per_view = a.vpls.is_none() && !a.equal_count;
+    super::super::warn_unread_by_methods(&a.frame.given, &base, &a.methods, per_view, err)?;
     let gpu = Gpu::new(&a.frame.gpu_options()).map_err(error::device)?;
     let vpls = a.vpls.unwrap_or(SUITE_VPLS);
     for &method in &a.methods {
