@@ -294,6 +294,9 @@ fn compare_measures_an_exr_against_a_reference() {
     // that command's help.
     expect_bad_input(&[], "no command given", &d.join("none"));
     expect_bad_input(&["compare", "--frobnicate"], "bounce compare --help", &d.join("none"));
+    // Also where clap's message has no usage line (an invalid value).
+    let s = bounce_tests::default_scene();
+    expect_bad_input(&["render", s.to_str().unwrap(), "--method", "psm"], "bounce render --help", &d.join("none"));
 }
 
 /// A frame flag given that the frame does not read is said (`FrameSettings::reads`, which the reads

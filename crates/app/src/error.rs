@@ -97,8 +97,9 @@ pub fn report(e: &anyhow::Error, err: &mut dyn Write) -> i32 {
 }
 
 /// A command line clap rejected (exit 2, one line on `err`), or `--help` / `--version` (exit 0, the
-/// text on `out`).
-pub fn report_usage(e: &clap::Error, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+/// text on `out`). `named`: the line's first word, the command whose help the error points to where it
+/// is one.
+pub fn report_usage(e: &clap::Error, named: Option<&str>, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
     let text = e.render().to_string();
     if !e.use_stderr() {
         let _ = write!(out, "{text}");
@@ -115,7 +116,11 @@ pub fn report_usage(e: &clap::Error, out: &mut dyn Write, err: &mut dyn Write) -
         .lines()
         .find_map(|l| l.trim().strip_prefix("Usage: bounce "))
         .and_then(|rest| rest.split_whitespace().next())
-        .filter(|c| !c.starts_with(['[', '<', '-']));
+        .filter(|c| !c.starts_with(['[', '<', '-']))
+        .or_else(|| {
+            use clap::CommandFactory;
+            named.filter(|n| crate::cli::Cli::command().get_subcommands().any(|c| c.get_name() == *n))
+        });
     let help = command.map_or("bounce --help".to_string(), |c| format!("bounce {c} --help"));
     // clap's message is several paragraphs; the first names the problem (and, for missing arguments,
     // lists them on its following lines). One line, like every error.

@@ -46,12 +46,15 @@ pub fn cli_reference() -> String {
 /// progress, warnings and the one-line error to `err`.
 pub fn run(args: Vec<OsString>, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
     use clap::{CommandFactory, FromArgMatches};
+    let named = args.get(1).and_then(|a| a.to_str()).map(str::to_string);
     let parsed = Cli::command()
         .try_get_matches_from(args)
         .and_then(|m| Ok((Cli::from_arg_matches(&m).map_err(|e| e.format(&mut Cli::command()))?, m)));
     let (mut cli, matches) = match parsed {
         Ok(parsed) => parsed,
-        Err(e) => return error::report_usage(&e, out, err),
+        // The line's first word names the command whose help the error points to (clap's usage line names
+        // it only in some errors; an invalid value's has none).
+        Err(e) => return error::report_usage(&e, named.as_deref(), out, err),
     };
     // Which frame flags were given, not defaulted: `render`, `bench` and `suite` say those nothing reads.
     let frame = match &mut cli.command {
