@@ -127,9 +127,7 @@ impl Renderer {
             camera: scene.camera,
             lights: scene.lights.clone(),
             retained: Retained::default(),
-            previous_camera: None,
-            previous_lights: None,
-            previous_vpls: None,
+            previous: None,
             history_view: None,
             realtime_frames: 0,
         };
@@ -161,9 +159,7 @@ impl Renderer {
     /// before each timed frame, so that every method pays for its full frame.
     pub fn clear_frame_cache(&mut self) {
         self.state.retained.clear();
-        self.state.previous_camera = None;
-        self.state.previous_lights = None;
-        self.state.previous_vpls = None;
+        self.state.previous = None;
         self.state.history_view = None;
         self.state.realtime_frames = 0;
         self.ctx.realtime_learns = None;
@@ -210,8 +206,8 @@ impl Renderer {
     /// A uniform buffer for `s` with the current camera (and last frame's, for reprojection).
     pub fn uniform_buffer(&self, s: &FrameSettings) -> Result<Buffer> {
         let mut u = self.uniforms(s);
-        if let Some(previous) = &self.state.previous_camera {
-            u.prev_view_proj = self.ctx.uniforms(s, previous).view_proj;
+        if let Some(previous) = &self.state.previous {
+            u.prev_view_proj = self.ctx.uniforms(s, &previous.camera).view_proj;
         }
         self.ctx.uniform_buffer(&u)
     }
@@ -293,8 +289,9 @@ impl Renderer {
             // BVH walks and saves part of one for each ray that ends in it, and a frame has about one ray
             // per VPL. The shade's rays walk whole segments instead (the same answers; the frame 0.91–0.94×
             // on Sibenik under the camera, 0.94× in the two rooms and 0.92× on Sibenik under a light; BENCHMARKS.md).
-            let camera_moved = self.state.previous_camera.is_some_and(|c| c != self.state.camera);
-            let lights_moved = self.state.previous_lights.as_ref().is_some_and(|l| *l != self.state.lights);
+            let previous = self.state.previous.as_ref();
+            let camera_moved = previous.is_some_and(|p| p.camera != self.state.camera);
+            let lights_moved = previous.is_some_and(|p| p.lights != self.state.lights);
             let end_balls = s.end_balls && !camera_moved && !lights_moved;
             return Ok(Some(FrameSettings { seed, ris, end_balls, ..s.clone() }));
         }
